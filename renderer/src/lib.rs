@@ -1,0 +1,7 @@
+//! aerie: a Vulkan-native, error-bounded terrain renderer for flight simulators.
+//!
+//! Pure-CPU parts (terrain data, camera math, GPU struct layouts) need no Vulkan device;
+//! `vk` is the thin Vulkan plumbing; `render` draws one frame in the order of DESIGN.md's data flow.
+
+pub mod camera;
+pub mod terrain;
