@@ -5,3 +5,9 @@
 
 pub mod camera;
 pub mod terrain;
+pub mod frame;
+pub mod gpu;
+pub mod vk;
+pub mod flight;
+pub mod output;
+pub mod cli;

@@ -1,7 +1,9 @@
-//! Terrain data: the heightfield model and its loaders.
+//! Terrain data: the heightfield model and its loaders, the tile mesh, tiles and selection.
 
 pub mod heightfield;
 pub mod load;
+pub mod mesh;
+pub mod tiles;
 
 pub use heightfield::{GeoReference, Heightfield};
 pub use load::{load_dem, DemError};

@@ -1,0 +1,363 @@
+//! The `aerie` command line: argument types, commands, exit codes.
+//! Exit 0 on success, 2 on bad input (arguments, DEM files), 1 on runtime failures (Vulkan, I/O).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::{Args, Parser, Subcommand};
+use glam::DVec3;
+
+use crate::camera::{parse_camera_arg, parse_size_arg, Attitude, Camera, Frustum};
+use crate::flight::StraightPass;
+use crate::frame::{FrameStats, RendererDesc, TerrainRenderer};
+use crate::output::{write_png, write_text};
+use crate::terrain::{load_dem, Heightfield};
+use crate::vk::DeviceDesc;
+
+#[derive(Debug, Parser)]
+#[command(name = "aerie", version, about = "Error-bounded Vulkan terrain renderer for flight simulators")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Render one frame of a DEM from a fixed camera to a PNG (+ a JSON summary next to it).
+    Render(RenderArgs),
+    /// Fly a scripted straight-and-level pass over a DEM headless: PNGs + per-frame CSV.
+    Fly(FlyArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct GpuArgs {
+    /// Use the first Vulkan device whose name contains this (case-insensitive).
+    #[arg(long)]
+    pub gpu: Option<String>,
+    /// Enable the Khronos validation layer (always on in debug builds).
+    #[arg(long)]
+    pub validate: bool,
+    /// Horizontal field of view, degrees (0 < fov < 180).
+    #[arg(long, default_value_t = 90.0)]
+    pub fov: f64,
+    /// Output size, WxH pixels.
+    #[arg(long, default_value = "1920x1080")]
+    pub size: String,
+}
+
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// Elevation model: .hgt, .hgt.zip, 16-bit .png, raw .f32/.u16 with a .json sidecar, .npy.
+    #[arg(long)]
+    pub dem: PathBuf,
+    /// Camera as x,y,z,heading,pitch,roll: metres from the DEM's south-west sample (z above sea
+    /// level), degrees (heading clockwise from north, pitch nose-up, roll right-wing-down).
+    #[arg(long, allow_hyphen_values = true)]
+    pub camera: String,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+    /// Output PNG; a JSON summary is written next to it (same name, .json).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Debug, Args)]
+pub struct FlyArgs {
+    #[arg(long)]
+    pub dem: PathBuf,
+    /// Number of frames.
+    #[arg(long, default_value_t = 24)]
+    pub frames: u32,
+    /// Simulated frame rate (frames per second of flight time).
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f64,
+    /// Ground speed, m/s.
+    #[arg(long, default_value_t = 340.0)]
+    pub speed: f64,
+    /// Height above the highest sample of the DEM, metres.
+    #[arg(long, default_value_t = 600.0)]
+    pub agl: f64,
+    /// Heading of the pass, degrees clockwise from north.
+    #[arg(long, default_value_t = 70.0, allow_hyphen_values = true)]
+    pub heading: f64,
+    /// Camera pitch, degrees (negative looks down).
+    #[arg(long, default_value_t = -12.0, allow_hyphen_values = true)]
+    pub pitch: f64,
+    /// Write every k-th frame as PNG (stats are written for every frame).
+    #[arg(long, default_value_t = 1)]
+    pub every: u32,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+    /// Output folder (created): frame_NNNN.png, frames.csv, summary.json.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// A failure with its exit code: 2 = bad input, 1 = runtime.
+#[derive(Debug)]
+pub struct Failure {
+    pub code: i32,
+    pub message: String,
+}
+
+fn bad_input(message: impl ToString) -> Failure {
+    Failure {
+        code: 2,
+        message: message.to_string(),
+    }
+}
+
+fn runtime(message: impl ToString) -> Failure {
+    Failure {
+        code: 1,
+        message: message.to_string(),
+    }
+}
+
+pub fn run(cli: Cli) -> Result<(), Failure> {
+    match cli.command {
+        Command::Render(a) => cmd_render(a),
+        Command::Fly(a) => cmd_fly(a),
+    }
+}
+
+struct Setup {
+    width: u32,
+    height: u32,
+    frustum: Frustum,
+    desc: RendererDesc,
+}
+
+fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
+    let (width, height) = parse_size_arg(&g.size).map_err(|e| bad_input(format!("--size: {e}")))?;
+    if !(g.fov.is_finite() && g.fov > 0.0 && g.fov < 180.0) {
+        return Err(bad_input(format!(
+            "--fov: {} is outside (0, 180) degrees",
+            g.fov
+        )));
+    }
+    let frustum = Frustum::symmetric(g.fov.to_radians(), width, height);
+    let desc = RendererDesc {
+        validation: g.validate || cfg!(debug_assertions),
+        device: DeviceDesc {
+            name_filter: g.gpu.clone(),
+        },
+        width,
+        height,
+        ..Default::default()
+    };
+    Ok(Setup {
+        width,
+        height,
+        frustum,
+        desc,
+    })
+}
+
+fn load(path: &Path) -> Result<Heightfield, Failure> {
+    let t = Instant::now();
+    let hf = load_dem(path).map_err(bad_input)?;
+    let (lo, hi) = hf.min_max();
+    eprintln!(
+        "loaded {}: {}x{} samples, {:.0}..{:.0} m, {} voids filled, {} ({:.2} s)",
+        path.display(),
+        hf.width,
+        hf.height,
+        lo,
+        hi,
+        hf.voids_filled,
+        hf.spacing_note,
+        t.elapsed().as_secs_f64()
+    );
+    Ok(hf)
+}
+
+fn check_validation(r: &TerrainRenderer) -> Result<(), Failure> {
+    let c = r.validation_counters();
+    if c.errors() + c.warnings() > 0 {
+        return Err(runtime(format!(
+            "validation reported {} errors and {} warnings; first: {}",
+            c.errors(),
+            c.warnings(),
+            c.messages().first().cloned().unwrap_or_default()
+        )));
+    }
+    Ok(())
+}
+
+fn cmd_render(a: RenderArgs) -> Result<(), Failure> {
+    let s = setup(&a.gpu)?;
+    let (position, attitude) =
+        parse_camera_arg(&a.camera).map_err(|e| bad_input(format!("--camera: {e}")))?;
+    check_out_file(&a.out)?;
+    let hf = load(&a.dem)?;
+    let mut r = TerrainRenderer::new(&s.desc).map_err(runtime)?;
+    r.load_terrain(&hf).map_err(runtime)?;
+    let camera = Camera::new(position, attitude, s.frustum);
+    let stats = r.render(&camera).map_err(runtime)?;
+    let rgba = r.colour_rgba();
+    let device = r.device_name().to_string();
+    r.destroy();
+    check_validation(&r)?;
+    write_png(&a.out, s.width, s.height, &rgba).map_err(runtime)?;
+    let summary = serde_json::json!({
+        "device": device,
+        "dem": a.dem.display().to_string(),
+        "size": [s.width, s.height],
+        "triangles": stats.triangles,
+        "tiles_drawn": stats.tiles_drawn,
+        "tiles_culled": stats.tiles_culled,
+        "draw_calls": stats.draw_calls,
+        "gpu_ms": stats.gpu_upload_ms + stats.gpu_terrain_ms,
+        "cpu_select_us": stats.cpu_select_us,
+        "out": a.out.display().to_string(),
+    });
+    let line = summary.to_string();
+    write_text(&a.out.with_extension("json"), &format!("{line}\n")).map_err(runtime)?;
+    println!("{line}");
+    Ok(())
+}
+
+fn check_out_file(out: &Path) -> Result<(), Failure> {
+    let parent = out.parent().filter(|p| !p.as_os_str().is_empty());
+    if let Some(p) = parent {
+        if !p.is_dir() {
+            return Err(bad_input(format!(
+                "--out {}: folder {} does not exist",
+                out.display(),
+                p.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// One CSV row per frame.
+fn csv_row(s: &FrameStats, t: f64, pos: DVec3, att: Attitude) -> String {
+    format!(
+        "{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.3},{:.3},{},{},{},{},{},{},{:.1},{:.1},{:.3},{:.3}\n",
+        s.frame,
+        t,
+        pos.x,
+        pos.y,
+        pos.z,
+        att.heading.to_degrees(),
+        att.pitch.to_degrees(),
+        att.roll.to_degrees(),
+        s.tiles_considered,
+        s.tiles_culled,
+        s.tiles_drawn,
+        s.triangles,
+        s.draw_calls,
+        s.bytes_uploaded,
+        s.cpu_select_us,
+        s.cpu_record_us,
+        s.gpu_upload_ms,
+        s.gpu_terrain_ms
+    )
+}
+
+pub const FRAMES_CSV_HEADER: &str = "frame,time_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg,tiles_considered,tiles_culled,tiles_drawn,triangles,draw_calls,bytes_uploaded,cpu_select_us,cpu_record_us,gpu_upload_ms,gpu_terrain_ms\n";
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    let k = ((sorted.len() - 1) as f64 * p).round() as usize;
+    sorted[k]
+}
+
+fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
+    let s = setup(&a.gpu)?;
+    if a.frames == 0 {
+        return Err(bad_input("--frames: must be at least 1"));
+    }
+    if a.every == 0 {
+        return Err(bad_input("--every: must be at least 1"));
+    }
+    for (name, v) in [("--fps", a.fps), ("--speed", a.speed), ("--agl", a.agl)] {
+        if !v.is_finite() || v < 0.0 || (name == "--fps" && v == 0.0) {
+            return Err(bad_input(format!("{name}: {v} must be a finite positive number")));
+        }
+    }
+    for (name, v) in [("--heading", a.heading), ("--pitch", a.pitch)] {
+        if !v.is_finite() {
+            return Err(bad_input(format!("{name}: {v} is not finite")));
+        }
+    }
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| bad_input(format!("--out {}: cannot create folder: {e}", a.out.display())))?;
+    let hf = load(&a.dem)?;
+    let duration = a.frames as f64 / a.fps;
+    let pass = StraightPass::over(&hf, a.heading, a.pitch, a.speed, a.agl, duration);
+    let mut r = TerrainRenderer::new(&s.desc).map_err(runtime)?;
+    let t_upload = Instant::now();
+    let up = r.load_terrain(&hf).map_err(runtime)?;
+    eprintln!(
+        "uploaded {:.1} MB of heights in {} submissions ({:.2} s) on {}",
+        up.bytes as f64 / 1e6,
+        up.submissions,
+        t_upload.elapsed().as_secs_f64(),
+        r.device_name()
+    );
+    let bar = indicatif::ProgressBar::new(a.frames as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, eta {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.set_message("flying");
+    let mut csv = String::from(FRAMES_CSV_HEADER);
+    let mut gpu_ms = Vec::new();
+    let mut frame_ms = Vec::new();
+    let mut triangles = Vec::new();
+    let mut pngs = 0u32;
+    for f in 0..a.frames {
+        let t = f as f64 / a.fps;
+        let (pos, att) = pass.pose_at(t);
+        let camera = Camera::new(pos, att, s.frustum);
+        let wall = Instant::now();
+        let stats = r.render(&camera).map_err(runtime)?;
+        frame_ms.push(wall.elapsed().as_secs_f64() * 1e3);
+        gpu_ms.push(stats.gpu_upload_ms + stats.gpu_terrain_ms);
+        triangles.push(stats.triangles as f64);
+        csv.push_str(&csv_row(&stats, t, pos, att));
+        if f % a.every == 0 {
+            let path = a.out.join(format!("frame_{f:04}.png"));
+            write_png(&path, s.width, s.height, &r.colour_rgba()).map_err(runtime)?;
+            pngs += 1;
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let device = r.device_name().to_string();
+    r.destroy();
+    check_validation(&r)?;
+    write_text(&a.out.join("frames.csv"), &csv).map_err(runtime)?;
+    for v in [&mut gpu_ms, &mut frame_ms, &mut triangles] {
+        v.sort_by(f64::total_cmp);
+    }
+    let summary = serde_json::json!({
+        "device": device,
+        "dem": a.dem.display().to_string(),
+        "frames": a.frames,
+        "pngs": pngs,
+        "size": [s.width, s.height],
+        "gpu_ms": {"median": percentile(&gpu_ms, 0.5), "p99": percentile(&gpu_ms, 0.99), "max": percentile(&gpu_ms, 1.0)},
+        "frame_ms": {"median": percentile(&frame_ms, 0.5), "p99": percentile(&frame_ms, 0.99), "max": percentile(&frame_ms, 1.0)},
+        "triangles": {"median": percentile(&triangles, 0.5), "max": percentile(&triangles, 1.0)},
+        "validation": {"errors": 0, "warnings": 0},
+    });
+    write_text(&a.out.join("summary.json"), &format!("{summary:#}\n")).map_err(runtime)?;
+    println!(
+        "{} frames ({} PNGs) in {}: frame median {:.1} ms, p99 {:.1} ms, max {:.1} ms (GPU median {:.1} ms); triangles median {:.0}; validation clean",
+        a.frames,
+        pngs,
+        a.out.display(),
+        percentile(&frame_ms, 0.5),
+        percentile(&frame_ms, 0.99),
+        percentile(&frame_ms, 1.0),
+        percentile(&gpu_ms, 0.5),
+        percentile(&triangles, 0.5)
+    );
+    Ok(())
+}

@@ -1,0 +1,74 @@
+//! Scripted flights for headless runs: a straight-and-level pass over a dataset. Pure CPU.
+
+use glam::{DVec2, DVec3};
+
+use crate::camera::Attitude;
+use crate::terrain::Heightfield;
+
+/// A straight, level pass at constant speed: position = start + t·speed·(sin ψ, cos ψ).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StraightPass {
+    pub start: DVec2,
+    pub altitude: f64,
+    pub speed: f64,
+    pub attitude: Attitude,
+}
+
+impl StraightPass {
+    /// A pass through the centre of `hf` on `heading_deg`, at `agl` metres above the highest
+    /// sample, camera pitched `pitch_deg`, lasting `duration_s` at `speed` m/s and centred on
+    /// the dataset's middle (clamped so the pass starts inside the dataset).
+    pub fn over(
+        hf: &Heightfield,
+        heading_deg: f64,
+        pitch_deg: f64,
+        speed: f64,
+        agl: f64,
+        duration_s: f64,
+    ) -> Self {
+        let (ex, ey) = hf.extent_m();
+        let centre = DVec2::new(ex / 2.0, ey / 2.0);
+        let h = heading_deg.to_radians();
+        let dir = DVec2::new(h.sin(), h.cos());
+        let half = (speed * duration_s / 2.0).min(ex.min(ey) / 2.0);
+        let (_, top) = hf.min_max();
+        Self {
+            start: centre - dir * half,
+            altitude: top as f64 + agl,
+            speed,
+            attitude: Attitude::from_degrees(heading_deg, pitch_deg, 0.0),
+        }
+    }
+
+    pub fn pose_at(&self, t: f64) -> (DVec3, Attitude) {
+        let h = self.attitude.heading;
+        let p = self.start + DVec2::new(h.sin(), h.cos()) * self.speed * t;
+        (DVec3::new(p.x, p.y, self.altitude), self.attitude)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pass_moves_along_its_heading_at_its_speed() {
+        let hf = Heightfield {
+            width: 101,
+            height: 101,
+            spacing_x: 10.0,
+            spacing_y: 10.0,
+            heights: vec![100.0; 101 * 101],
+            geo: None,
+            voids_filled: 0,
+            spacing_note: String::new(),
+        };
+        let pass = StraightPass::over(&hf, 90.0, -10.0, 50.0, 300.0, 10.0);
+        let (p0, a) = pass.pose_at(0.0);
+        let (p1, _) = pass.pose_at(2.0);
+        assert!((p1.x - p0.x - 100.0).abs() < 1e-9 && (p1.y - p0.y).abs() < 1e-9);
+        assert_eq!(p0.z, 400.0);
+        assert_eq!((p0.x, p0.y), (250.0, 500.0)); // centred: 250 m before the middle
+        assert!((a.pitch + 10f64.to_radians()).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,154 @@
+//! A 2-D image (optionally an array) with its memory and one view.
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use super::{Device, VkError, VkResultExt};
+
+#[derive(Debug, Clone, Copy)]
+pub struct ImageDesc {
+    pub width: u32,
+    pub height: u32,
+    pub format: vk::Format,
+    pub usage: vk::ImageUsageFlags,
+    pub aspect: vk::ImageAspectFlags,
+}
+
+pub struct Image2d {
+    pub raw: vk::Image,
+    pub view: vk::ImageView,
+    pub desc: ImageDesc,
+    allocation: Option<Allocation>,
+}
+
+impl Image2d {
+    pub fn new(device: &Device, name: &str, desc: ImageDesc) -> Result<Self, VkError> {
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(desc.format)
+            .extent(vk::Extent3D {
+                width: desc.width,
+                height: desc.height,
+                depth: 1,
+            })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(desc.usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        let raw = unsafe { device.raw.create_image(&info, None) }.call("vkCreateImage")?;
+        let requirements = unsafe { device.raw.get_image_memory_requirements(raw) };
+        let allocation = device.allocator().allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location: MemoryLocation::GpuOnly,
+            linear: false,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(source) => {
+                unsafe { device.raw.destroy_image(raw, None) };
+                return Err(VkError::Allocation {
+                    what: name.into(),
+                    source,
+                });
+            }
+        };
+        let mut image = Self {
+            raw,
+            view: vk::ImageView::null(),
+            desc,
+            allocation: None,
+        };
+        let bound = unsafe {
+            device
+                .raw
+                .bind_image_memory(raw, allocation.memory(), allocation.offset())
+        };
+        image.allocation = Some(allocation);
+        if let Err(result) = bound {
+            image.destroy(device);
+            return Err(VkError::Call {
+                call: "vkBindImageMemory",
+                result,
+            });
+        }
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(raw)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(desc.format)
+            .subresource_range(subresource_range(desc.aspect));
+        match unsafe { device.raw.create_image_view(&view_info, None) } {
+            Ok(v) => image.view = v,
+            Err(result) => {
+                image.destroy(device);
+                return Err(VkError::Call {
+                    call: "vkCreateImageView",
+                    result,
+                });
+            }
+        }
+        Ok(image)
+    }
+
+    /// View first, then image, then memory.
+    pub fn destroy(&mut self, device: &Device) {
+        unsafe {
+            if self.view != vk::ImageView::null() {
+                device.raw.destroy_image_view(self.view, None);
+                self.view = vk::ImageView::null();
+            }
+            if let Some(a) = self.allocation.take() {
+                device.raw.destroy_image(self.raw, None);
+                let _ = device.allocator().free(a);
+                self.raw = vk::Image::null();
+            }
+        }
+    }
+}
+
+pub fn subresource_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange {
+        aspect_mask: aspect,
+        base_mip_level: 0,
+        level_count: 1,
+        base_array_layer: 0,
+        layer_count: 1,
+    }
+}
+
+/// A layout transition of the whole image with explicit stages and accesses.
+#[allow(clippy::too_many_arguments)]
+pub fn transition(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    aspect: vk::ImageAspectFlags,
+    from: (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags),
+    to: (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags),
+) {
+    let barrier = vk::ImageMemoryBarrier::default()
+        .old_layout(from.0)
+        .new_layout(to.0)
+        .src_access_mask(from.2)
+        .dst_access_mask(to.2)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .image(image)
+        .subresource_range(subresource_range(aspect));
+    unsafe {
+        device.raw.cmd_pipeline_barrier(
+            cmd,
+            from.1,
+            to.1,
+            vk::DependencyFlags::empty(),
+            &[],
+            &[],
+            &[barrier],
+        )
+    };
+}

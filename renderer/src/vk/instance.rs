@@ -1,0 +1,172 @@
+//! Vulkan instance, optional validation layer, and the debug-utils messenger that logs through
+//! `tracing` and counts errors and warnings (tests fail on any).
+
+use std::ffi::{c_void, CStr};
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, Mutex};
+
+use ash::{ext, vk};
+
+use super::{VkError, VkResultExt};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// Counts what the validation layer reported. Shared with tests through [`Instance::counters`].
+#[derive(Debug, Default)]
+pub struct ValidationCounters {
+    pub errors: AtomicU32,
+    pub warnings: AtomicU32,
+    /// The first few messages, kept so a failing test can say what went wrong.
+    pub messages: Mutex<Vec<String>>,
+}
+
+impl ValidationCounters {
+    pub fn errors(&self) -> u32 {
+        self.errors.load(Ordering::SeqCst)
+    }
+    pub fn warnings(&self) -> u32 {
+        self.warnings.load(Ordering::SeqCst)
+    }
+    pub fn messages(&self) -> Vec<String> {
+        self.messages.lock().map(|m| m.clone()).unwrap_or_default()
+    }
+}
+
+pub struct Instance {
+    pub entry: ash::Entry,
+    pub raw: ash::Instance,
+    debug: Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    counters: Arc<ValidationCounters>,
+    pub validation: bool,
+}
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    kind: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    let message = if data.is_null() {
+        String::from("(no message)")
+    } else {
+        (*data)
+            .message_as_c_str()
+            .map(|m| m.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    let counters = (user as *const ValidationCounters).as_ref();
+    let keep = |c: &ValidationCounters| {
+        if let Ok(mut m) = c.messages.lock() {
+            if m.len() < 16 {
+                m.push(message.clone());
+            }
+        }
+    };
+    if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+        tracing::error!(target: "vulkan", ?kind, "{message}");
+        if let Some(c) = counters {
+            c.errors.fetch_add(1, Ordering::SeqCst);
+            keep(c);
+        }
+    } else if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING) {
+        tracing::warn!(target: "vulkan", ?kind, "{message}");
+        if let Some(c) = counters {
+            c.warnings.fetch_add(1, Ordering::SeqCst);
+            keep(c);
+        }
+    } else {
+        tracing::debug!(target: "vulkan", ?kind, "{message}");
+    }
+    vk::FALSE
+}
+
+impl Instance {
+    /// Creates the instance. With `validation`, the Khronos layer is required (an error names the
+    /// package when it is missing) and every message is counted.
+    pub fn new(validation: bool) -> Result<Self, VkError> {
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::Loader(e.to_string()))?;
+        let counters = Arc::new(ValidationCounters::default());
+
+        let mut layers = Vec::new();
+        let mut extensions = Vec::new();
+        if validation {
+            let available = unsafe { entry.enumerate_instance_layer_properties() }
+                .call("vkEnumerateInstanceLayerProperties")?;
+            let found = available
+                .iter()
+                .any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER));
+            if !found {
+                return Err(VkError::ValidationLayerMissing);
+            }
+            layers.push(VALIDATION_LAYER.as_ptr());
+            extensions.push(ext::debug_utils::NAME.as_ptr());
+        }
+
+        let app_info = vk::ApplicationInfo::default()
+            .application_name(c"aerie")
+            .application_version(1)
+            .engine_name(c"aerie")
+            .api_version(vk::API_VERSION_1_3);
+        let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+            .message_severity(
+                vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+                    | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                    | vk::DebugUtilsMessageSeverityFlagsEXT::INFO,
+            )
+            .message_type(
+                vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                    | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+            )
+            .pfn_user_callback(Some(debug_callback))
+            .user_data(Arc::as_ptr(&counters) as *mut c_void);
+        let mut create_info = vk::InstanceCreateInfo::default()
+            .application_info(&app_info)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions);
+        if validation {
+            // Also catches messages from vkCreateInstance / vkDestroyInstance themselves.
+            create_info = create_info.push_next(&mut messenger_info);
+        }
+        let raw = unsafe { entry.create_instance(&create_info, None) }.call("vkCreateInstance")?;
+
+        let debug = if validation {
+            let loader = ext::debug_utils::Instance::new(&entry, &raw);
+            let messenger = unsafe { loader.create_debug_utils_messenger(&messenger_info, None) };
+            match messenger {
+                Ok(m) => Some((loader, m)),
+                Err(e) => {
+                    unsafe { raw.destroy_instance(None) };
+                    return Err(VkError::Call {
+                        call: "vkCreateDebugUtilsMessengerEXT",
+                        result: e,
+                    });
+                }
+            }
+        } else {
+            None
+        };
+        Ok(Self {
+            entry,
+            raw,
+            debug,
+            counters,
+            validation,
+        })
+    }
+
+    /// What validation has reported so far (errors, warnings, first messages).
+    pub fn counters(&self) -> Arc<ValidationCounters> {
+        self.counters.clone()
+    }
+
+    /// Destroys the messenger, then the instance. Every device must be destroyed before.
+    pub fn destroy(&mut self) {
+        unsafe {
+            if let Some((loader, messenger)) = self.debug.take() {
+                loader.destroy_debug_utils_messenger(messenger, None);
+            }
+            self.raw.destroy_instance(None);
+        }
+    }
+}
