@@ -35,5 +35,5 @@ void main() {
     float lambert = max(dot(n, frame.sun_dir.xyz), 0.0);
     vec3 c = albedo * (ambient + (1.0 - ambient) * lambert);
     float haze = 1.0 - exp(-length(v_rel) / frame.sky_colour.w);
-    out_colour = vec4(mix(c, frame.sky_colour.rgb, 0.7 * haze), 1.0);
+    out_colour = vec4(mix(c, frame.sky_colour.rgb, 0.6 * haze), 1.0);
 }

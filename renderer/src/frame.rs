@@ -781,8 +781,8 @@ fn frame_uniforms(camera: &Camera, grid: &TileGrid, _min_height: f32, tile_size:
     let s = sun_direction();
     FrameUniforms {
         relative_world_to_clip: m.to_cols_array_2d(),
-        sun_dir: [s[0], s[1], s[2], 0.3],
-        sky_colour: [SKY_LINEAR[0], SKY_LINEAR[1], SKY_LINEAR[2], 60_000.0],
+        sun_dir: [s[0], s[1], s[2], 0.22],
+        sky_colour: [SKY_LINEAR[0], SKY_LINEAR[1], SKY_LINEAR[2], 90_000.0],
         grid_spacing: [
             grid.spacing_x as f32,
             grid.spacing_y as f32,
