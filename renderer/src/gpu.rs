@@ -72,7 +72,7 @@ mod tests {
             .unwrap_or_else(|| panic!("struct {name} not in gpu_types.glsl"));
         let body = &src[start..];
         let body = &body[body.find('{').unwrap() + 1..body.find("};").unwrap()];
-        let mut offset = 0;
+        let mut offset: usize = 0;
         let mut max_align = 4;
         let mut fields = Vec::new();
         for line in body.lines() {

@@ -5,6 +5,14 @@ use std::path::{Path, PathBuf};
 /// Writes an RGBA8 PNG through a temporary file in the same folder and renames it into place,
 /// so a failure never leaves a partial PNG behind.
 pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<(), String> {
+    let expected = width as usize * height as usize * 4;
+    if rgba.len() != expected {
+        return Err(format!(
+            "{}: cannot write PNG: {} bytes of pixels for {width}x{height} RGBA (expected {expected})",
+            path.display(),
+            rgba.len()
+        ));
+    }
     let tmp = temp_sibling(path);
     let result = image::save_buffer_with_format(
         &tmp,

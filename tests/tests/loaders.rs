@@ -8,7 +8,10 @@ use std::time::Instant;
 use aerie::terrain::{load_dem, DemError, GeoReference, Heightfield};
 
 fn data_dir() -> Option<PathBuf> {
-    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data/dem"));
+    let dir = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../shared/data/dem"
+    ));
     if dir.is_dir() {
         Some(dir)
     } else {
@@ -45,7 +48,11 @@ fn n47e011_zip_alps_with_voids() {
     let Some(dir) = data_dir() else { return };
     let t = Instant::now();
     let hf = load(&dir.join("srtm3_single/N47E011.hgt.zip"));
-    eprintln!("N47E011.hgt.zip loaded in {:?}", t.elapsed());
+    eprintln!(
+        "N47E011.hgt.zip loaded in {:?}: {}",
+        t.elapsed(),
+        hf.spacing_note
+    );
     assert_eq!((hf.width, hf.height), (1201, 1201));
     assert_eq!(hf.heights.len(), 1201 * 1201);
     assert_eq!(hf.voids_filled, 54_278);
@@ -93,18 +100,84 @@ fn n40w074_new_york_western_hemisphere() {
 
 /// (file, min, max, mean, samples <= 0) from SOURCES.md §1a/§1b; none of these tiles has voids.
 const CLEAN_TILES: &[(&str, f32, f32, f64, usize)] = &[
-    ("srtm3_sierra_nevada_es/N36W003.hgt", -14.0, 2240.0, 115.1, 1_103_696),
-    ("srtm3_sierra_nevada_es/N36W004.hgt", -2.0, 2926.0, 219.9, 1_058_968),
-    ("srtm3_sierra_nevada_es/N36W005.hgt", -9.0, 2064.0, 177.2, 886_575),
-    ("srtm3_sierra_nevada_es/N37W003.hgt", 139.0, 2602.0, 1043.2, 0),
-    ("srtm3_sierra_nevada_es/N37W004.hgt", 222.0, 3460.0, 959.8, 0),
+    (
+        "srtm3_sierra_nevada_es/N36W003.hgt",
+        -14.0,
+        2240.0,
+        115.1,
+        1_103_696,
+    ),
+    (
+        "srtm3_sierra_nevada_es/N36W004.hgt",
+        -2.0,
+        2926.0,
+        219.9,
+        1_058_968,
+    ),
+    (
+        "srtm3_sierra_nevada_es/N36W005.hgt",
+        -9.0,
+        2064.0,
+        177.2,
+        886_575,
+    ),
+    (
+        "srtm3_sierra_nevada_es/N37W003.hgt",
+        139.0,
+        2602.0,
+        1043.2,
+        0,
+    ),
+    (
+        "srtm3_sierra_nevada_es/N37W004.hgt",
+        222.0,
+        3460.0,
+        959.8,
+        0,
+    ),
     ("srtm3_sierra_nevada_es/N37W005.hgt", 70.0, 1658.0, 444.0, 0),
-    ("srtm3_northern_england/N53W002.hgt", -48.0, 637.0, 154.9, 243),
-    ("srtm3_northern_england/N53W003.hgt", -3.0, 557.0, 110.0, 27_370),
-    ("srtm3_northern_england/N53W004.hgt", -7.0, 1059.0, 71.1, 941_473),
-    ("srtm3_northern_england/N54W002.hgt", -49.0, 702.0, 126.5, 163_198),
-    ("srtm3_northern_england/N54W003.hgt", -2.0, 891.0, 282.8, 37_663),
-    ("srtm3_northern_england/N54W004.hgt", -1.0, 969.0, 73.6, 786_854),
+    (
+        "srtm3_northern_england/N53W002.hgt",
+        -48.0,
+        637.0,
+        154.9,
+        243,
+    ),
+    (
+        "srtm3_northern_england/N53W003.hgt",
+        -3.0,
+        557.0,
+        110.0,
+        27_370,
+    ),
+    (
+        "srtm3_northern_england/N53W004.hgt",
+        -7.0,
+        1059.0,
+        71.1,
+        941_473,
+    ),
+    (
+        "srtm3_northern_england/N54W002.hgt",
+        -49.0,
+        702.0,
+        126.5,
+        163_198,
+    ),
+    (
+        "srtm3_northern_england/N54W003.hgt",
+        -2.0,
+        891.0,
+        282.8,
+        37_663,
+    ),
+    (
+        "srtm3_northern_england/N54W004.hgt",
+        -1.0,
+        969.0,
+        73.6,
+        786_854,
+    ),
 ];
 
 #[test]
@@ -151,7 +224,11 @@ fn neighbouring_tiles_share_edges_after_flip() {
         .enumerate()
         .max_by(|a, b| a.1.total_cmp(b.1))
         .unwrap();
-    assert!(i / 1201 < 600, "highest sample on row {} (should be south half)", i / 1201);
+    assert!(
+        i / 1201 < 600,
+        "highest sample on row {} (should be south half)",
+        i / 1201
+    );
 }
 
 #[test]
@@ -190,7 +267,10 @@ fn matplotlib_npz_samples() {
     assert_eq!((hf.width, hf.height), (120, 91));
     assert_eq!(hf.min_max(), (-1437.0, 2205.0));
     let (lat, lon, _, _) = sw_corner(&hf);
-    assert!((lat - 48.016).abs() < 0.01 && (lon + 125.98).abs() < 0.01, "{lat} {lon}");
+    assert!(
+        (lat - 48.016).abs() < 0.01 && (lon + 125.98).abs() < 0.01,
+        "{lat} {lon}"
+    );
 }
 
 #[test]
@@ -201,7 +281,10 @@ fn real_data_errors_name_the_file() {
     let e = load_dem(&tif).unwrap_err();
     assert!(matches!(e, DemError::UnknownExtension { .. }), "{e:?}");
     let msg = e.to_string();
-    assert!(msg.starts_with(&format!("{}: ", tif.display())) && msg.contains(".hgt"), "{msg}");
+    assert!(
+        msg.starts_with(&format!("{}: ", tif.display())) && msg.contains(".hgt"),
+        "{msg}"
+    );
 
     let missing = dir.join("srtm3_single/N99E999.hgt");
     let msg = load_dem(&missing).unwrap_err().to_string();
@@ -212,12 +295,18 @@ fn real_data_errors_name_the_file() {
     let renamed = tmp.path().join("innsbruck.hgt");
     std::fs::copy(dir.join("srtm3_single/N40W074.hgt"), &renamed).unwrap();
     let msg = load_dem(&renamed).unwrap_err().to_string();
-    assert!(msg.contains("innsbruck.hgt") && !msg.contains('\n'), "{msg}");
+    assert!(
+        msg.contains("innsbruck.hgt") && !msg.contains('\n'),
+        "{msg}"
+    );
 
     // A truncated copy of a real tile.
     let bytes = std::fs::read(dir.join("srtm3_single/N40W074.hgt")).unwrap();
     let cut = tmp.path().join("N40W074.hgt");
     std::fs::write(&cut, &bytes[..bytes.len() - 2402]).unwrap();
     let msg = load_dem(&cut).unwrap_err().to_string();
-    assert!(msg.contains("2882400 bytes") && msg.contains("2884802"), "{msg}");
+    assert!(
+        msg.contains("2882400 bytes") && msg.contains("2884802"),
+        "{msg}"
+    );
 }

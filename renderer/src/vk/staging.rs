@@ -61,7 +61,9 @@ impl RingCursor {
         }
         let region = self.current.ok_or(StagingError::NotOpen)?;
         let align = align.max(self.base_alignment);
-        let start = self.head.div_ceil(align) * align;
+        // Align the absolute offset: region bases need not be multiples of `align`.
+        let base = region as u64 * self.region_size;
+        let start = (base + self.head).div_ceil(align) * align - base;
         if start + size > self.region_size {
             return Err(StagingError::OverBudget {
                 requested: size,
@@ -70,7 +72,7 @@ impl RingCursor {
             });
         }
         self.head = start + size;
-        Ok(region as u64 * self.region_size + start)
+        Ok(base + start)
     }
 
     pub fn remaining(&self) -> u64 {

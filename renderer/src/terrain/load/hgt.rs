@@ -249,9 +249,15 @@ mod tests {
             let (lo, hi) = neighbours
                 .iter()
                 .fold((f32::MAX, f32::MIN), |(l, h), &x| (l.min(x), h.max(x)));
-            assert!(lo < v && v < hi, "void ({c},{row}) = {v} not in ({lo},{hi})");
+            assert!(
+                lo < v && v < hi,
+                "void ({c},{row}) = {v} not in ({lo},{hi})"
+            );
             let want = f32::from(plane(r, c));
-            assert!((v - want).abs() < 0.01, "void ({c},{row}) = {v}, plane {want}");
+            assert!(
+                (v - want).abs() < 0.01,
+                "void ({c},{row}) = {v}, plane {want}"
+            );
         }
         assert!(hf.heights.iter().all(|h| h.is_finite()));
         assert_eq!(
@@ -281,7 +287,16 @@ mod tests {
         assert_eq!(parse_tile_name("n40w074.hgt"), Some((40.0, -74.0)));
         assert_eq!(parse_tile_name("N47E011"), Some((47.0, 11.0)));
         assert_eq!(parse_tile_name("N47E011.SRTMGL1.hgt"), Some((47.0, 11.0)));
-        for bad in ["tile.hgt", "N47E11.hgt", "N47E0111.hgt", "X47E011.hgt", "N91E011.hgt", "N47E181.hgt", "N4éE011.hgt", ""] {
+        for bad in [
+            "tile.hgt",
+            "N47E11.hgt",
+            "N47E0111.hgt",
+            "X47E011.hgt",
+            "N91E011.hgt",
+            "N47E181.hgt",
+            "N4éE011.hgt",
+            "",
+        ] {
             assert_eq!(parse_tile_name(bad), None, "{bad}");
         }
         let dir = tempfile::tempdir().unwrap();
@@ -303,7 +318,10 @@ mod tests {
         std::fs::write(&p, tile_bytes()).unwrap();
         let msg = load_dem(&p).unwrap_err().to_string();
         assert!(msg.starts_with(&p.display().to_string()), "{msg}");
-        assert!(msg.contains("mytile.hgt") && msg.contains("N47E011"), "{msg}");
+        assert!(
+            msg.contains("mytile.hgt") && msg.contains("N47E011"),
+            "{msg}"
+        );
     }
 
     #[test]
@@ -320,7 +338,10 @@ mod tests {
         }
         // Off by one sample is also wrong.
         std::fs::write(&p, vec![0u8; N * N * 2 - 2]).unwrap();
-        assert!(load_dem(&p).unwrap_err().to_string().contains("2884800 bytes"));
+        assert!(load_dem(&p)
+            .unwrap_err()
+            .to_string()
+            .contains("2884800 bytes"));
     }
 
     #[test]
@@ -330,7 +351,10 @@ mod tests {
         let bytes: Vec<u8> = (0..N * N).flat_map(|_| VOID.to_be_bytes()).collect();
         std::fs::write(&p, bytes).unwrap();
         let e = load_dem(&p).unwrap_err();
-        assert!(matches!(e, DemError::AllVoid { count, .. } if count == N * N), "{e:?}");
+        assert!(
+            matches!(e, DemError::AllVoid { count, .. } if count == N * N),
+            "{e:?}"
+        );
     }
 
     #[test]
@@ -377,17 +401,24 @@ mod tests {
 
         // Plain .zip: the position comes from the entry, whatever the zip is called.
         let other = dir.path().join("download.zip");
-        write_zip(&other, &[("readme.txt", b"hi"), ("tiles/S05W060.hgt", &bytes)]);
+        write_zip(
+            &other,
+            &[("readme.txt", b"hi"), ("tiles/S05W060.hgt", &bytes)],
+        );
         let c = load_dem(&other).unwrap();
-        assert!(matches!(c.geo, Some(GeoReference::Geographic { south_lat_deg, west_lon_deg, .. })
-            if south_lat_deg == -5.0 && west_lon_deg == -60.0));
+        assert!(
+            matches!(c.geo, Some(GeoReference::Geographic { south_lat_deg, west_lon_deg, .. })
+            if south_lat_deg == -5.0 && west_lon_deg == -60.0)
+        );
 
         // Entry without a tile name: fall back to the zip's name.
         let fallback = dir.path().join("N10E020.hgt.zip");
         write_zip(&fallback, &[("data.hgt", &bytes)]);
         let d = load_dem(&fallback).unwrap();
-        assert!(matches!(d.geo, Some(GeoReference::Geographic { south_lat_deg, west_lon_deg, .. })
-            if south_lat_deg == 10.0 && west_lon_deg == 20.0));
+        assert!(
+            matches!(d.geo, Some(GeoReference::Geographic { south_lat_deg, west_lon_deg, .. })
+            if south_lat_deg == 10.0 && west_lon_deg == 20.0)
+        );
     }
 
     #[test]
@@ -396,13 +427,19 @@ mod tests {
         let corrupt = dir.path().join("N47E011.hgt.zip");
         std::fs::write(&corrupt, b"PK\x03\x04 definitely not a zip").unwrap();
         let msg = load_dem(&corrupt).unwrap_err().to_string();
-        assert!(msg.starts_with(&format!("{}: ", corrupt.display())), "{msg}");
+        assert!(
+            msg.starts_with(&format!("{}: ", corrupt.display())),
+            "{msg}"
+        );
         assert!(msg.contains("zip"), "{msg}");
 
         let none = dir.path().join("empty.zip");
         write_zip(&none, &[("a.txt", b"x")]);
         let msg = load_dem(&none).unwrap_err().to_string();
-        assert!(msg.contains("no .hgt entry") && msg.contains("a.txt"), "{msg}");
+        assert!(
+            msg.contains("no .hgt entry") && msg.contains("a.txt"),
+            "{msg}"
+        );
 
         let two = dir.path().join("two.zip");
         write_zip(&two, &[("N01E001.hgt", b"x"), ("N01E002.hgt", b"y")]);

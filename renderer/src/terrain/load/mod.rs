@@ -11,7 +11,6 @@ mod npy;
 mod png16;
 mod raw;
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::{GeoReference, Heightfield};
@@ -41,7 +40,10 @@ pub enum DemError {
     #[error("{path}: cannot read: {reason}")]
     Unreadable { path: String, reason: String },
     /// The file name ends in nothing `load_dem` knows.
-    #[error("{path}: unknown extension `{ext}` (accepted: {})", ACCEPTED_EXTENSIONS)]
+    #[error(
+        "{path}: unknown extension `{ext}` (accepted: {})",
+        ACCEPTED_EXTENSIONS
+    )]
     UnknownExtension { path: String, ext: String },
     /// The byte length or sample count does not match what the format or sidecar promises.
     #[error("{path}: {reason}")]
@@ -240,7 +242,8 @@ pub(crate) fn read_zip_entry(
             ),
         ));
     }
-    let mut out = Vec::with_capacity(file.size() as usize);
+    // The declared size is only a hint; do not trust it for a big up-front allocation.
+    let mut out = Vec::with_capacity(file.size().min(1 << 26) as usize);
     (&mut file)
         .take(max_len + 1)
         .read_to_end(&mut out)
@@ -480,9 +483,7 @@ fn arcsec(deg: f64) -> String {
     if (s - s.round()).abs() < 1e-6 {
         format!("{}\"", s.round())
     } else {
-        let mut out = String::new();
-        let _ = write!(out, "{s:.3}\"");
-        out
+        format!("{s:.3}\"")
     }
 }
 
@@ -535,14 +536,14 @@ pub(crate) fn finish(path: &Path, mut g: Grid) -> Result<Heightfield, DemError> 
             ),
         ));
     }
-    if !(g.spacing_x.is_finite() && g.spacing_x > 0.0 && g.spacing_y.is_finite() && g.spacing_y > 0.0)
+    if !(g.spacing_x.is_finite()
+        && g.spacing_x > 0.0
+        && g.spacing_y.is_finite()
+        && g.spacing_y > 0.0)
     {
         return Err(format_err(
             path,
-            format!(
-                "invalid grid spacing {} m × {} m",
-                g.spacing_x, g.spacing_y
-            ),
+            format!("invalid grid spacing {} m × {} m", g.spacing_x, g.spacing_y),
         ));
     }
     if let Some(i) = g.samples.iter().position(|v| v.is_infinite()) {
@@ -567,13 +568,7 @@ pub(crate) fn finish(path: &Path, mut g: Grid) -> Result<Heightfield, DemError> 
         });
     }
     if voids > 0 {
-        fill_voids(
-            &mut g.samples,
-            g.width,
-            g.height,
-            g.spacing_x,
-            g.spacing_y,
-        );
+        fill_voids(&mut g.samples, g.width, g.height, g.spacing_x, g.spacing_y);
     }
     Ok(Heightfield {
         width: g.width,
@@ -675,7 +670,11 @@ pub(crate) fn fill_voids(samples: &mut [f32], width: usize, height: usize, sx: f
                 for (c, &v) in row.iter().enumerate() {
                     if v.is_nan() {
                         if last_row[c] != usize::MAX {
-                            add(&mut acc[k], last_row[c].abs_diff(r) as f64 * sy, last_val[c]);
+                            add(
+                                &mut acc[k],
+                                last_row[c].abs_diff(r) as f64 * sy,
+                                last_val[c],
+                            );
                         }
                         k += 1;
                     } else {
@@ -740,7 +739,10 @@ mod tests {
         }
         // Known magnitudes: 3" N-S ≈ 92.2 m at the equator, ≈ 92.8 m at 60°.
         let (ew0, ns0) = geographic_spacing_m(0.0, 1.0 / 1200.0, 1.0 / 1200.0);
-        assert!((ns0 - 92.16).abs() < 0.1 && (ew0 - 92.77).abs() < 0.1, "{ew0} {ns0}");
+        assert!(
+            (ns0 - 92.16).abs() < 0.1 && (ew0 - 92.77).abs() < 0.1,
+            "{ew0} {ns0}"
+        );
     }
 
     #[test]

@@ -74,7 +74,10 @@ impl LitParser<'_> {
             self.pos += 1;
             Ok(())
         } else {
-            Err(format!("expected '{}' at header byte {}", c as char, self.pos))
+            Err(format!(
+                "expected '{}' at header byte {}",
+                c as char, self.pos
+            ))
         }
     }
 
@@ -167,11 +170,17 @@ impl LitParser<'_> {
 /// Parses the `.npy` header; `path` only for messages.
 fn parse_npy<'a>(path: &Path, bytes: &'a [u8]) -> Result<Npy<'a>, DemError> {
     if bytes.len() < 10 || &bytes[..6] != MAGIC {
-        return Err(format_err(path, "not a NumPy .npy file (magic \\x93NUMPY missing)"));
+        return Err(format_err(
+            path,
+            "not a NumPy .npy file (magic \\x93NUMPY missing)",
+        ));
     }
     let (major, minor) = (bytes[6], bytes[7]);
     let (header_len, start) = match major {
-        1 => (usize::from(u16::from_le_bytes([bytes[8], bytes[9]])), 10usize),
+        1 => (
+            usize::from(u16::from_le_bytes([bytes[8], bytes[9]])),
+            10usize,
+        ),
         2 | 3 if bytes.len() >= 12 => (
             u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
             12,
@@ -180,7 +189,9 @@ fn parse_npy<'a>(path: &Path, bytes: &'a [u8]) -> Result<Npy<'a>, DemError> {
         _ => {
             return Err(format_err(
                 path,
-                format!(".npy format version {major}.{minor} is not supported (accepted: 1.0, 2.0, 3.0)"),
+                format!(
+                ".npy format version {major}.{minor} is not supported (accepted: 1.0, 2.0, 3.0)"
+            ),
             ))
         }
     };
@@ -241,7 +252,12 @@ fn parse_npy<'a>(path: &Path, bytes: &'a [u8]) -> Result<Npy<'a>, DemError> {
                 "Fortran-order array is not supported; save a C-order array (np.ascontiguousarray)",
             ))
         }
-        _ => return Err(format_err(path, ".npy header lacks a boolean 'fortran_order'")),
+        _ => {
+            return Err(format_err(
+                path,
+                ".npy header lacks a boolean 'fortran_order'",
+            ))
+        }
     }
     let shape = match get("shape") {
         Some(Lit::Tuple(dims)) => dims
@@ -377,7 +393,10 @@ pub(super) fn load_npz(path: &Path) -> Result<Heightfield, DemError> {
     let mut entries: Vec<(String, Vec<u8>)> = Vec::new();
     for (i, name) in names.iter().enumerate() {
         if let Some(stem) = name.strip_suffix(".npy") {
-            entries.push((stem.to_string(), read_zip_entry(path, &mut zip, i, NPZ_ENTRY_MAX)?));
+            entries.push((
+                stem.to_string(),
+                read_zip_entry(path, &mut zip, i, NPZ_ENTRY_MAX)?,
+            ));
         }
     }
     let in_entry = |name: &str, e: DemError| match e {
@@ -419,7 +438,9 @@ pub(super) fn load_npz(path: &Path) -> Result<Heightfield, DemError> {
     let aux = |want: &str| -> Option<Vec<f64>> {
         let i = by_name(want)?;
         let a = parse_npy(path, &entries[i].1).ok()?;
-        a.values(path).ok().filter(|v| v.iter().all(|x| x.is_finite()))
+        a.values(path)
+            .ok()
+            .filter(|v| v.iter().all(|x| x.is_finite()))
     };
     let scalar = |want: &str| aux(want).filter(|v| v.len() == 1).map(|v| v[0]);
     // (north_up, south_lat, west_lon, dlat, dlon)
@@ -429,13 +450,20 @@ pub(super) fn load_npz(path: &Path) -> Result<Heightfield, DemError> {
             let north_up = lat[0] > lat[height - 1];
             let dlat = (lat[height - 1] - lat[0]).abs() / (height - 1) as f64;
             let dlon = (lon[width - 1] - lon[0]) / (width - 1) as f64;
-            let west = if lon[0] > 180.0 { lon[0] - 360.0 } else { lon[0] };
+            let west = if lon[0] > 180.0 {
+                lon[0] - 360.0
+            } else {
+                lon[0]
+            };
             let south = lat[0].min(lat[height - 1]);
             geo_guess = Some((north_up, south, west, dlat, dlon));
         }
-    } else if let (Some(xmin), Some(xmax), Some(ymin), Some(ymax)) =
-        (scalar("xmin"), scalar("xmax"), scalar("ymin"), scalar("ymax"))
-    {
+    } else if let (Some(xmin), Some(xmax), Some(ymin), Some(ymax)) = (
+        scalar("xmin"),
+        scalar("xmax"),
+        scalar("ymin"),
+        scalar("ymax"),
+    ) {
         // matplotlib draws row 0 at `ymin` (linspace(ymin, ymax, rows)), whatever its sign.
         let dlat = scalar("dy").unwrap_or((ymax - ymin).abs() / (height - 1) as f64);
         let dlon = scalar("dx").unwrap_or((xmax - xmin).abs() / (width - 1) as f64);
@@ -500,11 +528,16 @@ pub(crate) mod tests {
             [n] => format!("({n},)"),
             _ => format!(
                 "({})",
-                shape.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ")
+                shape
+                    .iter()
+                    .map(|d| d.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ),
         };
         let fo = if fortran { "True" } else { "False" };
-        let mut header = format!("{{'descr': '{descr}', 'fortran_order': {fo}, 'shape': {dims}, }}");
+        let mut header =
+            format!("{{'descr': '{descr}', 'fortran_order': {fo}, 'shape': {dims}, }}");
         while (10 + header.len() + 1) % 64 != 0 {
             header.push(' ');
         }
@@ -547,8 +580,11 @@ pub(crate) mod tests {
         assert!(hf.heights.iter().all(|h| h.is_finite()));
 
         // Sidecar spacing and orientation.
-        std::fs::write(sidecar_path(&p), r#"{"spacing_x": 2, "spacing_y": 3, "north_up": false}"#)
-            .unwrap();
+        std::fs::write(
+            sidecar_path(&p),
+            r#"{"spacing_x": 2, "spacing_y": 3, "north_up": false}"#,
+        )
+        .unwrap();
         let hf = load_dem(&p).unwrap();
         assert_eq!((hf.spacing_x, hf.spacing_y), (2.0, 3.0));
         assert_eq!(&hf.heights[..4], &[10., 20., 30., 40.]);
@@ -557,14 +593,20 @@ pub(crate) mod tests {
     #[test]
     fn npy_other_dtypes_and_version2() {
         let dir = tempfile::tempdir().unwrap();
-        let i2: Vec<u8> = [1i16, -5, i16::MIN, 300].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let i2: Vec<u8> = [1i16, -5, i16::MIN, 300]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
         let p = dir.path().join("i.npy");
         std::fs::write(&p, npy_bytes("<i2", false, &[2, 2], &i2)).unwrap();
         let hf = load_dem(&p).unwrap();
         assert_eq!(hf.voids_filled, 1);
         assert_eq!((hf.at(0, 1), hf.at(1, 1), hf.at(1, 0)), (1.0, -5.0, 300.0));
 
-        let f8: Vec<u8> = [1.5f64, 2.5, 3.5, 4.5].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let f8: Vec<u8> = [1.5f64, 2.5, 3.5, 4.5]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
         let mut v2 = npy_bytes("<f8", false, &[2, 2], &f8);
         // Rewrite as a version 2.0 header (u32 length).
         let hl = u16::from_le_bytes([v2[8], v2[9]]) as u32;
@@ -594,8 +636,14 @@ pub(crate) mod tests {
         check(npy_bytes("<f4", false, &[4], &d), &["2-D", "[4]"]);
         check(npy_bytes("<f4", false, &[1, 4], &d), &["2×2"]);
         check(npy_bytes("<f4", false, &[0, 4], &[]), &["zero-size"]);
-        check(npy_bytes("<f4", false, &[2, 2], &d[..12]), &["expected 16", "found 12", "truncated"]);
-        check(npy_bytes("<f4", false, &[2, 2], &f4(&[f32::NAN; 4])), &["all 4 samples are voids"]);
+        check(
+            npy_bytes("<f4", false, &[2, 2], &d[..12]),
+            &["expected 16", "found 12", "truncated"],
+        );
+        check(
+            npy_bytes("<f4", false, &[2, 2], &f4(&[f32::NAN; 4])),
+            &["all 4 samples are voids"],
+        );
         let hdr = npy_bytes("<f4", false, &[2, 2], &[]).len();
         check(
             npy_bytes("<f4", false, &[2, 2], &f4(&[1.0, 2.0, f32::INFINITY, 3.0])),
@@ -626,9 +674,15 @@ pub(crate) mod tests {
         write_npz(
             &p,
             &[
-                ("longitude.npy", npy_bytes("<f8", false, &[3], &f8(&[234.0, 234.5, 235.0]))),
+                (
+                    "longitude.npy",
+                    npy_bytes("<f8", false, &[3], &f8(&[234.0, 234.5, 235.0])),
+                ),
                 ("topo.npy", npy_bytes("<f4", false, &[2, 3], &grid)),
-                ("latitude.npy", npy_bytes("<f8", false, &[2], &f8(&[48.0, 48.5]))),
+                (
+                    "latitude.npy",
+                    npy_bytes("<f8", false, &[2], &f8(&[48.0, 48.5])),
+                ),
             ],
         );
         let hf = load_dem(&p).unwrap();
@@ -659,6 +713,9 @@ pub(crate) mod tests {
 
         let p = dir.path().join("none.npz");
         write_npz(&p, &[("dx.npy", npy_bytes("<f8", false, &[], &f8(&[1.0])))]);
-        assert!(load_dem(&p).unwrap_err().to_string().contains("no 2-D array"));
+        assert!(load_dem(&p)
+            .unwrap_err()
+            .to_string()
+            .contains("no 2-D array"));
     }
 }

@@ -27,7 +27,10 @@ fn describe(ct: ExtendedColorType) -> String {
     if ch == 0 {
         return format!("{kind} ({ct:?})");
     }
-    format!("{}-bit {kind} ({ct:?})", ct.bits_per_pixel() / u16::from(ch))
+    format!(
+        "{}-bit {kind} ({ct:?})",
+        ct.bits_per_pixel() / u16::from(ch)
+    )
 }
 
 pub(super) fn load_png(path: &Path) -> Result<Heightfield, DemError> {
@@ -60,9 +63,21 @@ pub(super) fn load_png(path: &Path) -> Result<Heightfield, DemError> {
         .map_err(|e| format_err(path, format!("corrupt PNG data: {e}")))?;
 
     let sc = sidecar.as_ref();
-    let scale = sc.map(|s| s.f64("scale")).transpose()?.flatten().unwrap_or(1.0);
-    let offset = sc.map(|s| s.f64("offset")).transpose()?.flatten().unwrap_or(0.0);
-    let north_up = sc.map(|s| s.bool("north_up")).transpose()?.flatten().unwrap_or(true);
+    let scale = sc
+        .map(|s| s.f64("scale"))
+        .transpose()?
+        .flatten()
+        .unwrap_or(1.0);
+    let offset = sc
+        .map(|s| s.f64("offset"))
+        .transpose()?
+        .flatten()
+        .unwrap_or(0.0);
+    let north_up = sc
+        .map(|s| s.bool("north_up"))
+        .transpose()?
+        .flatten()
+        .unwrap_or(true);
     let (spacing_x, spacing_y, spacing_note) = metric_spacing(sc)?;
     // `read_image` yields native-endian u16 for L16.
     let samples = buf
@@ -117,13 +132,20 @@ mod tests {
         let hf = load_dem(&p).unwrap();
         assert_eq!((hf.width, hf.height), (W as usize, H as usize));
         assert_eq!((hf.spacing_x, hf.spacing_y), (10.0, 12.5));
-        assert!(hf.spacing_note.contains("hm.png.json"), "{}", hf.spacing_note);
+        assert!(
+            hf.spacing_note.contains("hm.png.json"),
+            "{}",
+            hf.spacing_note
+        );
         for y in 0..H {
             for x in 0..W {
                 // PNG row 0 is north, so it becomes the last heightfield row.
                 let got = hf.at(x as usize, (H - 1 - y) as usize);
                 let want = f64::from(value(x, y)) * 0.1 - 100.0;
-                assert!((f64::from(got) - want).abs() < 1e-3, "({x},{y}) {got} vs {want}");
+                assert!(
+                    (f64::from(got) - want).abs() < 1e-3,
+                    "({x},{y}) {got} vs {want}"
+                );
             }
         }
         assert_eq!(hf.voids_filled, 0);
@@ -187,7 +209,10 @@ mod tests {
         assert!(msg.contains("invalid JSON") && !msg.contains('\n'), "{msg}");
 
         std::fs::write(&sc, "[1, 2]").unwrap();
-        assert!(load_dem(&p).unwrap_err().to_string().contains("JSON object"));
+        assert!(load_dem(&p)
+            .unwrap_err()
+            .to_string()
+            .contains("JSON object"));
     }
 
     #[test]
@@ -196,6 +221,9 @@ mod tests {
         let p = dir.path().join("x.png");
         std::fs::write(&p, b"\x89PNG\r\n\x1a\nnot really").unwrap();
         let msg = load_dem(&p).unwrap_err().to_string();
-        assert!(msg.starts_with(&format!("{}: ", p.display())) && !msg.contains('\n'), "{msg}");
+        assert!(
+            msg.starts_with(&format!("{}: ", p.display())) && !msg.contains('\n'),
+            "{msg}"
+        );
     }
 }

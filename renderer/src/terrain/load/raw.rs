@@ -221,7 +221,10 @@ mod tests {
             Some(r#"{"width": 3, "height": 2, "spacing_x": 5, "spacing_y": 7}"#),
         );
         let hf = load_dem(&p).unwrap();
-        assert_eq!((hf.width, hf.height, hf.spacing_x, hf.spacing_y), (3, 2, 5.0, 7.0));
+        assert_eq!(
+            (hf.width, hf.height, hf.spacing_x, hf.spacing_y),
+            (3, 2, 5.0, 7.0)
+        );
         // north_up default: file row 0 becomes heightfield row 1.
         assert_eq!(hf.heights, [100.0, 200.5, -1e4, 1.5, -2.25, 3.0]);
 
@@ -270,12 +273,17 @@ mod tests {
         assert!(matches!(e, DemError::Size { .. }), "{e:?}");
         assert!(msg.starts_with(&format!("{}: ", p.display())), "{msg}");
         assert!(
-            msg.contains("expected 24 bytes") && msg.contains("found 20") && msg.contains("truncated"),
+            msg.contains("expected 24 bytes")
+                && msg.contains("found 20")
+                && msg.contains("truncated"),
             "{msg}"
         );
         let p = write(dir.path(), "l.f32", &[0u8; 30], Some(sc));
         let msg = load_dem(&p).unwrap_err().to_string();
-        assert!(msg.contains("found 30") && msg.contains("too long by 6"), "{msg}");
+        assert!(
+            msg.contains("found 30") && msg.contains("too long by 6"),
+            "{msg}"
+        );
     }
 
     #[test]
@@ -284,20 +292,44 @@ mod tests {
         let mut vals = VALS;
         vals[4] = f32::NAN; // (col 1, row 1)
         let le: Vec<u8> = vals.iter().flat_map(|v| v.to_le_bytes()).collect();
-        let p = write(dir.path(), "n.f32", &le, Some(r#"{"width": 3, "height": 2}"#));
+        let p = write(
+            dir.path(),
+            "n.f32",
+            &le,
+            Some(r#"{"width": 3, "height": 2}"#),
+        );
         let e = load_dem(&p).unwrap_err();
         assert!(
-            matches!(e, DemError::NonFinite { col: 1, row: 1, offset: 16, .. }),
+            matches!(
+                e,
+                DemError::NonFinite {
+                    col: 1,
+                    row: 1,
+                    offset: 16,
+                    ..
+                }
+            ),
             "{e:?}"
         );
         let msg = e.to_string();
-        assert!(msg.contains("NaN") && msg.contains("byte offset 16"), "{msg}");
+        assert!(
+            msg.contains("NaN") && msg.contains("byte offset 16"),
+            "{msg}"
+        );
         vals[4] = 0.0;
         vals[2] = f32::NEG_INFINITY;
         let le: Vec<u8> = vals.iter().flat_map(|v| v.to_le_bytes()).collect();
-        let p = write(dir.path(), "i.f32", &le, Some(r#"{"width": 3, "height": 2}"#));
+        let p = write(
+            dir.path(),
+            "i.f32",
+            &le,
+            Some(r#"{"width": 3, "height": 2}"#),
+        );
         let msg = load_dem(&p).unwrap_err().to_string();
-        assert!(msg.contains("-inf") && msg.contains("byte offset 8"), "{msg}");
+        assert!(
+            msg.contains("-inf") && msg.contains("byte offset 8"),
+            "{msg}"
+        );
     }
 
     #[test]
@@ -306,21 +338,39 @@ mod tests {
         let p = write(dir.path(), "m.f32", &[0u8; 16], None);
         let msg = load_dem(&p).unwrap_err().to_string();
         assert!(msg.starts_with(&format!("{}: ", p.display())), "{msg}");
-        assert!(msg.contains(&sidecar_path(&p).display().to_string()), "{msg}");
+        assert!(
+            msg.contains(&sidecar_path(&p).display().to_string()),
+            "{msg}"
+        );
 
         let p = write(dir.path(), "w.f32", &[0u8; 16], Some(r#"{"height": 2}"#));
         let msg = load_dem(&p).unwrap_err().to_string();
         assert!(msg.contains("`width`") && msg.contains("required"), "{msg}");
 
-        let p = write(dir.path(), "s.f32", &[0u8; 16], Some(r#"{"width": 2, "height": 2, "scale": 2}"#));
+        let p = write(
+            dir.path(),
+            "s.f32",
+            &[0u8; 16],
+            Some(r#"{"width": 2, "height": 2, "scale": 2}"#),
+        );
         let msg = load_dem(&p).unwrap_err().to_string();
         assert!(msg.contains("`scale`") && msg.contains("u16"), "{msg}");
 
-        let p = write(dir.path(), "f.f32", &[0u8; 16], Some(r#"{"width": 2, "height": 2, "format": "f64le"}"#));
+        let p = write(
+            dir.path(),
+            "f.f32",
+            &[0u8; 16],
+            Some(r#"{"width": 2, "height": 2, "format": "f64le"}"#),
+        );
         let msg = load_dem(&p).unwrap_err().to_string();
         assert!(msg.contains("f64le") && msg.contains("u16be"), "{msg}");
 
-        let p = write(dir.path(), "x.f32", &[0u8; 16], Some(r#"{"width": 2.5, "height": 2}"#));
+        let p = write(
+            dir.path(),
+            "x.f32",
+            &[0u8; 16],
+            Some(r#"{"width": 2.5, "height": 2}"#),
+        );
         let msg = load_dem(&p).unwrap_err().to_string();
         assert!(msg.contains("`width`") && msg.contains("integer"), "{msg}");
     }
@@ -328,9 +378,19 @@ mod tests {
     #[test]
     fn degenerate_sizes_are_rejected() {
         let dir = tempfile::tempdir().unwrap();
-        let p = write(dir.path(), "z.f32", &[], Some(r#"{"width": 0, "height": 5}"#));
+        let p = write(
+            dir.path(),
+            "z.f32",
+            &[],
+            Some(r#"{"width": 0, "height": 5}"#),
+        );
         assert!(load_dem(&p).unwrap_err().to_string().contains("zero-size"));
-        let p = write(dir.path(), "o.f32", &[0u8; 20], Some(r#"{"width": 1, "height": 5}"#));
+        let p = write(
+            dir.path(),
+            "o.f32",
+            &[0u8; 20],
+            Some(r#"{"width": 1, "height": 5}"#),
+        );
         assert!(load_dem(&p).unwrap_err().to_string().contains("2×2"));
         let p = write(
             dir.path(),

@@ -1,0 +1,27 @@
+# Two commands: `make demo` renders a scripted flight over the embedded Inn valley DEM,
+# `make test` passes every check. Both install missing system packages first (Debian).
+SHELL := /bin/bash
+DEMO_OUT ?= out/demo
+
+.PHONY: setup demo test lint fmt
+
+setup:
+	@scripts/setup-debian.sh
+
+demo: setup
+	cargo build -p aerie
+	./target/debug/aerie render --dem assets/dem/N47E011.hgt.zip \
+	    --camera 30500,12000,4500,0,-15,0 --size 1280x720 --out $(DEMO_OUT)-still.png
+	./target/debug/aerie fly --dem assets/dem/N47E011.hgt.zip \
+	    --frames 24 --every 4 --size 640x360 --out $(DEMO_OUT)
+	@echo "demo: $(DEMO_OUT)-still.png, $(DEMO_OUT)/frame_*.png, $(DEMO_OUT)/frames.csv, $(DEMO_OUT)/summary.json"
+
+lint:
+	cargo fmt --all -- --check
+	cargo clippy --workspace --all-targets -- -D warnings
+
+test: setup lint
+	cargo test --workspace
+
+fmt:
+	cargo fmt --all

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Installs the system packages aerie needs on Debian/Ubuntu, once: the Vulkan loader, lavapipe
+# (Mesa's CPU Vulkan driver), the Khronos validation layer, shaderc/glslang/SPIRV-Tools static
+# libraries for the shader build, and Xvfb for window tests. Idempotent; uses sudo when not root.
+set -euo pipefail
+
+packages=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers libshaderc-dev glslang-dev spirv-tools xvfb)
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all system packages present"
+  exit 0
+fi
+if ! command -v apt-get >/dev/null 2>&1; then
+  echo "setup: missing packages ${missing[*]} and no apt-get: install them with your package manager" >&2
+  exit 1
+fi
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then
+  sudo="sudo"
+fi
+echo "setup: installing ${missing[*]}"
+$sudo apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
