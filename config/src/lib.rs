@@ -1,1 +1,333 @@
+//! Typed, validated configuration for aerie.
+//!
+//! A config file is TOML with a `[render]` and an optional `[dem]` table; every key is optional
+//! and unknown keys are errors. [`load`] and [`parse`] return a [`RenderConfig`] whose values are
+//! all within range, or a [`ConfigError`] whose message is one line naming the file, the key
+//! (dotted, e.g. `render.tile_size`), the line and column when known, and the reason:
+//!
+//! ```text
+//! site.toml:4:13: render.tile_size: must be 2^j+1 between 3 and 257 (3, 5, 9, 17, 33, 65, 129, 257), got 16
+//! ```
+//!
+//! ```toml
+//! [render]
+//! size = "1920x1080"        # or: width = 1920, height = 1080
+//! fov_deg = 90.0            # horizontal field of view, degrees, (0, 180)
+//! tau_px = 1.0              # screen-space error bound τ, pixels, > 0
+//! tile_size = 17            # vertices per tile side m = 2^j+1, 3..=257
+//! staging_budget_mib = 8    # upload budget per frame, MiB, 1..=1024
+//! validation = false        # enable VK_LAYER_KHRONOS_validation
+//! gpu = "RTX"               # optional: pick the first GPU whose name contains this
+//!
+//! [dem]
+//! path = "data/dem.tif"     # optional: elevation dataset
+//! ```
 
+mod error;
+mod path_de;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+pub use error::{ConfigError, Location};
+
+/// Allowed tile sizes `m = 2^j + 1` (vertices per tile side).
+pub const TILE_SIZES: [u32; 8] = [3, 5, 9, 17, 33, 65, 129, 257];
+/// Largest accepted viewport width or height, pixels.
+pub const MAX_DIMENSION: u32 = 16384;
+/// Largest accepted per-frame staging budget, MiB.
+pub const MAX_STAGING_BUDGET_MIB: u32 = 1024;
+
+/// The whole configuration file, validated.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct RenderConfig {
+    /// The `[render]` table.
+    pub render: RenderSettings,
+    /// The `[dem]` table.
+    pub dem: DemSettings,
+}
+
+/// Renderer settings (`[render]`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RenderSettings {
+    /// Viewport width, pixels (`size = "WxH"` or `width`), 1..=[`MAX_DIMENSION`].
+    pub width: u32,
+    /// Viewport height, pixels (`size = "WxH"` or `height`), 1..=[`MAX_DIMENSION`].
+    pub height: u32,
+    /// Horizontal field of view, degrees, in (0, 180).
+    pub fov_deg: f64,
+    /// Screen-space error bound τ, pixels, finite and > 0.
+    pub tau_px: f64,
+    /// Vertices per tile side, one of [`TILE_SIZES`].
+    pub tile_size: u32,
+    /// Per-frame upload budget through the staging ring, MiB, 1..=[`MAX_STAGING_BUDGET_MIB`].
+    pub staging_budget_mib: u32,
+    /// Enable the Khronos validation layer.
+    pub validation: bool,
+    /// Pick the first GPU whose name contains this substring; `None` lets aerie choose.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gpu: Option<String>,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 1920,
+            height: 1080,
+            fov_deg: 90.0,
+            tau_px: 1.0,
+            tile_size: 17,
+            staging_budget_mib: 8,
+            validation: false,
+            gpu: None,
+        }
+    }
+}
+
+impl RenderSettings {
+    /// The staging budget in bytes.
+    pub fn staging_budget_bytes(&self) -> u64 {
+        u64::from(self.staging_budget_mib) << 20
+    }
+}
+
+/// Elevation dataset settings (`[dem]`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct DemSettings {
+    /// Path of the elevation dataset, as written in the file (not resolved).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path: Option<PathBuf>,
+}
+
+impl RenderConfig {
+    /// Writes the configuration as TOML that [`parse`] reads back to an equal value
+    /// (the size is written as `width` and `height`).
+    pub fn to_toml(&self) -> Result<String, toml::ser::Error> {
+        toml::to_string(self)
+    }
+}
+
+/// True if `m` is an allowed tile size (`2^j + 1`, 3..=257).
+pub fn is_valid_tile_size(m: u32) -> bool {
+    TILE_SIZES.contains(&m)
+}
+
+/// Reads and validates the config file at `path`; errors name `path`.
+pub fn load(path: impl AsRef<Path>) -> Result<RenderConfig, ConfigError> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse(&text, &path.display().to_string())
+}
+
+/// Parses and validates config `text`; `source_name` (usually the file name) starts every
+/// error message.
+pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError> {
+    // 1. TOML syntax.
+    let table: toml::Table = toml::from_str(text).map_err(|e| ConfigError::Syntax {
+        source_name: source_name.to_owned(),
+        location: e
+            .span()
+            .map(|s| Location::from_offset(text, s.start))
+            .unwrap_or(Location { line: 1, column: 1 }),
+        message: error::one_line(e.message()),
+    })?;
+
+    // 2. Shape and types (unknown keys, wrong types), with the key path of the first error.
+    let root = toml::Value::Table(table);
+    let raw: RawConfig = path_de::from_value(&root).map_err(|e| {
+        let message = error::one_line(&e.message);
+        // toml's own deserializer knows the span; use it when it reports the same problem.
+        let location = match toml::from_str::<RawConfig>(text) {
+            Err(te) if error::one_line(te.message()) == message => {
+                te.span().map(|s| Location::from_offset(text, s.start))
+            }
+            _ => None,
+        };
+        ConfigError::Invalid {
+            source_name: source_name.to_owned(),
+            key: path_de::dotted(e.path.as_deref().unwrap_or(&[])),
+            location,
+            message,
+        }
+    })?;
+
+    // 3. Ranges and cross-key rules.
+    raw.validate().map_err(|(key, message)| ConfigError::Invalid {
+        source_name: source_name.to_owned(),
+        location: locate_key(text, key),
+        key: key.to_owned(),
+        message,
+    })
+}
+
+/// Line and column of the value of a `table.key` leaf, if it can be found.
+fn locate_key(text: &str, key: &str) -> Option<Location> {
+    let (table, leaf) = key.split_once('.')?;
+    type Spans = BTreeMap<String, BTreeMap<String, toml::Spanned<toml::Value>>>;
+    let spans: Spans = toml::from_str(text).ok()?;
+    let value = spans.get(table)?.get(leaf)?;
+    Some(Location::from_offset(text, value.span().start))
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawConfig {
+    #[serde(default)]
+    render: RawRender,
+    #[serde(default)]
+    dem: RawDem,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRender {
+    size: Option<String>,
+    width: Option<u32>,
+    height: Option<u32>,
+    fov_deg: Option<f64>,
+    tau_px: Option<f64>,
+    tile_size: Option<u32>,
+    staging_budget_mib: Option<u32>,
+    validation: Option<bool>,
+    gpu: Option<String>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDem {
+    path: Option<PathBuf>,
+}
+
+/// A validation failure: the dotted key and the reason.
+type Invalid = (&'static str, String);
+
+fn check_dimension(key: &'static str, v: u32) -> Result<u32, Invalid> {
+    if (1..=MAX_DIMENSION).contains(&v) {
+        Ok(v)
+    } else {
+        Err((key, format!("must be 1..={MAX_DIMENSION} pixels, got {v}")))
+    }
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), Invalid> {
+    const KEY: &str = "render.size";
+    let malformed = || (KEY, format!("expected \"WIDTHxHEIGHT\" such as \"1920x1080\", got {s:?}"));
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(malformed)?;
+    let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
+    if !digits(w) || !digits(h) {
+        return Err(malformed());
+    }
+    let (w, h) = (w.parse::<u64>(), h.parse::<u64>());
+    let in_range = |v: &Result<u64, _>| matches!(v, Ok(v) if (1..=u64::from(MAX_DIMENSION)).contains(v));
+    match (&w, &h) {
+        (Ok(w), Ok(h)) if in_range(&Ok::<u64, ()>(*w)) && in_range(&Ok::<u64, ()>(*h)) => {
+            Ok((*w as u32, *h as u32))
+        }
+        _ => Err((
+            KEY,
+            format!("width and height must each be 1..={MAX_DIMENSION} pixels, got {s:?}"),
+        )),
+    }
+}
+
+impl RawConfig {
+    fn validate(self) -> Result<RenderConfig, Invalid> {
+        let d = RenderSettings::default();
+        let r = self.render;
+
+        let (width, height) = match (r.size.as_deref(), r.width, r.height) {
+            (Some(_), Some(_), _) | (Some(_), _, Some(_)) => {
+                return Err((
+                    "render.size",
+                    "give either size or width and height, not both".to_owned(),
+                ))
+            }
+            (Some(s), None, None) => parse_size(s)?,
+            (None, Some(w), Some(h)) => (
+                check_dimension("render.width", w)?,
+                check_dimension("render.height", h)?,
+            ),
+            (None, Some(_), None) => {
+                return Err((
+                    "render.height",
+                    "missing: width and height go together (or use size = \"WxH\")".to_owned(),
+                ))
+            }
+            (None, None, Some(_)) => {
+                return Err((
+                    "render.width",
+                    "missing: width and height go together (or use size = \"WxH\")".to_owned(),
+                ))
+            }
+            (None, None, None) => (d.width, d.height),
+        };
+
+        let fov_deg = r.fov_deg.unwrap_or(d.fov_deg);
+        if !(fov_deg > 0.0 && fov_deg < 180.0) {
+            return Err((
+                "render.fov_deg",
+                format!("must be greater than 0 and less than 180 degrees, got {fov_deg}"),
+            ));
+        }
+
+        let tau_px = r.tau_px.unwrap_or(d.tau_px);
+        if !(tau_px.is_finite() && tau_px > 0.0) {
+            return Err((
+                "render.tau_px",
+                format!("must be a finite number of pixels greater than 0, got {tau_px}"),
+            ));
+        }
+
+        let tile_size = r.tile_size.unwrap_or(d.tile_size);
+        if !is_valid_tile_size(tile_size) {
+            let list = TILE_SIZES.map(|m| m.to_string()).join(", ");
+            return Err((
+                "render.tile_size",
+                format!("must be 2^j+1 between 3 and 257 ({list}), got {tile_size}"),
+            ));
+        }
+
+        let staging_budget_mib = r.staging_budget_mib.unwrap_or(d.staging_budget_mib);
+        if !(1..=MAX_STAGING_BUDGET_MIB).contains(&staging_budget_mib) {
+            return Err((
+                "render.staging_budget_mib",
+                format!("must be 1..={MAX_STAGING_BUDGET_MIB} MiB, got {staging_budget_mib}"),
+            ));
+        }
+
+        if r.gpu.as_deref().is_some_and(|g| g.trim().is_empty()) {
+            return Err((
+                "render.gpu",
+                "must not be empty (omit the key to let aerie choose the GPU)".to_owned(),
+            ));
+        }
+
+        if self.dem.path.as_deref().is_some_and(|p| p.as_os_str().is_empty()) {
+            return Err(("dem.path", "must not be empty".to_owned()));
+        }
+
+        Ok(RenderConfig {
+            render: RenderSettings {
+                width,
+                height,
+                fov_deg,
+                tau_px,
+                tile_size,
+                staging_budget_mib,
+                validation: r.validation.unwrap_or(d.validation),
+                gpu: r.gpu,
+            },
+            dem: DemSettings {
+                path: self.dem.path,
+            },
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests;

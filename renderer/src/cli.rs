@@ -136,7 +136,8 @@ fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
             g.fov
         )));
     }
-    let frustum = Frustum::symmetric(g.fov.to_radians(), width, height);
+    let frustum = Frustum::try_symmetric(g.fov.to_radians(), width, height)
+        .map_err(|e| bad_input(format!("--fov: {e}")))?;
     let desc = RendererDesc {
         validation: g.validate || cfg!(debug_assertions),
         device: DeviceDesc {
