@@ -4,7 +4,11 @@
 use std::path::{Path, PathBuf};
 
 fn main() {
-    let shader_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let shader_dir = manifest
+        .parent()
+        .expect("renderer/ has a parent")
+        .join("shaders");
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("OUT_DIR"));
     println!("cargo:rerun-if-changed={}", shader_dir.display());
 
@@ -56,8 +60,11 @@ fn main() {
         }
     }
     if !failures.is_empty() {
-        for f in &failures {
-            println!("cargo:warning={}", f.lines().next().unwrap_or(""));
+        // shaderc's first line is a generic "compilation error:"; the file:line lines follow.
+        for line in failures.iter().flat_map(|f| f.lines()) {
+            if line.contains(": error:") || line.contains(": warning:") {
+                println!("cargo:warning={line}");
+            }
         }
         panic!("shader compilation failed:\n{}", failures.join("\n"));
     }
