@@ -15,7 +15,11 @@ use crate::terrain::{load_dem, Heightfield};
 use crate::vk::DeviceDesc;
 
 #[derive(Debug, Parser)]
-#[command(name = "aerie", version, about = "Error-bounded Vulkan terrain renderer for flight simulators")]
+#[command(
+    name = "aerie",
+    version,
+    about = "Error-bounded Vulkan terrain renderer for flight simulators"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -278,7 +282,9 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
     }
     for (name, v) in [("--fps", a.fps), ("--speed", a.speed), ("--agl", a.agl)] {
         if !v.is_finite() || v < 0.0 || (name == "--fps" && v == 0.0) {
-            return Err(bad_input(format!("{name}: {v} must be a finite positive number")));
+            return Err(bad_input(format!(
+                "{name}: {v} must be a finite positive number"
+            )));
         }
     }
     for (name, v) in [("--heading", a.heading), ("--pitch", a.pitch)] {
@@ -286,8 +292,12 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
             return Err(bad_input(format!("{name}: {v} is not finite")));
         }
     }
-    std::fs::create_dir_all(&a.out)
-        .map_err(|e| bad_input(format!("--out {}: cannot create folder: {e}", a.out.display())))?;
+    std::fs::create_dir_all(&a.out).map_err(|e| {
+        bad_input(format!(
+            "--out {}: cannot create folder: {e}",
+            a.out.display()
+        ))
+    })?;
     let hf = load(&a.dem)?;
     let duration = a.frames as f64 / a.fps;
     let pass = StraightPass::over(&hf, a.heading, a.pitch, a.speed, a.agl, duration);

@@ -96,7 +96,6 @@ struct GpuTerrain {
     heights: Image2d,
     grid: TileGrid,
     frame_buffers: Vec<FrameBuffers>,
-    min_height: f32,
 }
 
 /// Owns every Vulkan object. Fields are destroyed explicitly in reverse creation order by
@@ -150,15 +149,15 @@ impl TerrainRenderer {
             }
         };
         let parts = Self::create_parts(&device, desc);
-        let (frames, staging, descriptors, timer, pipeline, target, tile_index_buffer) =
-            match parts {
-                Ok(p) => p,
-                Err(e) => {
-                    device.destroy();
-                    instance.destroy();
-                    return Err(e);
-                }
-            };
+        let (frames, staging, descriptors, timer, pipeline, target, tile_index_buffer) = match parts
+        {
+            Ok(p) => p,
+            Err(e) => {
+                device.destroy();
+                instance.destroy();
+                return Err(e);
+            }
+        };
         let mut this = Self {
             instance,
             device,
@@ -286,7 +285,11 @@ impl TerrainRenderer {
     }
 
     /// A one-off upload of a small buffer through the ring, in its own submission.
-    fn upload_buffer<T: bytemuck::Pod>(&mut self, data: &[T], dst: vk::Buffer) -> Result<(), VkError> {
+    fn upload_buffer<T: bytemuck::Pod>(
+        &mut self,
+        data: &[T],
+        dst: vk::Buffer,
+    ) -> Result<(), VkError> {
         let (i, _) = self.begin_context()?;
         let offset = self.staging.push(data, 4)?;
         let cmd = self.frames.begin_recording(&self.device, i)?;
@@ -362,12 +365,10 @@ impl TerrainRenderer {
                 }
             }
         }
-        let (min_height, _) = hf.min_max();
         self.terrain = Some(GpuTerrain {
             heights,
             grid,
             frame_buffers,
-            min_height,
         });
 
         let mut stats = UploadStats::default();
@@ -516,7 +517,7 @@ impl TerrainRenderer {
         let t1 = Instant::now();
         let (i, _) = self.begin_context()?;
         let terrain = self.terrain.as_ref().expect("checked above");
-        let uniforms = frame_uniforms(camera, &terrain.grid, terrain.min_height, self.tile_size);
+        let uniforms = frame_uniforms(camera, &terrain.grid, self.tile_size);
         let draw = DrawIndexedIndirect {
             index_count: ((m - 1) * (m - 1) * 6) as u32,
             instance_count: self.instances_scratch.len() as u32,
@@ -588,8 +589,16 @@ impl TerrainRenderer {
                 }],
             )
         };
-        copy(fb.uniforms.raw, off_uniforms, std::mem::size_of::<FrameUniforms>() as u64);
-        copy(fb.indirect.raw, off_draw, std::mem::size_of::<DrawIndexedIndirect>() as u64);
+        copy(
+            fb.uniforms.raw,
+            off_uniforms,
+            std::mem::size_of::<FrameUniforms>() as u64,
+        );
+        copy(
+            fb.indirect.raw,
+            off_draw,
+            std::mem::size_of::<DrawIndexedIndirect>() as u64,
+        );
         if let Some(off) = off_instances {
             let size = std::mem::size_of_val(self.instances_scratch.as_slice()) as u64;
             copy(fb.instances.raw, off, size);
@@ -776,7 +785,7 @@ fn sun_direction() -> [f32; 3] {
     ]
 }
 
-fn frame_uniforms(camera: &Camera, grid: &TileGrid, _min_height: f32, tile_size: u32) -> FrameUniforms {
+fn frame_uniforms(camera: &Camera, grid: &TileGrid, tile_size: u32) -> FrameUniforms {
     let m = camera.relative_world_to_clip_f32();
     let s = sun_direction();
     FrameUniforms {

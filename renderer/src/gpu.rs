@@ -110,7 +110,13 @@ mod tests {
         check!(
             FrameUniforms,
             Rules::Std140,
-            [relative_world_to_clip, sun_dir, sky_colour, grid_spacing, grid_size]
+            [
+                relative_world_to_clip,
+                sun_dir,
+                sky_colour,
+                grid_spacing,
+                grid_size
+            ]
         );
     }
 
@@ -137,10 +143,25 @@ mod tests {
     fn indirect_command_matches_vulkan() {
         use ash::vk::DrawIndexedIndirectCommand as Vk;
         assert_eq!(size_of::<DrawIndexedIndirect>(), size_of::<Vk>());
-        assert_eq!(offset_of!(DrawIndexedIndirect, index_count), offset_of!(Vk, index_count));
-        assert_eq!(offset_of!(DrawIndexedIndirect, instance_count), offset_of!(Vk, instance_count));
-        assert_eq!(offset_of!(DrawIndexedIndirect, first_index), offset_of!(Vk, first_index));
-        assert_eq!(offset_of!(DrawIndexedIndirect, vertex_offset), offset_of!(Vk, vertex_offset));
-        assert_eq!(offset_of!(DrawIndexedIndirect, first_instance), offset_of!(Vk, first_instance));
+        assert_eq!(
+            offset_of!(DrawIndexedIndirect, index_count),
+            offset_of!(Vk, index_count)
+        );
+        assert_eq!(
+            offset_of!(DrawIndexedIndirect, instance_count),
+            offset_of!(Vk, instance_count)
+        );
+        assert_eq!(
+            offset_of!(DrawIndexedIndirect, first_index),
+            offset_of!(Vk, first_index)
+        );
+        assert_eq!(
+            offset_of!(DrawIndexedIndirect, vertex_offset),
+            offset_of!(Vk, vertex_offset)
+        );
+        assert_eq!(
+            offset_of!(DrawIndexedIndirect, first_instance),
+            offset_of!(Vk, first_instance)
+        );
     }
 }

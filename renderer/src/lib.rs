@@ -4,10 +4,10 @@
 //! `vk` is the thin Vulkan plumbing; `render` draws one frame in the order of DESIGN.md's data flow.
 
 pub mod camera;
-pub mod terrain;
+pub mod cli;
+pub mod flight;
 pub mod frame;
 pub mod gpu;
-pub mod vk;
-pub mod flight;
 pub mod output;
-pub mod cli;
+pub mod terrain;
+pub mod vk;

@@ -99,7 +99,10 @@ fn fly_writes_frames_csv_and_summary() {
     // The camera moves east-north-east at 50 m/s, 30 fps.
     let x = |r: &str| r.split(',').nth(2).unwrap().parse::<f64>().unwrap();
     let dx = x(rows[2]) - x(rows[1]);
-    assert!((dx - 50.0 / 30.0 * 70f64.to_radians().sin()).abs() < 0.02, "dx {dx}");
+    assert!(
+        (dx - 50.0 / 30.0 * 70f64.to_radians().sin()).abs() < 0.02,
+        "dx {dx}"
+    );
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["frames"], 4);
@@ -122,11 +125,22 @@ fn assert_bad(dem: &Path, camera: &str, size: &str, needle: &str) {
         out.to_str().unwrap(),
     ]);
     let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(2), "expected exit 2 for {needle}: {err}");
-    assert!(err.contains(needle), "message should name {needle:?}: {err}");
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "expected exit 2 for {needle}: {err}"
+    );
+    assert!(
+        err.contains(needle),
+        "message should name {needle:?}: {err}"
+    );
     assert_eq!(err.trim().lines().count(), 1, "one-line error: {err}");
     assert!(!err.contains("panicked"), "{err}");
-    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "no file left behind");
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "no file left behind"
+    );
 }
 
 #[test]
@@ -152,7 +166,11 @@ fn bad_inputs_exit_2_with_a_named_reason_and_no_png() {
         .collect();
     bytes.extend_from_slice(&[0u8; 0]);
     std::fs::write(&nan, &bytes).unwrap();
-    std::fs::write(dir.path().join("nan.f32.json"), r#"{"width": 2, "height": 2}"#).unwrap();
+    std::fs::write(
+        dir.path().join("nan.f32.json"),
+        r#"{"width": 2, "height": 2}"#,
+    )
+    .unwrap();
     assert_bad(&nan, cam, "64x36", "byte offset 8");
 
     assert_bad(&good, "1,2,3", "64x36", "--camera");

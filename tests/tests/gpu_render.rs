@@ -44,7 +44,10 @@ fn inn_valley_matches_golden_image() {
     assert_eq!(s.draw_calls, 1);
     // Terrain fills the lower part of the view, sky the top row.
     let sky = f.depth[..W as usize].iter().filter(|&&d| d == 0.0).count();
-    let ground = f.depth[((H - 1) * W) as usize..].iter().filter(|&&d| d > 0.0).count();
+    let ground = f.depth[((H - 1) * W) as usize..]
+        .iter()
+        .filter(|&&d| d > 0.0)
+        .count();
     assert_eq!(sky, W as usize, "top row should be sky");
     assert_eq!(ground, W as usize, "bottom row should be terrain");
     check_golden("inn_valley_320x180", f, GOLDEN_TOLERANCE);
@@ -89,7 +92,10 @@ fn flat_plane_depth_matches_f64_ray_cast() {
                 checked += 1;
             }
         }
-        assert!(checked > (W * H / 4) as usize, "only {checked} pixels checked");
+        assert!(
+            checked > (W * H / 4) as usize,
+            "only {checked} pixels checked"
+        );
         assert!(sky > 0 || cam.attitude.pitch < -0.5);
     }
     // The sky is cleared to the documented colour.
@@ -158,7 +164,10 @@ fn upload_split_by_staging_budget_renders_identically() {
         r.destroy();
         assert_validation_clean(&counters);
     }
-    assert!(images[0].chunks(4).any(|p| p[0] != images[0][0]), "image is blank");
+    assert!(
+        images[0].chunks(4).any(|p| p[0] != images[0][0]),
+        "image is blank"
+    );
     assert_eq!(images[0], images[1], "chunked upload changed the image");
 }
 
@@ -178,7 +187,10 @@ fn misuse_is_an_error_not_a_crash() {
         .load_terrain(&synthetic(2000, 4, 1.0, 0.0, &[]))
         .unwrap_err()
         .to_string();
-    assert!(err.contains("8000 bytes") && err.contains("budget"), "{err}");
+    assert!(
+        err.contains("8000 bytes") && err.contains("budget"),
+        "{err}"
+    );
     // A budget too small for the renderer's own first upload fails creation cleanly.
     let tiny = RendererDesc {
         staging_budget: 1024,
@@ -192,6 +204,9 @@ fn misuse_is_an_error_not_a_crash() {
         assert_validation_clean(&c);
     }
     // Zero-sized target refused.
-    let err = TerrainRenderer::new(&test_desc(0, 10)).err().unwrap().to_string();
+    let err = TerrainRenderer::new(&test_desc(0, 10))
+        .err()
+        .unwrap()
+        .to_string();
     assert!(err.contains("0x10"), "{err}");
 }

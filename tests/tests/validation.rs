@@ -17,8 +17,15 @@ fn validation_layer_counts_a_deliberate_error() {
     if let Ok(b) = unsafe { device.raw.create_buffer(&info, None) } {
         unsafe { device.raw.destroy_buffer(b, None) };
     }
-    assert!(counters.errors() >= 1, "the layer did not report a zero-sized buffer");
-    assert!(counters.messages().iter().any(|m| m.contains("00912")), "{:?}", counters.messages());
+    assert!(
+        counters.errors() >= 1,
+        "the layer did not report a zero-sized buffer"
+    );
+    assert!(
+        counters.messages().iter().any(|m| m.contains("00912")),
+        "{:?}",
+        counters.messages()
+    );
     device.destroy();
     instance.destroy();
 }

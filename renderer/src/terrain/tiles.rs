@@ -45,7 +45,9 @@ pub fn outside_frustum(camera: &Camera, aabb: &Aabb) -> bool {
         &|p| -p.y > f.tan_up * p.z,
         &|p| -p.y < f.tan_down * p.z,
     ];
-    planes.iter().any(|outside| corners.iter().all(|&c| outside(c)))
+    planes
+        .iter()
+        .any(|outside| corners.iter().all(|&c| outside(c)))
 }
 
 /// The grid cut into tiles of `quads × quads` cells, with each tile's height range.
@@ -72,7 +74,10 @@ impl TileGrid {
         for ty in 0..tiles_y {
             for tx in 0..tiles_x {
                 let (c0, r0) = (tx * quads, ty * quads);
-                let (c1, r1) = ((c0 + quads).min(hf.width - 1), (r0 + quads).min(hf.height - 1));
+                let (c1, r1) = (
+                    (c0 + quads).min(hf.width - 1),
+                    (r0 + quads).min(hf.height - 1),
+                );
                 let mut lo = f32::INFINITY;
                 let mut hi = f32::NEG_INFINITY;
                 for r in r0..=r1 {
@@ -149,10 +154,7 @@ pub fn select_full_resolution(
             }
             stats.drawn += 1;
             out.push(TileInstance {
-                origin_rel: [
-                    (aabb.min.x - eye.x) as f32,
-                    (aabb.min.y - eye.y) as f32,
-                ],
+                origin_rel: [(aabb.min.x - eye.x) as f32, (aabb.min.y - eye.y) as f32],
                 origin_texel: [(tx * grid.quads) as i32, (ty * grid.quads) as i32],
                 step: 1.0,
                 level: 0,
@@ -193,7 +195,10 @@ mod tests {
                 let (tx, ty) = ((c / 16).min(2), (r / 16).min(1));
                 let b = grid.aabb(tx, ty);
                 let p = DVec3::new(c as f64 * 10.0, r as f64 * 20.0, hf.at(c, r) as f64);
-                assert!(p.cmpge(b.min).all() && p.cmple(b.max).all(), "{p} outside {b:?}");
+                assert!(
+                    p.cmpge(b.min).all() && p.cmple(b.max).all(),
+                    "{p} outside {b:?}"
+                );
             }
         }
         // Exact: the last tile's maximum is the grid's maximum.
@@ -217,20 +222,25 @@ mod tests {
         assert!(stats.culled > 0 && stats.drawn > 0);
         // Every drawn tile has a sample that projects into the view, and no culled tile has
         // one (checked by brute force over the tile's corner samples and centre).
-        let drawn: std::collections::HashSet<[i32; 2]> = out.iter().map(|t| t.origin_texel).collect();
+        let drawn: std::collections::HashSet<[i32; 2]> =
+            out.iter().map(|t| t.origin_texel).collect();
         for ty in 0..grid.tiles_y {
             for tx in 0..grid.tiles_x {
                 let b = grid.aabb(tx, ty);
                 let visible = b.corners().iter().any(|&c| {
-                    cam.project_px(c, 320, 180)
-                        .is_some_and(|(p, _)| p.x >= 0.0 && p.x <= 320.0 && p.y >= 0.0 && p.y <= 180.0)
+                    cam.project_px(c, 320, 180).is_some_and(|(p, _)| {
+                        p.x >= 0.0 && p.x <= 320.0 && p.y >= 0.0 && p.y <= 180.0
+                    })
                 });
                 let key = [(tx * 16) as i32, (ty * 16) as i32];
                 if visible {
                     assert!(drawn.contains(&key), "visible tile {tx},{ty} was culled");
                 }
                 if b.max.y < 1600.0 - 100.0 {
-                    assert!(!drawn.contains(&key), "tile {tx},{ty} behind the eye was drawn");
+                    assert!(
+                        !drawn.contains(&key),
+                        "tile {tx},{ty} behind the eye was drawn"
+                    );
                 }
             }
         }

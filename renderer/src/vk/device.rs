@@ -37,7 +37,10 @@ fn kind_rank(kind: vk::PhysicalDeviceType) -> u32 {
 
 /// Picks the best suitable candidate (index), or explains why none is: every device found with
 /// its type and what it lacks.
-pub fn choose_device(candidates: &[DeviceCandidate], filter: Option<&str>) -> Result<usize, String> {
+pub fn choose_device(
+    candidates: &[DeviceCandidate],
+    filter: Option<&str>,
+) -> Result<usize, String> {
     let filter_lc = filter.map(|f| f.to_lowercase());
     let best = candidates
         .iter()
@@ -120,9 +123,7 @@ fn candidate(instance: &ash::Instance, pd: vk::PhysicalDevice) -> (DeviceCandida
             missing.push("dynamicRendering");
         }
     }
-    let fmt = unsafe {
-        instance.get_physical_device_format_properties(pd, vk::Format::D32_SFLOAT)
-    };
+    let fmt = unsafe { instance.get_physical_device_format_properties(pd, vk::Format::D32_SFLOAT) };
     if !fmt
         .optimal_tiling_features
         .contains(vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT)
@@ -151,7 +152,9 @@ impl Device {
         let index = choose_device(&candidates, desc.name_filter.as_deref())
             .map_err(VkError::NoSuitableDevice)?;
         let physical = physicals[index];
-        let queue_family = described[index].1.expect("suitable device has a graphics queue");
+        let queue_family = described[index]
+            .1
+            .expect("suitable device has a graphics queue");
         let properties = unsafe { instance.raw.get_physical_device_properties(physical) };
         let families = unsafe {
             instance
@@ -259,12 +262,19 @@ mod tests {
     #[test]
     fn unsuitable_devices_are_skipped_and_listed() {
         let list = vec![
-            c("dgpu", vk::PhysicalDeviceType::DISCRETE_GPU, &["multiDrawIndirect"]),
+            c(
+                "dgpu",
+                vk::PhysicalDeviceType::DISCRETE_GPU,
+                &["multiDrawIndirect"],
+            ),
             c("llvmpipe", vk::PhysicalDeviceType::CPU, &[]),
         ];
         assert_eq!(choose_device(&list, None), Ok(1));
         let err = choose_device(&list[..1], None).unwrap_err();
-        assert!(err.contains("dgpu") && err.contains("missing multiDrawIndirect"), "{err}");
+        assert!(
+            err.contains("dgpu") && err.contains("missing multiDrawIndirect"),
+            "{err}"
+        );
     }
 
     #[test]
@@ -275,7 +285,14 @@ mod tests {
         ];
         assert_eq!(choose_device(&list, Some("LLVMPIPE")), Ok(1));
         let err = choose_device(&list, Some("radeon")).unwrap_err();
-        assert!(err.contains("--gpu 'radeon'") && err.contains("NVIDIA RTX") && err.contains("llvmpipe"), "{err}");
-        assert!(choose_device(&[], None).unwrap_err().contains("no Vulkan devices"));
+        assert!(
+            err.contains("--gpu 'radeon'")
+                && err.contains("NVIDIA RTX")
+                && err.contains("llvmpipe"),
+            "{err}"
+        );
+        assert!(choose_device(&[], None)
+            .unwrap_err()
+            .contains("no Vulkan devices"));
     }
 }

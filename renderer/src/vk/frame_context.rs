@@ -94,7 +94,11 @@ impl FrameContexts {
     }
 
     /// Resets the fence and the command pool of context `i` and begins its command buffer.
-    pub fn begin_recording(&mut self, device: &Device, i: usize) -> Result<vk::CommandBuffer, VkError> {
+    pub fn begin_recording(
+        &mut self,
+        device: &Device,
+        i: usize,
+    ) -> Result<vk::CommandBuffer, VkError> {
         let f = &self.frames[i];
         unsafe {
             device.raw.reset_fences(&[f.fence]).call("vkResetFences")?;
@@ -116,7 +120,10 @@ impl FrameContexts {
     pub fn submit(&mut self, device: &Device, i: usize) -> Result<(), VkError> {
         let f = &mut self.frames[i];
         unsafe {
-            device.raw.end_command_buffer(f.cmd).call("vkEndCommandBuffer")?;
+            device
+                .raw
+                .end_command_buffer(f.cmd)
+                .call("vkEndCommandBuffer")?;
             let cmds = [f.cmd];
             let submit = vk::SubmitInfo::default().command_buffers(&cmds);
             device
@@ -131,8 +138,12 @@ impl FrameContexts {
 
     /// Blocks until context `i`'s last submission has completed.
     pub fn wait(&self, device: &Device, i: usize) -> Result<(), VkError> {
-        unsafe { device.raw.wait_for_fences(&[self.frames[i].fence], true, u64::MAX) }
-            .call("vkWaitForFences")
+        unsafe {
+            device
+                .raw
+                .wait_for_fences(&[self.frames[i].fence], true, u64::MAX)
+        }
+        .call("vkWaitForFences")
     }
 
     pub fn destroy(&mut self, device: &Device) {

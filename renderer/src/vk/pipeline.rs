@@ -134,7 +134,8 @@ impl TerrainPipeline {
             .depth_compare_op(vk::CompareOp::GREATER);
         let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
             .color_write_mask(vk::ColorComponentFlags::RGBA)];
-        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        let blend =
+            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let colour_formats = [COLOUR_FORMAT];
@@ -170,7 +171,9 @@ impl TerrainPipeline {
         unsafe {
             device.raw.destroy_pipeline(self.raw, None);
             device.raw.destroy_pipeline_layout(self.layout, None);
-            device.raw.destroy_descriptor_set_layout(self.set_layout, None);
+            device
+                .raw
+                .destroy_descriptor_set_layout(self.set_layout, None);
             device.raw.destroy_sampler(self.height_sampler, None);
         }
         *self = Self {

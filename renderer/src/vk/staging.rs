@@ -127,8 +127,7 @@ impl StagingRing {
         frame: usize,
         fence: vk::Fence,
     ) -> Result<(), VkError> {
-        let signaled =
-            unsafe { device.raw.get_fence_status(fence) }.call("vkGetFenceStatus")?;
+        let signaled = unsafe { device.raw.get_fence_status(fence) }.call("vkGetFenceStatus")?;
         if !signaled {
             return Err(VkError::Staging(format!(
                 "region {frame} reused before its fence signaled"
@@ -156,7 +155,10 @@ impl StagingRing {
             .buffer
             .mapped_mut()
             .expect("staging ring is persistently mapped");
-        Ok((offset, &mut mapped[offset as usize..(offset + size) as usize]))
+        Ok((
+            offset,
+            &mut mapped[offset as usize..(offset + size) as usize],
+        ))
     }
 
     pub fn remaining(&self) -> u64 {

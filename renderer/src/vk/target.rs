@@ -61,7 +61,13 @@ impl OffscreenTarget {
         };
         let bytes = width as u64 * height as u64 * 4;
         let usage = vk::BufferUsageFlags::TRANSFER_DST;
-        let readback = Buffer::new(device, "colour readback", bytes, usage, MemoryLocation::GpuToCpu);
+        let readback = Buffer::new(
+            device,
+            "colour readback",
+            bytes,
+            usage,
+            MemoryLocation::GpuToCpu,
+        );
         let mut readback = match readback {
             Ok(b) => b,
             Err(e) => {
@@ -70,8 +76,13 @@ impl OffscreenTarget {
                 return Err(e);
             }
         };
-        let depth_readback =
-            Buffer::new(device, "depth readback", bytes, usage, MemoryLocation::GpuToCpu);
+        let depth_readback = Buffer::new(
+            device,
+            "depth readback",
+            bytes,
+            usage,
+            MemoryLocation::GpuToCpu,
+        );
         let depth_readback = match depth_readback {
             Ok(b) => b,
             Err(e) => {
@@ -209,14 +220,17 @@ impl OffscreenTarget {
 
     /// RGBA8 (sRGB-encoded) pixels, rows top to bottom. Valid after the frame's fence.
     pub fn colour_rgba(&self) -> Vec<u8> {
-        self.readback.mapped().map(|m| m.to_vec()).unwrap_or_default()
+        self.readback
+            .mapped()
+            .map(|m| m.to_vec())
+            .unwrap_or_default()
     }
 
     /// Reversed-Z depth per pixel (1 = near plane, 0 = infinitely far / sky).
     pub fn depth(&self) -> Vec<f32> {
         self.depth_readback
             .mapped()
-            .map(|m| bytemuck::pod_collect_to_vec(m))
+            .map(bytemuck::pod_collect_to_vec)
             .unwrap_or_default()
     }
 

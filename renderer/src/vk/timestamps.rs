@@ -24,8 +24,8 @@ impl GpuTimer {
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(QUERIES_PER_FRAME * FRAMES_IN_FLIGHT as u32);
-        let pool = unsafe { device.raw.create_query_pool(&info, None) }
-            .call("vkCreateQueryPool")?;
+        let pool =
+            unsafe { device.raw.create_query_pool(&info, None) }.call("vkCreateQueryPool")?;
         Ok(Self {
             pool,
             period_ns: device.timestamp_period_ns,
@@ -45,7 +45,13 @@ impl GpuTimer {
     }
 
     pub fn begin(&self, device: &Device, cmd: vk::CommandBuffer, frame: usize, pass: Pass) {
-        self.write(device, cmd, frame, pass as u32 * 2, vk::PipelineStageFlags::TOP_OF_PIPE);
+        self.write(
+            device,
+            cmd,
+            frame,
+            pass as u32 * 2,
+            vk::PipelineStageFlags::TOP_OF_PIPE,
+        );
     }
 
     pub fn end(&self, device: &Device, cmd: vk::CommandBuffer, frame: usize, pass: Pass) {
@@ -78,7 +84,11 @@ impl GpuTimer {
 
     /// Milliseconds per pass of frame `frame`. Only call after that frame's fence signaled and
     /// when every pass's queries were written.
-    pub fn read_ms(&self, device: &Device, frame: usize) -> Result<[f64; PASS_COUNT as usize], VkError> {
+    pub fn read_ms(
+        &self,
+        device: &Device,
+        frame: usize,
+    ) -> Result<[f64; PASS_COUNT as usize], VkError> {
         let Some(period) = self.period_ns else {
             return Ok([0.0; PASS_COUNT as usize]);
         };
