@@ -157,12 +157,13 @@ pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError>
     })?;
 
     // 3. Ranges and cross-key rules.
-    raw.validate().map_err(|(key, message)| ConfigError::Invalid {
-        source_name: source_name.to_owned(),
-        location: locate_key(text, key),
-        key: key.to_owned(),
-        message,
-    })
+    raw.validate()
+        .map_err(|(key, message)| ConfigError::Invalid {
+            source_name: source_name.to_owned(),
+            location: locate_key(text, key),
+            key: key.to_owned(),
+            message,
+        })
 }
 
 /// Line and column of the value of a `table.key` leaf, if it can be found.
@@ -216,18 +217,24 @@ fn check_dimension(key: &'static str, v: u32) -> Result<u32, Invalid> {
 
 fn parse_size(s: &str) -> Result<(u32, u32), Invalid> {
     const KEY: &str = "render.size";
-    let malformed = || (KEY, format!("expected \"WIDTHxHEIGHT\" such as \"1920x1080\", got {s:?}"));
+    let malformed = || {
+        (
+            KEY,
+            format!("expected \"WIDTHxHEIGHT\" such as \"1920x1080\", got {s:?}"),
+        )
+    };
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(malformed)?;
     let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
     if !digits(w) || !digits(h) {
         return Err(malformed());
     }
-    let (w, h) = (w.parse::<u64>(), h.parse::<u64>());
-    let in_range = |v: &Result<u64, _>| matches!(v, Ok(v) if (1..=u64::from(MAX_DIMENSION)).contains(v));
-    match (&w, &h) {
-        (Ok(w), Ok(h)) if in_range(&Ok::<u64, ()>(*w)) && in_range(&Ok::<u64, ()>(*h)) => {
-            Ok((*w as u32, *h as u32))
-        }
+    let dim = |t: &str| {
+        t.parse::<u64>()
+            .ok()
+            .filter(|v| (1..=u64::from(MAX_DIMENSION)).contains(v))
+    };
+    match (dim(w), dim(h)) {
+        (Some(w), Some(h)) => Ok((w as u32, h as u32)),
         _ => Err((
             KEY,
             format!("width and height must each be 1..={MAX_DIMENSION} pixels, got {s:?}"),
@@ -307,7 +314,12 @@ impl RawConfig {
             ));
         }
 
-        if self.dem.path.as_deref().is_some_and(|p| p.as_os_str().is_empty()) {
+        if self
+            .dem
+            .path
+            .as_deref()
+            .is_some_and(|p| p.as_os_str().is_empty())
+        {
             return Err(("dem.path", "must not be empty".to_owned()));
         }
 

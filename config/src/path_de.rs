@@ -167,12 +167,12 @@ fn unexpected(v: &Value) -> de::Unexpected<'_> {
     }
 }
 
-struct SeqAccess<'de, 'p, I> {
+struct SeqAccess<'p, I> {
     items: I,
     path: &'p [Segment],
 }
 
-impl<'de, I> de::SeqAccess<'de> for SeqAccess<'de, '_, I>
+impl<'de, I> de::SeqAccess<'de> for SeqAccess<'_, I>
 where
     I: Iterator<Item = (usize, &'de Value)>,
 {

@@ -356,7 +356,11 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
         "gpu_ms": {"median": percentile(&gpu_ms, 0.5), "p99": percentile(&gpu_ms, 0.99), "max": percentile(&gpu_ms, 1.0)},
         "frame_ms": {"median": percentile(&frame_ms, 0.5), "p99": percentile(&frame_ms, 0.99), "max": percentile(&frame_ms, 1.0)},
         "triangles": {"median": percentile(&triangles, 0.5), "max": percentile(&triangles, 1.0)},
-        "validation": {"errors": 0, "warnings": 0},
+        "validation": {
+            "enabled": s.desc.validation,
+            "errors": r.validation_counters().errors(),
+            "warnings": r.validation_counters().warnings(),
+        },
     });
     write_text(&a.out.join("summary.json"), &format!("{summary:#}\n")).map_err(runtime)?;
     println!(
