@@ -176,7 +176,7 @@ fn locate_key(text: &str, key: &str) -> Option<Location> {
 }
 
 #[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, expecting = "a table")]
 struct RawConfig {
     #[serde(default)]
     render: RawRender,
@@ -185,7 +185,7 @@ struct RawConfig {
 }
 
 #[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, expecting = "a table of render settings")]
 struct RawRender {
     size: Option<String>,
     width: Option<u32>,
@@ -199,7 +199,7 @@ struct RawRender {
 }
 
 #[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, expecting = "a table of DEM settings")]
 struct RawDem {
     path: Option<PathBuf>,
 }

@@ -86,11 +86,9 @@ pub(crate) fn dotted(path: &[Segment]) -> String {
 
 /// Deserializes `T` from `value`, tracking the key path of any error.
 pub(crate) fn from_value<'de, T: de::Deserialize<'de>>(value: &'de Value) -> Result<T, PathError> {
-    T::deserialize(PathDeserializer { value, path: &[] }).map_err(|e| {
-        let mut e = e;
-        if e.path.is_none() {
-            e.path = Some(Vec::new());
-        }
+    // An error raised by the root table itself (no key on the way) belongs to the empty path.
+    T::deserialize(PathDeserializer { value, path: &[] }).map_err(|mut e| {
+        e.path.get_or_insert_with(Vec::new);
         e
     })
 }
