@@ -219,7 +219,7 @@ mod tests {
     fn diff_counts_pixels_over_tolerance() {
         let a = vec![10u8, 10, 10, 255, 0, 0, 0, 255];
         let b = vec![10u8, 30, 10, 255, 0, 0, 5, 255];
-        let d = diff_images(&a, &b, 4);
+        let d = diff_images(&a, &b, 5);
         assert_eq!(d.max, 20);
         assert_eq!(d.fraction_over, 0.5);
         assert!((d.mean - 25.0 / 6.0).abs() < 1e-12);
