@@ -8,6 +8,7 @@ layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameUniforms frame; }
 layout(location = 0) in vec3 v_rel;
 layout(location = 1) in vec3 v_normal;
 layout(location = 2) in float v_height;
+layout(location = 3) flat in uint v_tile;
 layout(location = 0) out vec4 out_colour;
 
 vec3 srgb_to_linear(vec3 c) { return pow(c, vec3(2.2)); }
@@ -30,6 +31,15 @@ void main() {
     // Steep faces show rock, except under snow.
     float steep = smoothstep(0.55, 0.8, 1.0 - n.z);
     if (v_height < 2600.0) base = mix(base, vec3(0.45, 0.42, 0.40), steep);
+    if ((frame.grid_size.w & 1) != 0) {
+        // Debug tiles (the seed's figure 3): hue by level, brighter with refinement.
+        const vec3 hues[8] = vec3[](vec3(0.9, 0.2, 0.2), vec3(0.9, 0.6, 0.1), vec3(0.8, 0.9, 0.1),
+                                    vec3(0.2, 0.8, 0.2), vec3(0.1, 0.7, 0.8), vec3(0.2, 0.3, 0.9),
+                                    vec3(0.6, 0.2, 0.9), vec3(0.9, 0.3, 0.7));
+        uint level = v_tile & 255u;
+        uint r = v_tile >> 8;
+        base = mix(hues[level % 8u], vec3(1.0), 0.18 * float(r));
+    }
     vec3 albedo = srgb_to_linear(base);
     float ambient = frame.sun_dir.w;
     float lambert = max(dot(n, frame.sun_dir.xyz), 0.0);

@@ -1,42 +1,75 @@
 #version 450
-// Full-resolution tiles: one instance per tile, vertices generated from gl_VertexIndex,
-// heights fetched from the R32F texture, positions relative to the eye (DESIGN.md "Precision").
+// Clipmap tiles: one instance per tile, vertices generated from gl_VertexIndex (grid, then the
+// skirt under the perimeter), heights from the level's toroidal texture (r = 0) or from the
+// refined-tile pool r, positions relative to the eye with the Earth-curvature drop
+// (DESIGN.md "The terrain technique", "Precision", "Earth curvature").
 #extension GL_GOOGLE_include_directive : require
 #include "gpu_types.glsl"
 
 layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameUniforms frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Instances { TileInstance tiles[]; };
-layout(set = 0, binding = 2) uniform sampler2D heights;
+layout(set = 0, binding = 2) uniform sampler2DArray clipmap;
+layout(set = 0, binding = 3) uniform sampler2DArray pools[6];
 
 layout(location = 0) out vec3 v_rel;
 layout(location = 1) out vec3 v_normal;
 layout(location = 2) out float v_height;
+layout(location = 3) flat out uint v_tile;
 
-float height_at(ivec2 t) {
-    return texelFetch(heights, clamp(t, ivec2(0), frame.grid_size.xy - 1), 0).r;
+float fetch(TileInstance t, ivec2 ij, int side) {
+    if (t.refinement == 0u) {
+        int T = frame.clipmap.x;
+        // Level-L vertex coordinates; +T keeps the toroidal modulo non-negative at ij = -1.
+        ivec2 v = (t.origin_sample >> int(t.level)) + ij;
+        return texelFetch(clipmap, ivec3((v + T) % T, int(t.level)), 0).r;
+    }
+    ivec3 c = ivec3(clamp(ij, ivec2(0), ivec2(side - 1)), int(t.slot));
+    switch (t.refinement) {
+        case 1u: return texelFetch(pools[0], c, 0).r;
+        case 2u: return texelFetch(pools[1], c, 0).r;
+        case 3u: return texelFetch(pools[2], c, 0).r;
+        case 4u: return texelFetch(pools[3], c, 0).r;
+        case 5u: return texelFetch(pools[4], c, 0).r;
+        default: return texelFetch(pools[5], c, 0).r;
+    }
 }
 
 void main() {
     TileInstance t = tiles[gl_InstanceIndex];
-    int m = frame.grid_size.z + 1;
-    ivec2 ij = ivec2(gl_VertexIndex % m, gl_VertexIndex / m);
+    int side = (frame.grid_size.z << t.refinement) + 1;
+    int n = side - 1;
+    int vi = gl_VertexIndex;
+    bool skirt = vi >= side * side;
+    ivec2 ij;
+    if (!skirt) {
+        ij = ivec2(vi % side, vi / side);
+    } else {
+        // Same perimeter walk as terrain::mesh::perimeter_vertex.
+        int k = vi - side * side;
+        int e = k / n;
+        int s = k % n;
+        ij = e == 0 ? ivec2(s, 0) : e == 1 ? ivec2(n, s) : e == 2 ? ivec2(n - s, n) : ivec2(0, n - s);
+    }
     int step = int(t.step);
-    // Vertices past the grid's last sample collapse onto it (zero-area triangles).
-    ivec2 texel = min(t.origin_texel + ij * step, frame.grid_size.xy - 1);
-    float h = height_at(texel);
-    vec2 d = vec2(texel - t.origin_texel) * frame.grid_spacing.xy;
-    vec3 rel = vec3(t.origin_rel + d, h - frame.grid_spacing.z);
+    // Vertices past the last valid sample collapse onto the first vertex at or past it, so the
+    // padding added for the clipmap is never drawn as terrain.
+    ivec2 lim = (frame.grid_size.xy - 1 - t.origin_sample + step - 1) / step;
+    ij = min(ij, lim);
+    float h = fetch(t, ij, side);
+    vec2 xy = t.origin_rel + vec2(ij) * float(step) * frame.grid_spacing.xy;
+    float z = h - frame.grid_spacing.z - frame.grid_spacing.w * dot(xy, xy);
+    if (skirt) z -= t.skirt_m;
 
-    // Normal from central differences of the full-resolution heights (one-sided at the edges).
-    ivec2 lo = max(texel - ivec2(step), ivec2(0));
-    ivec2 hi = min(texel + ivec2(step), frame.grid_size.xy - 1);
-    float dx = float(max(hi.x - lo.x, 1)) * frame.grid_spacing.x;
-    float dy = float(max(hi.y - lo.y, 1)) * frame.grid_spacing.y;
-    float dhdx = (height_at(ivec2(hi.x, texel.y)) - height_at(ivec2(lo.x, texel.y))) / dx;
-    float dhdy = (height_at(ivec2(texel.x, hi.y)) - height_at(ivec2(texel.x, lo.y))) / dy;
+    // Normal from central differences at the drawn resolution (one-sided at pool tile edges).
+    ivec2 lo = t.refinement == 0u ? ij - 1 : max(ij - 1, ivec2(0));
+    ivec2 hi = t.refinement == 0u ? ij + 1 : min(ij + 1, ivec2(n));
+    vec2 span = vec2(max(hi - lo, ivec2(1))) * float(step) * frame.grid_spacing.xy;
+    float dhdx = (fetch(t, ivec2(hi.x, ij.y), side) - fetch(t, ivec2(lo.x, ij.y), side)) / span.x;
+    float dhdy = (fetch(t, ivec2(ij.x, hi.y), side) - fetch(t, ivec2(ij.x, lo.y), side)) / span.y;
 
-    v_rel = rel;
+    v_rel = vec3(xy, z);
     v_normal = normalize(vec3(-dhdx, -dhdy, 1.0));
     v_height = h;
-    gl_Position = frame.relative_world_to_clip * vec4(rel, 1.0);
+    v_tile = t.level | (t.refinement << 8);
+    gl_Position = frame.relative_world_to_clip * vec4(xy, z, 1.0);
 }

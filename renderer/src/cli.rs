@@ -7,11 +7,15 @@ use std::time::Instant;
 use clap::{Args, Parser, Subcommand};
 use glam::DVec3;
 
+use std::sync::Arc;
+
 use crate::camera::{parse_camera_arg, parse_size_arg, Attitude, Camera, Frustum};
 use crate::flight::StraightPass;
 use crate::frame::{FrameStats, RendererDesc, TerrainRenderer};
 use crate::output::{write_png, write_text};
-use crate::terrain::{load_dem, Heightfield};
+use crate::terrain::bake::{bake, bake_path_for, load_or_bake, BakeOutcome, BakeParams, ErrorBake};
+use crate::terrain::dataset::{load_dataset, Dataset};
+use crate::terrain::select::{LodMode, SelectParams, MAX_REFINEMENT};
 use crate::vk::DeviceDesc;
 
 #[derive(Debug, Parser)]
@@ -31,6 +35,10 @@ pub enum Command {
     Render(RenderArgs),
     /// Fly a scripted straight-and-level pass over a DEM headless: PNGs + per-frame CSV.
     Fly(FlyArgs),
+    /// Generate a deterministic synthetic DEM (raw f32 + JSON sidecar) for scale and stress tests.
+    GenDem(crate::commands::gen_dem::GenDemArgs),
+    /// Bake the per-tile error table of a dataset (file or folder of SRTM tiles).
+    Bake(crate::commands::bake::BakeArgs),
 }
 
 #[derive(Debug, Args)]
@@ -47,11 +55,35 @@ pub struct GpuArgs {
     /// Output size, WxH pixels.
     #[arg(long, default_value = "1920x1080")]
     pub size: String,
+    /// Screen-space error bound τ, pixels.
+    #[arg(long, default_value_t = 1.0)]
+    pub tau: f64,
+    /// Level-of-detail decision: bounded (ours), clipmap (no refinement), full (brute force).
+    #[arg(long, value_enum, default_value_t = LodArg::Bounded)]
+    pub lod: LodArg,
+    /// Clipmap patch side n in vertices (129 or 257; n = P(m−1)+1).
+    #[arg(long, default_value_t = 129)]
+    pub patch: u32,
+    /// Colour tiles by clipmap level and refinement.
+    #[arg(long)]
+    pub debug_tiles: bool,
+    /// Draw a flat Earth (no curvature drop).
+    #[arg(long)]
+    pub no_curvature: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum LodArg {
+    Bounded,
+    Clipmap,
+    Full,
 }
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
-    /// Elevation model: .hgt, .hgt.zip, 16-bit .png, raw .f32/.u16 with a .json sidecar, .npy.
+    /// Elevation model: .hgt, .hgt.zip, a folder of SRTM tiles, GeoTIFF, 16-bit .png,
+    /// raw .f32/.u16 with a .json sidecar, .npy/.npz. Its error bake is read from (or written
+    /// to) `<name>.aerie-bake` next to it.
     #[arg(long)]
     pub dem: PathBuf,
     /// Camera as x,y,z,heading,pitch,roll: metres from the DEM's south-west sample (z above sea
@@ -104,14 +136,14 @@ pub struct Failure {
     pub message: String,
 }
 
-fn bad_input(message: impl ToString) -> Failure {
+pub(crate) fn bad_input(message: impl ToString) -> Failure {
     Failure {
         code: 2,
         message: message.to_string(),
     }
 }
 
-fn runtime(message: impl ToString) -> Failure {
+pub(crate) fn runtime(message: impl ToString) -> Failure {
     Failure {
         code: 1,
         message: message.to_string(),
@@ -122,6 +154,8 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
         Command::Render(a) => cmd_render(a),
         Command::Fly(a) => cmd_fly(a),
+        Command::GenDem(a) => crate::commands::gen_dem::run(a),
+        Command::Bake(a) => crate::commands::bake::run(a),
     }
 }
 
@@ -142,6 +176,27 @@ fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
     }
     let frustum = Frustum::try_symmetric(g.fov.to_radians(), width, height)
         .map_err(|e| bad_input(format!("--fov: {e}")))?;
+    if !(g.tau.is_finite() && g.tau > 0.0) {
+        return Err(bad_input(format!("--tau: {} must be a positive number of pixels", g.tau)));
+    }
+    let defaults = RendererDesc::default();
+    let q = defaults.tile_size - 1;
+    if g.patch < 8 * q + 1 || (g.patch - 1) % (2 * q) != 0 {
+        return Err(bad_input(format!(
+            "--patch: {} must be P·{q}+1 with P even and ≥ 8 (e.g. 129 or 257)",
+            g.patch
+        )));
+    }
+    let mode = match g.lod {
+        LodArg::Bounded => LodMode::Bounded,
+        LodArg::Clipmap => LodMode::Clipmap,
+        LodArg::Full => LodMode::Full,
+    };
+    let mut pool_capacity = defaults.pool_capacity;
+    if mode == LodMode::Full {
+        // Brute force draws every visible tile at full resolution: room for all of them.
+        pool_capacity = [1024, 512, 256, 128, 48, 16];
+    }
     let desc = RendererDesc {
         validation: g.validate || cfg!(debug_assertions),
         device: DeviceDesc {
@@ -149,7 +204,17 @@ fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
         },
         width,
         height,
-        ..Default::default()
+        patch_tiles: (g.patch - 1) / q,
+        pool_capacity,
+        debug_tiles: g.debug_tiles,
+        select: SelectParams {
+            mode,
+            tau_px: g.tau,
+            curvature: !g.no_curvature,
+            max_refinement: if mode == LodMode::Full { MAX_REFINEMENT } else { 4 },
+            ..SelectParams::default()
+        },
+        ..defaults
     };
     Ok(Setup {
         width,
@@ -159,13 +224,19 @@ fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
     })
 }
 
-fn load(path: &Path) -> Result<Heightfield, Failure> {
+/// Loads the dataset (file or folder) and its error bake: reads `<name>.aerie-bake` when it is a
+/// valid bake of this data, else bakes and writes it; when it cannot be written (read-only
+/// folder, or a file that is not ours) the bake is kept in memory and the reason printed.
+pub fn prepare_terrain(path: &Path, tile_size: u32) -> Result<(Arc<Dataset>, Arc<ErrorBake>), Failure> {
     let t = Instant::now();
-    let hf = load_dem(path).map_err(bad_input)?;
+    let ds = load_dataset(path).map_err(bad_input)?;
+    let hf = &ds.hf;
     let (lo, hi) = hf.min_max();
     eprintln!(
-        "loaded {}: {}x{} samples, {:.0}..{:.0} m, {} voids filled, {} ({:.2} s)",
+        "loaded {}: {}x{} samples (padded to {}x{}), {:.0}..{:.0} m, {} voids filled, {} ({:.2} s)",
         path.display(),
+        ds.valid_width,
+        ds.valid_height,
         hf.width,
         hf.height,
         lo,
@@ -174,7 +245,39 @@ fn load(path: &Path) -> Result<Heightfield, Failure> {
         hf.spacing_note,
         t.elapsed().as_secs_f64()
     );
-    Ok(hf)
+    let params = BakeParams {
+        tile_size,
+        levels: 0,
+    };
+    let bake_path = bake_path_for(path);
+    let t = Instant::now();
+    let quiet = |_: u64, _: u64| {};
+    let b = match load_or_bake(&ds, &bake_path, params, false, &quiet) {
+        Ok((b, outcome)) => {
+            let what = match outcome {
+                BakeOutcome::UpToDate => "read".to_string(),
+                BakeOutcome::Baked => "baked and wrote".to_string(),
+                BakeOutcome::Replaced(why) => format!("re-baked ({why}) and wrote"),
+            };
+            eprintln!(
+                "{what} {} ({} levels, {:.2} s)",
+                bake_path.display(),
+                b.levels.len(),
+                t.elapsed().as_secs_f64()
+            );
+            b
+        }
+        Err(e) => {
+            let b = bake(&ds, params, &quiet);
+            eprintln!(
+                "baked in memory ({} levels, {:.2} s); not saved: {e}",
+                b.levels.len(),
+                t.elapsed().as_secs_f64()
+            );
+            b
+        }
+    };
+    Ok((Arc::new(ds), Arc::new(b)))
 }
 
 fn check_validation(r: &TerrainRenderer) -> Result<(), Failure> {
@@ -195,9 +298,9 @@ fn cmd_render(a: RenderArgs) -> Result<(), Failure> {
     let (position, attitude) =
         parse_camera_arg(&a.camera).map_err(|e| bad_input(format!("--camera: {e}")))?;
     check_out_file(&a.out)?;
-    let hf = load(&a.dem)?;
+    let (ds, b) = prepare_terrain(&a.dem, s.desc.tile_size)?;
     let mut r = TerrainRenderer::new(&s.desc).map_err(runtime)?;
-    r.load_terrain(&hf).map_err(runtime)?;
+    r.load_terrain(ds, b, position).map_err(runtime)?;
     let camera = Camera::new(position, attitude, s.frustum);
     let stats = r.render(&camera).map_err(runtime)?;
     let rgba = r.colour_rgba();
@@ -209,9 +312,13 @@ fn cmd_render(a: RenderArgs) -> Result<(), Failure> {
         "device": device,
         "dem": a.dem.display().to_string(),
         "size": [s.width, s.height],
+        "lod": s.desc.select.mode,
+        "tau_px": s.desc.select.tau_px,
         "triangles": stats.triangles,
         "tiles_drawn": stats.tiles_drawn,
         "tiles_culled": stats.tiles_culled,
+        "tiles_by_refinement": stats.tiles_by_refinement,
+        "tiles_late": stats.tiles_late,
         "draw_calls": stats.draw_calls,
         "gpu_ms": stats.gpu_upload_ms + stats.gpu_terrain_ms,
         "cpu_select_us": stats.cpu_select_us,
@@ -237,11 +344,10 @@ fn check_out_file(out: &Path) -> Result<(), Failure> {
     Ok(())
 }
 
-/// One CSV row per frame.
+/// One CSV row per frame: the pose, then every frame statistic.
 fn csv_row(s: &FrameStats, t: f64, pos: DVec3, att: Attitude) -> String {
     format!(
-        "{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.3},{:.3},{},{},{},{},{},{},{:.1},{:.1},{:.3},{:.3}\n",
-        s.frame,
+        "{:.4},{:.2},{:.2},{:.2},{:.3},{:.3},{:.3},{}\n",
         t,
         pos.x,
         pos.y,
@@ -249,20 +355,17 @@ fn csv_row(s: &FrameStats, t: f64, pos: DVec3, att: Attitude) -> String {
         att.heading.to_degrees(),
         att.pitch.to_degrees(),
         att.roll.to_degrees(),
-        s.tiles_considered,
-        s.tiles_culled,
-        s.tiles_drawn,
-        s.triangles,
-        s.draw_calls,
-        s.bytes_uploaded,
-        s.cpu_select_us,
-        s.cpu_record_us,
-        s.gpu_upload_ms,
-        s.gpu_terrain_ms
+        s.csv_row()
     )
 }
 
-pub const FRAMES_CSV_HEADER: &str = "frame,time_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg,tiles_considered,tiles_culled,tiles_drawn,triangles,draw_calls,bytes_uploaded,cpu_select_us,cpu_record_us,gpu_upload_ms,gpu_terrain_ms\n";
+/// Header of `frames.csv`.
+pub fn frames_csv_header() -> String {
+    format!(
+        "time_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg,{}\n",
+        FrameStats::CSV_HEADER
+    )
+}
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {
     if sorted.is_empty() {
@@ -298,14 +401,15 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
             a.out.display()
         ))
     })?;
-    let hf = load(&a.dem)?;
+    let (ds, b) = prepare_terrain(&a.dem, s.desc.tile_size)?;
     let duration = a.frames as f64 / a.fps;
-    let pass = StraightPass::over(&hf, a.heading, a.pitch, a.speed, a.agl, duration);
+    let pass = StraightPass::over(&ds, a.heading, a.pitch, a.speed, a.agl, duration);
     let mut r = TerrainRenderer::new(&s.desc).map_err(runtime)?;
     let t_upload = Instant::now();
-    let up = r.load_terrain(&hf).map_err(runtime)?;
+    let up = r.load_terrain(ds, b, pass.pose_at(0.0).0).map_err(runtime)?;
     eprintln!(
-        "uploaded {:.1} MB of heights in {} submissions ({:.2} s) on {}",
+        "{} clipmap levels filled: {:.1} MB in {} submissions ({:.2} s) on {}",
+        up.levels,
         up.bytes as f64 / 1e6,
         up.submissions,
         t_upload.elapsed().as_secs_f64(),
@@ -317,7 +421,9 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar.set_message("flying");
-    let mut csv = String::from(FRAMES_CSV_HEADER);
+    let mut csv = frames_csv_header();
+    let mut late = 0u64;
+    let mut refined = 0u64;
     let mut gpu_ms = Vec::new();
     let mut frame_ms = Vec::new();
     let mut triangles = Vec::new();
@@ -331,6 +437,8 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
         frame_ms.push(wall.elapsed().as_secs_f64() * 1e3);
         gpu_ms.push(stats.gpu_upload_ms + stats.gpu_terrain_ms);
         triangles.push(stats.triangles as f64);
+        late += stats.tiles_late as u64;
+        refined += stats.tiles_drawn as u64 - stats.tiles_by_refinement[0] as u64;
         csv.push_str(&csv_row(&stats, t, pos, att));
         if f % a.every == 0 {
             let path = a.out.join(format!("frame_{f:04}.png"));
@@ -356,6 +464,10 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
         "gpu_ms": {"median": percentile(&gpu_ms, 0.5), "p99": percentile(&gpu_ms, 0.99), "max": percentile(&gpu_ms, 1.0)},
         "frame_ms": {"median": percentile(&frame_ms, 0.5), "p99": percentile(&frame_ms, 0.99), "max": percentile(&frame_ms, 1.0)},
         "triangles": {"median": percentile(&triangles, 0.5), "max": percentile(&triangles, 1.0)},
+        "lod": s.desc.select.mode,
+        "tau_px": s.desc.select.tau_px,
+        "tiles_refined": refined,
+        "tiles_late": late,
         "validation": {
             "enabled": s.desc.validation,
             "errors": r.validation_counters().errors(),
@@ -364,7 +476,7 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
     });
     write_text(&a.out.join("summary.json"), &format!("{summary:#}\n")).map_err(runtime)?;
     println!(
-        "{} frames ({} PNGs) in {}: frame median {:.1} ms, p99 {:.1} ms, max {:.1} ms (GPU median {:.1} ms); triangles median {:.0}; validation clean",
+        "{} frames ({} PNGs) in {}: frame median {:.1} ms, p99 {:.1} ms, max {:.1} ms (GPU median {:.1} ms); triangles median {:.0}; {} tiles refined, {} late; validation clean",
         a.frames,
         pngs,
         a.out.display(),
@@ -372,7 +484,9 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
         percentile(&frame_ms, 0.99),
         percentile(&frame_ms, 1.0),
         percentile(&gpu_ms, 0.5),
-        percentile(&triangles, 0.5)
+        percentile(&triangles, 0.5),
+        refined,
+        late
     );
     Ok(())
 }

@@ -3,6 +3,8 @@
 use glam::{DVec2, DVec3};
 
 use crate::camera::Attitude;
+use crate::terrain::dataset::Dataset;
+#[cfg(test)]
 use crate::terrain::Heightfield;
 
 /// A straight, level pass at constant speed: position = start + t·speed·(sin ψ, cos ψ).
@@ -19,14 +21,16 @@ impl StraightPass {
     /// sample, camera pitched `pitch_deg`, lasting `duration_s` at `speed` m/s and centred on
     /// the dataset's middle (clamped so the pass starts inside the dataset).
     pub fn over(
-        hf: &Heightfield,
+        ds: &Dataset,
         heading_deg: f64,
         pitch_deg: f64,
         speed: f64,
         agl: f64,
         duration_s: f64,
     ) -> Self {
-        let (ex, ey) = hf.extent_m();
+        let hf = &ds.hf;
+        let ex = (ds.valid_width - 1) as f64 * hf.spacing_x;
+        let ey = (ds.valid_height - 1) as f64 * hf.spacing_y;
         let centre = DVec2::new(ex / 2.0, ey / 2.0);
         let h = heading_deg.to_radians();
         let dir = DVec2::new(h.sin(), h.cos());
@@ -63,7 +67,8 @@ mod tests {
             voids_filled: 0,
             spacing_note: String::new(),
         };
-        let pass = StraightPass::over(&hf, 90.0, -10.0, 50.0, 300.0, 10.0);
+        let ds = Dataset::from_heightfield(hf, "test".into());
+        let pass = StraightPass::over(&ds, 90.0, -10.0, 50.0, 300.0, 10.0);
         let (p0, a) = pass.pose_at(0.0);
         let (p1, _) = pass.pose_at(2.0);
         assert!((p1.x - p0.x - 100.0).abs() < 1e-9 && (p1.y - p0.y).abs() < 1e-9);

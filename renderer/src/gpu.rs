@@ -13,6 +13,7 @@ pub struct FrameUniforms {
     pub sky_colour: [f32; 4],
     pub grid_spacing: [f32; 4],
     pub grid_size: [i32; 4],
+    pub clipmap: [i32; 4],
 }
 
 /// Storage buffer element (std430), one per drawn tile.
@@ -20,16 +21,20 @@ pub struct FrameUniforms {
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
 pub struct TileInstance {
     pub origin_rel: [f32; 2],
-    pub origin_texel: [i32; 2],
-    pub step: f32,
+    pub origin_sample: [i32; 2],
+    pub step: u32,
     pub level: u32,
     pub refinement: u32,
+    pub slot: u32,
+    pub skirt_m: f32,
     pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
 }
 
 /// `VkDrawIndexedIndirectCommand`, as the device reads it (a Pod twin of ash's struct).
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq, Eq, Default)]
 pub struct DrawIndexedIndirect {
     pub index_count: u32,
     pub instance_count: u32,
@@ -115,7 +120,8 @@ mod tests {
                 sun_dir,
                 sky_colour,
                 grid_spacing,
-                grid_size
+                grid_size,
+                clipmap
             ]
         );
     }
@@ -125,7 +131,7 @@ mod tests {
         check!(
             TileInstance,
             Rules::Std430,
-            [origin_rel, origin_texel, step, level, refinement, pad0]
+            [origin_rel, origin_sample, step, level, refinement, slot, skirt_m, pad0, pad1, pad2]
         );
     }
 
@@ -135,7 +141,7 @@ mod tests {
         // float is pushed to offset 8, and std140 rounds the struct to 16.
         assert_eq!(type_layout("vec3", Rules::Std430), (12, 16));
         let (fields, size) = glsl_struct("TileInstance", Rules::Std140);
-        assert_eq!(fields[1], ("origin_texel".to_string(), 8));
+        assert_eq!(fields[1], ("origin_sample".to_string(), 8));
         assert_eq!(size % 16, 0);
     }
 

@@ -5,6 +5,7 @@
 
 pub mod camera;
 pub mod cli;
+pub mod commands;
 pub mod flight;
 pub mod frame;
 pub mod gpu;

@@ -95,9 +95,10 @@ fn fly_writes_frames_csv_and_summary() {
     let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
     let rows: Vec<&str> = csv.lines().collect();
     assert_eq!(rows.len(), 5, "header + 4 frames");
-    assert!(rows[0].starts_with("frame,time_s,x_m"));
+    assert!(rows[0].starts_with("time_s,x_m,y_m"));
+    assert!(rows[0].contains("tiles_late") && rows[0].contains("gpu_terrain_ms"));
     // The camera moves east-north-east at 50 m/s, 30 fps.
-    let x = |r: &str| r.split(',').nth(2).unwrap().parse::<f64>().unwrap();
+    let x = |r: &str| r.split(',').nth(1).unwrap().parse::<f64>().unwrap();
     let dx = x(rows[2]) - x(rows[1]);
     assert!(
         (dx - 50.0 / 30.0 * 70f64.to_radians().sin()).abs() < 0.02,

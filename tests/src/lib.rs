@@ -3,8 +3,12 @@
 
 use std::path::{Path, PathBuf};
 
+use std::sync::Arc;
+
 use aerie::camera::Camera;
 use aerie::frame::{FrameStats, RendererDesc, TerrainRenderer};
+use aerie::terrain::bake::{bake, BakeParams, ErrorBake};
+use aerie::terrain::dataset::Dataset;
 use aerie::terrain::Heightfield;
 
 /// The repository root.
@@ -49,11 +53,34 @@ pub fn test_desc(width: u32, height: u32) -> RendererDesc {
     }
 }
 
+/// A heightfield padded into a dataset, with its error bake (tile size of `desc`).
+pub fn prepare(desc: &RendererDesc, hf: &Heightfield) -> (Arc<Dataset>, Arc<ErrorBake>) {
+    let ds = Dataset::from_heightfield(hf.clone(), "test".into());
+    let params = BakeParams {
+        tile_size: desc.tile_size,
+        levels: 0,
+    };
+    let b = bake(&ds, params, &|_, _| {});
+    (Arc::new(ds), Arc::new(b))
+}
+
 /// Renders each camera with a fresh renderer (validation on), tears everything down and
 /// panics if the validation layer reported any error or warning — including leaks at teardown.
 pub fn render_frames(desc: &RendererDesc, hf: &Heightfield, cameras: &[Camera]) -> Vec<Rendered> {
+    let (ds, b) = prepare(desc, hf);
+    render_dataset(desc, ds, b, cameras)
+}
+
+/// As [`render_frames`] for an already prepared dataset.
+pub fn render_dataset(
+    desc: &RendererDesc,
+    ds: Arc<Dataset>,
+    b: Arc<ErrorBake>,
+    cameras: &[Camera],
+) -> Vec<Rendered> {
     let mut r = TerrainRenderer::new(desc).expect("create renderer");
-    r.load_terrain(hf).expect("upload terrain");
+    r.load_terrain(ds, b, cameras[0].position)
+        .expect("upload terrain");
     let mut out = Vec::new();
     for cam in cameras {
         let stats = r.render(cam).expect("render");

@@ -5,6 +5,7 @@
 use aerie::camera::{Attitude, Camera, Frustum};
 use aerie::frame::{RendererDesc, TerrainRenderer, SKY_LINEAR};
 use aerie::terrain::load_dem;
+use aerie::terrain::select::{LodMode, SelectParams};
 use aerie_tests::*;
 use glam::DVec3;
 
@@ -28,29 +29,77 @@ fn linear_to_srgb8(c: f32) -> u8 {
     (s * 255.0).round() as u8
 }
 
+/// South of Innsbruck above the Wipptal, looking north across the Inn valley at the
+/// Nordkette (Karwendel); the valley floor is 1800 m below the range.
+fn inn_camera() -> Camera {
+    camera([30500.0, 12000.0, 4500.0], [0.0, -15.0, 0.0], 90.0)
+}
+
+fn desc_with(mode: LodMode, tau: f64) -> RendererDesc {
+    let mut d = test_desc(W, H);
+    d.select = SelectParams {
+        mode,
+        tau_px: tau,
+        ..SelectParams::default()
+    };
+    if mode == LodMode::Full {
+        d.pool_capacity = [1024, 512, 256, 128, 48, 16];
+        d.select.max_refinement = 6;
+    }
+    d
+}
+
 #[test]
 fn inn_valley_matches_golden_image() {
     let hf = load_dem(&demo_dem()).expect("demo DEM loads");
-    // South of Innsbruck above the Wipptal, looking north across the Inn valley at the
-    // Nordkette (Karwendel); the valley floor is 1800 m below the range.
-    let cam = camera([30500.0, 12000.0, 4500.0], [0.0, -15.0, 0.0], 90.0);
-    let frames = render_frames(&test_desc(W, H), &hf, &[cam]);
+    let frames = render_frames(&desc_with(LodMode::Bounded, 1.0), &hf, &[inn_camera()]);
     let f = &frames[0];
     let s = f.stats;
     assert!(s.tiles_culled > 0 && s.tiles_drawn > 0, "{s:?}");
     assert_eq!(s.tiles_drawn + s.tiles_culled, s.tiles_considered);
-    assert_eq!(s.tiles_considered, 75 * 75);
-    assert_eq!(s.triangles, s.tiles_drawn as u64 * 16 * 16 * 2);
-    assert_eq!(s.draw_calls, 1);
+    assert_eq!(s.tiles_by_refinement.iter().sum::<u32>(), s.tiles_drawn);
+    assert!(s.tiles_by_refinement[0] < s.tiles_drawn, "τ = 1 px refines some tiles");
+    assert_eq!((s.draw_calls, s.tiles_late, s.tiles_unbounded), (1, 0, 0));
     // Terrain fills the lower part of the view, sky the top row.
     let sky = f.depth[..W as usize].iter().filter(|&&d| d == 0.0).count();
-    let ground = f.depth[((H - 1) * W) as usize..]
-        .iter()
-        .filter(|&&d| d > 0.0)
-        .count();
+    let ground = f.depth[((H - 1) * W) as usize..].iter().filter(|&&d| d > 0.0).count();
     assert_eq!(sky, W as usize, "top row should be sky");
     assert_eq!(ground, W as usize, "bottom row should be terrain");
     check_golden("inn_valley_320x180", f, GOLDEN_TOLERANCE);
+}
+
+#[test]
+fn debug_tiles_view_matches_golden_image() {
+    let hf = load_dem(&demo_dem()).expect("demo DEM loads");
+    let mut desc = desc_with(LodMode::Bounded, 1.0);
+    desc.debug_tiles = true;
+    let frames = render_frames(&desc, &hf, &[inn_camera()]);
+    check_golden("inn_valley_debug_tiles_320x180", &frames[0], GOLDEN_TOLERANCE);
+}
+
+/// At τ = 0.5 px the error-bounded clipmap and brute force (every tile at full resolution)
+/// draw the same picture, with far fewer triangles.
+#[test]
+fn bounded_at_half_pixel_looks_like_brute_force() {
+    let hf = load_dem(&demo_dem()).expect("demo DEM loads");
+    let cam = inn_camera();
+    let full = render_frames(&desc_with(LodMode::Full, 0.5), &hf, &[cam]);
+    let bounded = render_frames(&desc_with(LodMode::Bounded, 0.5), &hf, &[cam]);
+    let plain = render_frames(&desc_with(LodMode::Clipmap, 0.5), &hf, &[cam]);
+    let (f, b, p) = (&full[0], &bounded[0], &plain[0]);
+    assert!(b.stats.triangles < f.stats.triangles, "{} vs {}", b.stats.triangles, f.stats.triangles);
+    let d_bounded = diff_images(&b.rgba, &f.rgba, 16);
+    let d_plain = diff_images(&p.rgba, &f.rgba, 16);
+    let out = test_output_dir();
+    for (name, img) in [("full", f), ("bounded", b), ("clipmap", p)] {
+        aerie::output::write_png(&out.join(format!("tau_half_{name}.png")), W, H, &img.rgba).unwrap();
+    }
+    assert!(
+        d_bounded.fraction_over <= 0.01 && d_bounded.mean <= 1.0,
+        "bounded vs brute force: {d_bounded:?}"
+    );
+    // The comparison can tell: plain clipmaps (no refinement) differ visibly.
+    assert!(d_plain.mean > d_bounded.mean, "plain {d_plain:?} vs bounded {d_bounded:?}");
 }
 
 /// Every pixel of a flat plane: the GPU's depth equals the f64 oracle's (ray through the pixel
@@ -60,10 +109,12 @@ fn flat_plane_depth_matches_f64_ray_cast() {
     let plane_h = 250.0f32;
     let hf = synthetic(257, 257, 20.0, plane_h, &[]);
     let cams = [
-        camera([2560.0, 300.0, 400.0], [10.0, -20.0, 0.0], 90.0),
+        camera([2571.0, 300.0, 400.0], [10.0, -20.0, 0.0], 90.0),
         camera([1000.0, 4000.0, 1250.0], [135.0, -35.0, 25.0], 60.0),
     ];
-    let frames = render_frames(&test_desc(W, H), &hf, &cams);
+    let mut desc = test_desc(W, H);
+    desc.select.curvature = false;
+    let frames = render_frames(&desc, &hf, &cams);
     for (cam, f) in cams.iter().zip(&frames) {
         let (ex, ey) = hf.extent_m();
         let mut checked = 0;
@@ -114,7 +165,9 @@ fn nearer_surface_wins_with_reversed_z() {
     // Flat ground at 0 with a 200 m block over samples 60..=68 in both directions (10 m spacing).
     let hf = synthetic(129, 129, 10.0, 0.0, &[(60, 60, 68, 68, 200.0)]);
     let cam = camera([640.0, 100.0, 150.0], [0.0, -5.0, 0.0], 60.0);
-    let frames = render_frames(&test_desc(W, H), &hf, &[cam]);
+    let mut desc = test_desc(W, H);
+    desc.select.curvature = false;
+    let frames = render_frames(&desc, &hf, &[cam]);
     let f = &frames[0];
     // A point on the tower's south face (sloped from y=590 at z=0 to y=600 at z=200).
     let face = DVec3::new(640.0, 595.0, 100.0);
@@ -134,8 +187,45 @@ fn nearer_surface_wins_with_reversed_z() {
     assert!(gpu > ground_depth * 1.2);
 }
 
-/// A heightfield larger than the per-frame staging budget is uploaded over several
-/// submissions and renders exactly like a single-submission upload.
+/// With curvature on, a flat plane drops by d²/2R: every pixel's depth matches an f64 ray cast
+/// against the curved surface (the horizon sinks: pixels just below it see sky without curvature
+/// checks would fail by hundreds of metres at 50 km).
+#[test]
+fn curvature_drop_matches_f64_ray_cast() {
+    let hf = synthetic(1025, 1025, 100.0, 0.0, &[]);
+    let cam = camera([51200.0, 2000.0, 300.0], [0.0, -1.0, 0.0], 60.0);
+    let frames = render_frames(&test_desc(W, H), &hf, &[cam]);
+    let f = &frames[0];
+    let r = aerie::terrain::select::EARTH_RADIUS_M;
+    let (mut checked, mut sky) = (0, 0);
+    for py in 0..H {
+        for px in 0..W {
+            let gpu = f.depth[(py * W + px) as usize] as f64;
+            let dir = cam.pixel_ray(px as f64 + 0.5, py as f64 + 0.5, W, H);
+            // eye.z + t·dz = −(t·|dxy|)²/2R  →  a t² + dz t + eye.z = 0
+            let a = dir.truncate().length_squared() / (2.0 * r);
+            let disc = dir.z * dir.z - 4.0 * a * cam.position.z;
+            if disc < 0.0 {
+                sky += 1;
+                assert_eq!(gpu, 0.0, "pixel {px},{py} misses the curved plane but has depth");
+                continue;
+            }
+            let t = (-dir.z - disc.sqrt()) / (2.0 * a);
+            let p = cam.position + dir * t;
+            if p.x < 200.0 || p.y < 200.0 || p.x > 102_200.0 || p.y > 102_200.0 {
+                continue;
+            }
+            let (_, depth) = cam.project_px(p, W, H).expect("in front");
+            let rel = (gpu - depth).abs() / depth;
+            assert!(rel < 0.02, "pixel {px},{py}: GPU depth {gpu} vs oracle {depth} at {p:?}");
+            checked += 1;
+        }
+    }
+    assert!(sky > 0 && checked > (W * H / 4) as usize, "{sky} sky, {checked} checked");
+}
+
+/// A dataset whose first fill is larger than the per-frame staging budget is uploaded over
+/// several submissions and renders exactly like a single-submission upload.
 #[test]
 fn upload_split_by_staging_budget_renders_identically() {
     let mut hf = synthetic(256, 256, 15.0, 0.0, &[]);
@@ -147,16 +237,14 @@ fn upload_split_by_staging_budget_renders_identically() {
     }
     let cam = camera([1900.0, -300.0, 900.0], [20.0, -25.0, 0.0], 80.0);
     let mut images = Vec::new();
+    let mut submissions = Vec::new();
     for budget in [8u64 << 20, 64 << 10] {
-        let desc = RendererDesc {
-            staging_budget: budget,
-            ..test_desc(W, H)
-        };
+        let mut desc = desc_with(LodMode::Clipmap, 1.0);
+        desc.staging_budget = budget;
+        let (ds, b) = prepare(&desc, &hf);
         let mut r = TerrainRenderer::new(&desc).unwrap();
-        let up = r.load_terrain(&hf).unwrap();
-        let rows_per_chunk = (desc.staging_budget / (256 * 4)) as u32;
-        assert_eq!(up.submissions, 256u32.div_ceil(rows_per_chunk.min(256)));
-        assert_eq!(up.bytes, 256 * 256 * 4);
+        let up = r.load_terrain(ds, b, cam.position).unwrap();
+        submissions.push(up.submissions);
         let stats = r.render(&cam).unwrap();
         assert!(stats.bytes_uploaded > 0 && stats.bytes_uploaded <= budget);
         images.push(r.colour_rgba());
@@ -164,49 +252,39 @@ fn upload_split_by_staging_budget_renders_identically() {
         r.destroy();
         assert_validation_clean(&counters);
     }
-    assert!(
-        images[0].chunks(4).any(|p| p[0] != images[0][0]),
-        "image is blank"
-    );
+    assert_eq!(submissions[0], 1);
+    assert!(submissions[1] > 1, "{submissions:?}");
+    assert!(images[0].chunks(4).any(|p| p[0] != images[0][0]), "image is blank");
     assert_eq!(images[0], images[1], "chunked upload changed the image");
 }
 
 #[test]
 fn misuse_is_an_error_not_a_crash() {
-    let mut r = TerrainRenderer::new(&test_desc(64, 32)).unwrap();
+    let desc = test_desc(64, 32);
+    let mut r = TerrainRenderer::new(&desc).unwrap();
     let cam = camera([0.0, 0.0, 100.0], [0.0, 0.0, 0.0], 90.0);
     let err = r.render(&cam).unwrap_err().to_string();
     assert!(err.contains("before load_terrain"), "{err}");
-    // A row larger than the staging budget cannot be uploaded: refused with the numbers.
-    let desc = RendererDesc {
-        staging_budget: 4096,
-        ..test_desc(64, 32)
-    };
-    let mut small = TerrainRenderer::new(&desc).unwrap();
-    let err = small
-        .load_terrain(&synthetic(2000, 4, 1.0, 0.0, &[]))
+    // A bake made for another tile size is refused with the fix.
+    let hf = synthetic(65, 65, 10.0, 0.0, &[]);
+    let (ds, _) = prepare(&desc, &hf);
+    let other = aerie::terrain::bake::bake(
+        &ds,
+        aerie::terrain::bake::BakeParams {
+            tile_size: 9,
+            levels: 0,
+        },
+        &|_, _| {},
+    );
+    let err = r
+        .load_terrain(ds, std::sync::Arc::new(other), cam.position)
         .unwrap_err()
         .to_string();
-    assert!(
-        err.contains("8000 bytes") && err.contains("budget"),
-        "{err}"
-    );
-    // A budget too small for the renderer's own first upload fails creation cleanly.
-    let tiny = RendererDesc {
-        staging_budget: 1024,
-        ..test_desc(64, 32)
-    };
-    let err = TerrainRenderer::new(&tiny).err().unwrap().to_string();
-    assert!(err.contains("staging budget"), "{err}");
-    for mut x in [r, small] {
-        let c = x.validation_counters();
-        x.destroy();
-        assert_validation_clean(&c);
-    }
+    assert!(err.contains("re-bake"), "{err}");
+    let c = r.validation_counters();
+    r.destroy();
+    assert_validation_clean(&c);
     // Zero-sized target refused.
-    let err = TerrainRenderer::new(&test_desc(0, 10))
-        .err()
-        .unwrap()
-        .to_string();
+    let err = TerrainRenderer::new(&test_desc(0, 10)).err().unwrap().to_string();
     assert!(err.contains("0x10"), "{err}");
 }

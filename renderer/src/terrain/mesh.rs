@@ -80,3 +80,94 @@ mod tests {
         assert!((quad_surface(sw, se, nw, ne, 0.75, 0.25) - 2.5).abs() < 1e-12);
     }
 }
+
+/// Vertices of a tile with `side` vertices per side plus its skirt: `side²` grid vertices,
+/// then one skirt vertex under each of the `4(side − 1)` perimeter vertices (see
+/// [`perimeter_vertex`]).
+pub fn skirted_vertex_count(side: u32) -> u32 {
+    side * side + 4 * (side - 1)
+}
+
+/// Grid position (i, j) of perimeter vertex `k` ∈ [0, 4(side−1)): south edge west→east, east edge
+/// south→north, north edge east→west, west edge north→south. The vertex shader walks the same way.
+pub fn perimeter_vertex(side: u32, k: u32) -> (u32, u32) {
+    let n = side - 1;
+    let (edge, t) = (k / n, k % n);
+    match edge {
+        0 => (t, 0),
+        1 => (n, t),
+        2 => (n - t, n),
+        _ => (0, n - t),
+    }
+}
+
+/// Triangle-list indices of a tile of `side × side` vertices and its skirt: the grid triangles of
+/// [`tile_indices`] (as u32), then two triangles per perimeter segment joining the edge to the
+/// skirt vertices below it (index `side² + k` for perimeter vertex k). Skirts hide the cracks
+/// between neighbours drawn at different resolutions (DESIGN.md "Cracks").
+pub fn skirted_tile_indices(side: u32) -> Vec<u32> {
+    assert!((2..=4097).contains(&side), "tile side {side} outside 2..=4097");
+    let n = side - 1;
+    let mut out = Vec::with_capacity((n * n * 6 + 4 * n * 6) as usize);
+    for j in 0..n {
+        for i in 0..n {
+            let sw = j * side + i;
+            let se = sw + 1;
+            let nw = sw + side;
+            let ne = nw + 1;
+            match TILE_DIAGONAL {
+                Diagonal::SouthWestToNorthEast => out.extend_from_slice(&[sw, se, ne, sw, ne, nw]),
+            }
+        }
+    }
+    let grid = |k: u32| {
+        let (i, j) = perimeter_vertex(side, k % (4 * n));
+        j * side + i
+    };
+    let skirt = |k: u32| side * side + k % (4 * n);
+    for k in 0..4 * n {
+        let (a, b) = (grid(k), grid(k + 1));
+        let (sa, sb) = (skirt(k), skirt(k + 1));
+        out.extend_from_slice(&[a, sa, sb, a, sb, b]);
+    }
+    out
+}
+
+#[cfg(test)]
+mod skirt_tests {
+    use super::*;
+
+    #[test]
+    fn perimeter_walk_visits_every_edge_vertex_once_in_order() {
+        for side in [2u32, 3, 17, 33] {
+            let n = side - 1;
+            let walk: Vec<_> = (0..4 * n).map(|k| perimeter_vertex(side, k)).collect();
+            let set: std::collections::HashSet<_> = walk.iter().copied().collect();
+            assert_eq!(set.len() as u32, 4 * n, "side {side}");
+            assert!(walk.iter().all(|&(i, j)| i == 0 || j == 0 || i == n || j == n));
+            // Consecutive perimeter vertices are grid neighbours (a closed loop).
+            for k in 0..walk.len() {
+                let (a, b) = (walk[k], walk[(k + 1) % walk.len()]);
+                let d = a.0.abs_diff(b.0) + a.1.abs_diff(b.1);
+                assert_eq!(d, 1, "side {side} step {k}: {a:?} → {b:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn skirted_indices_extend_the_grid_and_close_the_loop() {
+        let side = 5;
+        let idx = skirted_tile_indices(side);
+        let grid: Vec<u32> = tile_indices(side).into_iter().map(u32::from).collect();
+        assert_eq!(&idx[..grid.len()], &grid[..]);
+        let skirts = &idx[grid.len()..];
+        assert_eq!(skirts.len() as u32, 4 * (side - 1) * 6);
+        assert!(idx.iter().all(|&k| k < skirted_vertex_count(side)));
+        // Every skirt vertex is used, and every perimeter grid vertex is joined to a skirt.
+        for k in 0..4 * (side - 1) {
+            assert!(skirts.contains(&(side * side + k)));
+            let (i, j) = perimeter_vertex(side, k);
+            assert!(skirts.contains(&(j * side + i)));
+        }
+    }
+}

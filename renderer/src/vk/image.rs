@@ -13,6 +13,8 @@ pub struct ImageDesc {
     pub format: vk::Format,
     pub usage: vk::ImageUsageFlags,
     pub aspect: vk::ImageAspectFlags,
+    /// Array layers; when > 0 the view is a 2-D array view (0 = a plain 2-D image).
+    pub layers: u32,
 }
 
 pub struct Image2d {
@@ -33,7 +35,7 @@ impl Image2d {
                 depth: 1,
             })
             .mip_levels(1)
-            .array_layers(1)
+            .array_layers(desc.layers.max(1))
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(desc.usage)
@@ -79,9 +81,16 @@ impl Image2d {
         }
         let view_info = vk::ImageViewCreateInfo::default()
             .image(raw)
-            .view_type(vk::ImageViewType::TYPE_2D)
+            .view_type(if desc.layers > 0 {
+                vk::ImageViewType::TYPE_2D_ARRAY
+            } else {
+                vk::ImageViewType::TYPE_2D
+            })
             .format(desc.format)
-            .subresource_range(subresource_range(desc.aspect));
+            .subresource_range(vk::ImageSubresourceRange {
+                layer_count: desc.layers.max(1),
+                ..subresource_range(desc.aspect)
+            });
         match unsafe { device.raw.create_image_view(&view_info, None) } {
             Ok(v) => image.view = v,
             Err(result) => {
@@ -111,13 +120,14 @@ impl Image2d {
     }
 }
 
+/// Every mip level and array layer of the image.
 pub fn subresource_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
     vk::ImageSubresourceRange {
         aspect_mask: aspect,
         base_mip_level: 0,
         level_count: 1,
         base_array_layer: 0,
-        layer_count: 1,
+        layer_count: vk::REMAINING_ARRAY_LAYERS,
     }
 }
 

@@ -12,7 +12,10 @@ const TERRAIN_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/terrain.fr
 /// Bindings of set 0 (see shaders/terrain.vert).
 pub const BINDING_FRAME: u32 = 0;
 pub const BINDING_INSTANCES: u32 = 1;
-pub const BINDING_HEIGHTS: u32 = 2;
+pub const BINDING_CLIPMAP: u32 = 2;
+pub const BINDING_POOLS: u32 = 3;
+/// Refined-tile pools bound as an array (r = 1..=POOL_BINDINGS).
+pub const POOL_BINDINGS: u32 = crate::terrain::select::MAX_REFINEMENT;
 
 pub struct TerrainPipeline {
     pub set_layout: vk::DescriptorSetLayout,
@@ -68,9 +71,14 @@ impl TerrainPipeline {
                 .descriptor_count(1)
                 .stage_flags(vk::ShaderStageFlags::VERTEX),
             vk::DescriptorSetLayoutBinding::default()
-                .binding(BINDING_HEIGHTS)
+                .binding(BINDING_CLIPMAP)
                 .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
                 .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::VERTEX),
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(BINDING_POOLS)
+                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                .descriptor_count(POOL_BINDINGS)
                 .stage_flags(vk::ShaderStageFlags::VERTEX),
         ];
         let set_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);

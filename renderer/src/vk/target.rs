@@ -38,6 +38,7 @@ impl OffscreenTarget {
                 format: COLOUR_FORMAT,
                 usage: vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
                 aspect: vk::ImageAspectFlags::COLOR,
+                layers: 0,
             },
         )?;
         let depth = Image2d::new(
@@ -50,6 +51,7 @@ impl OffscreenTarget {
                 usage: vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
                     | vk::ImageUsageFlags::TRANSFER_SRC,
                 aspect: vk::ImageAspectFlags::DEPTH,
+                layers: 0,
             },
         );
         let mut depth = match depth {

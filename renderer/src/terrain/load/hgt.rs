@@ -56,12 +56,65 @@ fn file_name(path: &Path) -> String {
 }
 
 pub(super) fn load_hgt(path: &Path) -> Result<Heightfield, DemError> {
-    let bytes = read_file(path)?;
-    parse_hgt(path, &file_name(path), &bytes)
+    let tile = read_tile(path)?;
+    finish(path, tile.into_grid())
+}
+
+/// One SRTM tile decoded but not finished (no flip, no void fill): what stitching needs.
+#[derive(Debug, Clone)]
+pub(crate) struct HgtTile {
+    /// South-west corner from the name, whole degrees.
+    pub lat: f64,
+    pub lon: f64,
+    /// Samples per side (1201 or 3601).
+    pub n: usize,
+    /// Arc-seconds between samples (3 or 1).
+    pub arcsec: u32,
+    /// Row-major in file order (row 0 = north), NaN = void.
+    pub samples: Vec<f32>,
+}
+
+impl HgtTile {
+    /// Degrees between samples.
+    pub(crate) fn step_deg(&self) -> f64 {
+        1.0 / (3600 / self.arcsec) as f64
+    }
+
+    pub(crate) fn into_grid(self) -> Grid {
+        let d = self.step_deg();
+        let (spacing_x, spacing_y, spacing_note) =
+            geographic_spacing_with_note(self.lat, d, d, self.n);
+        Grid {
+            width: self.n,
+            height: self.n,
+            samples: self.samples,
+            north_up: true,
+            spacing_x,
+            spacing_y,
+            geo: Some(GeoReference::Geographic {
+                south_lat_deg: self.lat,
+                west_lon_deg: self.lon,
+                dlat_deg: d,
+                dlon_deg: d,
+            }),
+            spacing_note,
+        }
+    }
+}
+
+/// Reads a `.hgt`, `.hgt.zip` or `.zip` tile without finishing it.
+pub(crate) fn read_tile(path: &Path) -> Result<HgtTile, DemError> {
+    let name = file_name(path).to_ascii_lowercase();
+    if name.ends_with(".zip") {
+        read_zip_tile(path)
+    } else {
+        let bytes = read_file(path)?;
+        decode_tile(path, &file_name(path), &bytes)
+    }
 }
 
 /// Decodes tile bytes; `path` is only used in messages, `tile_name` gives the position.
-fn parse_hgt(path: &Path, tile_name: &str, bytes: &[u8]) -> Result<Heightfield, DemError> {
+fn decode_tile(path: &Path, tile_name: &str, bytes: &[u8]) -> Result<HgtTile, DemError> {
     let Some(&(n, arcsec)) = TILE_SIDES.iter().find(|(n, _)| n * n * 2 == bytes.len()) else {
         return Err(size_err(
             path,
@@ -87,26 +140,13 @@ fn parse_hgt(path: &Path, tile_name: &str, bytes: &[u8]) -> Result<Heightfield, 
             v => f32::from(v),
         })
         .collect();
-    let d = 1.0 / (3600 / arcsec) as f64;
-    let (spacing_x, spacing_y, spacing_note) = geographic_spacing_with_note(lat, d, d, n);
-    finish(
-        path,
-        Grid {
-            width: n,
-            height: n,
-            samples,
-            north_up: true,
-            spacing_x,
-            spacing_y,
-            geo: Some(GeoReference::Geographic {
-                south_lat_deg: lat,
-                west_lon_deg: lon,
-                dlat_deg: d,
-                dlon_deg: d,
-            }),
-            spacing_note,
-        },
-    )
+    Ok(HgtTile {
+        lat,
+        lon,
+        n,
+        arcsec,
+        samples,
+    })
 }
 
 /// Puts the zip entry's name into a content error so the message says where inside the zip.
@@ -126,6 +166,11 @@ fn in_entry(e: DemError, entry: &str) -> DemError {
 
 /// `.hgt.zip` or `.zip` with exactly one `.hgt` entry, unzipped in memory.
 pub(super) fn load_hgt_zip(path: &Path) -> Result<Heightfield, DemError> {
+    let tile = read_zip_tile(path)?;
+    finish(path, tile.into_grid())
+}
+
+fn read_zip_tile(path: &Path) -> Result<HgtTile, DemError> {
     let bytes = read_file(path)?;
     let mut zip = open_zip(path, &bytes)?;
     let names = zip_names(&zip);
@@ -168,7 +213,7 @@ pub(super) fn load_hgt_zip(path: &Path) -> Result<Heightfield, DemError> {
     } else {
         file_name(path)
     };
-    parse_hgt(path, &tile_name, &data).map_err(|e| in_entry(e, entry))
+    decode_tile(path, &tile_name, &data).map_err(|e| in_entry(e, entry))
 }
 
 fn preview(names: &[String]) -> String {

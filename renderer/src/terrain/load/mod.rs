@@ -1,15 +1,18 @@
-//! DEM loaders: turn elevation files (SRTM `.hgt`/`.hgt.zip`, 16-bit PNG, raw f32/u16,
-//! NumPy `.npy`/`.npz`) into a [`Heightfield`] in metres, row 0 = south.
+//! DEM loaders: turn elevation files (SRTM `.hgt`/`.hgt.zip`, GeoTIFF, 16-bit PNG, raw f32/u16,
+//! NumPy `.npy`/`.npz`) into a [`Heightfield`] in metres, row 0 = south; [`stitch`] puts
+//! adjacent SRTM tiles (a folder or a list) together into one grid.
 //!
 //! Every loader funnels through [`finish`] so the flip, the void fill and the sanity checks are
 //! the same for all formats. Bad input is reported as a one-line [`DemError`] that names the
 //! file (DESIGN.md "Conventions": bad data files stop start-up with a message naming the file,
 //! the key or offset, and the reason) — never a panic.
 
+mod geotiff;
 mod hgt;
 mod npy;
 mod png16;
 mod raw;
+pub mod stitch;
 
 use std::path::{Path, PathBuf};
 
@@ -17,10 +20,10 @@ use super::{GeoReference, Heightfield};
 
 /// File name endings `load_dem` understands, for the "unknown extension" message.
 const ACCEPTED_EXTENSIONS: &str =
-    ".hgt, .hgt.zip, .zip, .png, .f32, .r32, .raw, .u16, .r16, .npy, .npz";
+    ".hgt, .hgt.zip, .zip, .tif, .tiff, .png, .f32, .r32, .raw, .u16, .r16, .npy, .npz";
 
 /// Default grid spacing (metres) when a file carries none and no sidecar gives one.
-const DEFAULT_SPACING_M: f64 = 30.0;
+pub(crate) const DEFAULT_SPACING_M: f64 = 30.0;
 
 /// WGS84 semi-major axis, metres.
 const WGS84_A: f64 = 6_378_137.0;
@@ -109,7 +112,7 @@ pub(crate) fn size_err(path: &Path, reason: impl Into<String>) -> DemError {
     }
 }
 
-fn io_err(path: &Path, e: &std::io::Error) -> DemError {
+pub(crate) fn io_err(path: &Path, e: &std::io::Error) -> DemError {
     if e.kind() == std::io::ErrorKind::NotFound {
         DemError::NotFound { path: show(path) }
     } else {
@@ -137,6 +140,7 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, DemError> {
 enum Kind {
     Hgt,
     Zip,
+    Tiff,
     Png,
     RawF32,
     RawU16,
@@ -153,6 +157,8 @@ fn kind_of(path: &Path) -> Result<Kind, DemError> {
         Kind::Hgt
     } else if name.ends_with(".zip") {
         Kind::Zip
+    } else if name.ends_with(".tif") || name.ends_with(".tiff") {
+        Kind::Tiff
     } else if name.ends_with(".png") {
         Kind::Png
     } else if name.ends_with(".f32") || name.ends_with(".r32") || name.ends_with(".raw") {
@@ -179,7 +185,7 @@ fn kind_of(path: &Path) -> Result<Kind, DemError> {
 /// Loads a DEM file into a [`Heightfield`] (metres, row 0 = south, voids filled).
 ///
 /// The format is chosen from the file name: `.hgt`, `.hgt.zip`/`.zip` (one `.hgt` inside),
-/// `.png` (16-bit grayscale, optional `<file>.json` sidecar), `.f32`/`.r32`/`.raw`/`.u16`/`.r16`
+/// `.tif`/`.tiff` (GeoTIFF, one sample per pixel), `.png` (16-bit grayscale, optional `<file>.json` sidecar), `.f32`/`.r32`/`.raw`/`.u16`/`.r16`
 /// (raw samples, required `<file>.json` sidecar), `.npy`/`.npz` (optional sidecar).
 pub fn load_dem(path: &Path) -> Result<Heightfield, DemError> {
     // Existence first: "no such file" is the most useful message for a mistyped path.
@@ -193,6 +199,7 @@ pub fn load_dem(path: &Path) -> Result<Heightfield, DemError> {
     match kind_of(path)? {
         Kind::Hgt => hgt::load_hgt(path),
         Kind::Zip => hgt::load_hgt_zip(path),
+        Kind::Tiff => geotiff::load_geotiff(path),
         Kind::Png => png16::load_png(path),
         Kind::RawF32 => raw::load_raw(path, raw::SampleFormat::F32Le),
         Kind::RawU16 => raw::load_raw(path, raw::SampleFormat::U16Le),
@@ -783,13 +790,13 @@ mod tests {
     #[test]
     fn unknown_extension_lists_accepted_ones() {
         let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("terrain.tif");
+        let p = dir.path().join("terrain.dem");
         std::fs::write(&p, b"II*\0").unwrap();
         let e = load_dem(&p).unwrap_err();
         let msg = e.to_string();
         assert!(matches!(e, DemError::UnknownExtension { .. }), "{e:?}");
         assert!(msg.starts_with(&p.display().to_string()), "{msg}");
-        assert!(msg.contains(".tif") && msg.contains(".hgt.zip") && msg.contains(".npy"));
+        assert!(msg.contains(".dem") && msg.contains(".hgt.zip") && msg.contains(".tif"));
         assert!(!msg.contains('\n'));
     }
 
@@ -839,6 +846,7 @@ mod tests {
                 load_as("N47E011.hgt", &bytes, None);
                 load_as("x.npy", &bytes, None);
                 load_as("x.png", &bytes, None);
+                load_as("x.tif", &bytes, None);
                 load_as("x.raw", &bytes, Some(r#"{"width": 4, "height": 4}"#));
                 load_as("x.hgt.zip", &bytes, None);
                 load_as("x.npz", &bytes, None);
@@ -858,6 +866,9 @@ mod tests {
                 let mut png = b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR".to_vec();
                 png.extend_from_slice(&bytes);
                 load_as("x.png", &png, None);
+                let mut tif = b"II*\0\x08\0\0\0".to_vec();
+                tif.extend_from_slice(&bytes);
+                load_as("x.tif", &tif, None);
                 let mut zip = b"PK\x03\x04".to_vec();
                 zip.extend_from_slice(&bytes);
                 load_as("x.zip", &zip, None);

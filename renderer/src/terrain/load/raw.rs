@@ -3,9 +3,7 @@
 
 use std::path::Path;
 
-use super::{
-    check_dims, finish, metric_spacing, read_file, show, size_err, DemError, Grid, Sidecar,
-};
+use super::{check_dims, finish, io_err, metric_spacing, show, size_err, DemError, Grid, Sidecar};
 use crate::terrain::Heightfield;
 
 const KEYS: &[&str] = &[
@@ -17,6 +15,8 @@ const KEYS: &[&str] = &[
     "scale",
     "offset",
     "north_up",
+    // Free-form provenance (`aerie gen-dem` records kind and seed here); not interpreted.
+    "generator",
 ];
 
 /// Sample encoding of a raw file, chosen by the sidecar's `format` or the extension.
@@ -119,11 +119,7 @@ pub(super) fn load_raw(path: &Path, default: SampleFormat) -> Result<Heightfield
     if found != expected {
         return Err(length_err(found));
     }
-    let bytes = read_file(path)?;
-    if bytes.len() as u64 != expected {
-        return Err(length_err(bytes.len() as u64));
-    }
-    let samples = decode(path, &bytes, format, width, scale, offset)?;
+    let samples = read_samples(path, expected, format, width, scale, offset)?;
     finish(
         path,
         Grid {
@@ -139,6 +135,37 @@ pub(super) fn load_raw(path: &Path, default: SampleFormat) -> Result<Heightfield
     )
 }
 
+/// Reads and decodes the file in 4 MiB pieces, so a 1 GB grid costs 1 GB of memory, not 2.
+fn read_samples(
+    path: &Path,
+    expected: u64,
+    format: SampleFormat,
+    width: usize,
+    scale: f64,
+    offset: f64,
+) -> Result<Vec<f32>, DemError> {
+    use std::io::Read as _;
+    let mut file = std::fs::File::open(path).map_err(|e| io_err(path, &e))?;
+    let count = (expected / format.bytes() as u64) as usize;
+    let mut out = Vec::with_capacity(count);
+    let mut buf = vec![0u8; (4 << 20) / format.bytes() * format.bytes()];
+    let mut done = 0u64;
+    while done < expected {
+        let n = (expected - done).min(buf.len() as u64) as usize;
+        file.read_exact(&mut buf[..n]).map_err(|e| {
+            size_err(
+                path,
+                format!("expected {expected} bytes, reading failed at byte offset {done}: {e}"),
+            )
+        })?;
+        decode(path, &buf[..n], format, width, scale, offset, out.len(), &mut out)?;
+        done += n as u64;
+    }
+    Ok(out)
+}
+
+/// Decodes whole samples of `bytes` onto `out`; `first` is the index of the first one in the file.
+#[allow(clippy::too_many_arguments)]
 fn decode(
     path: &Path,
     bytes: &[u8],
@@ -146,9 +173,11 @@ fn decode(
     width: usize,
     scale: f64,
     offset: f64,
-) -> Result<Vec<f32>, DemError> {
-    let mut out = Vec::with_capacity(bytes.len() / format.bytes());
-    for (i, b) in bytes.chunks_exact(format.bytes()).enumerate() {
+    first: usize,
+    out: &mut Vec<f32>,
+) -> Result<(), DemError> {
+    for (k, b) in bytes.chunks_exact(format.bytes()).enumerate() {
+        let i = first + k;
         let v = match format {
             SampleFormat::F32Le => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
             SampleFormat::F32Be => f32::from_be_bytes([b[0], b[1], b[2], b[3]]),
@@ -164,7 +193,7 @@ fn decode(
         }
         out.push(v);
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Error for a NaN/inf sample `i` (file order) of a grid `width` wide with `item`-byte samples;

@@ -1,0 +1,426 @@
+//! Tile selection, the decision half of the core technique (DESIGN.md "The terrain technique"):
+//! for each clipmap level, the tiles of its ring; per tile an AABB from the baked min/max
+//! (Earth curvature included) → frustum cull; the projected error
+//! `ρ = ε·f·c / (z_min − ε)` (DESIGN.md, the bound that holds anywhere on screen) → the smallest
+//! refinement r with ρ(ε(L−r)) ≤ τ. Pure CPU: plain data in, plain data out.
+
+use glam::{DVec2, DVec3};
+
+use super::bake::ErrorBake;
+use super::clipmap::{ring_tiles, ClipmapDesc, LevelPlacement};
+use super::tiles::{outside_frustum, Aabb};
+use crate::camera::Camera;
+
+/// Mean Earth radius used for the curvature drop d²/2R (DESIGN.md "Earth curvature").
+pub const EARTH_RADIUS_M: f64 = 6_371_000.0;
+
+/// Highest refinement a tile may get (pool bindings exist for r = 1..=MAX_REFINEMENT).
+pub const MAX_REFINEMENT: u32 = 6;
+
+/// How the level of detail is decided. Everything else (levels, pipeline, uploads) is shared.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LodMode {
+    /// Error-bounded tiled clipmaps: refine until ρ ≤ τ (ours).
+    #[default]
+    Bounded,
+    /// Plain geometry clipmaps: the same levels, no error test, no refinement.
+    Clipmap,
+    /// Brute force: every visible tile at full resolution (r = L).
+    Full,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SelectParams {
+    pub mode: LodMode,
+    /// Screen-space error bound, pixels.
+    pub tau_px: f64,
+    /// Apply the Earth-curvature drop (and include it in the AABBs).
+    pub curvature: bool,
+    /// Refinement cap (≤ MAX_REFINEMENT); tiles that would need more are drawn at the cap and
+    /// counted as `unbounded`.
+    pub max_refinement: u32,
+    /// Skip fine levels that the next coarser level already draws within τ.
+    pub skip_fine_levels: bool,
+}
+
+impl Default for SelectParams {
+    fn default() -> Self {
+        Self {
+            mode: LodMode::Bounded,
+            tau_px: 1.0,
+            curvature: true,
+            max_refinement: 4,
+            skip_fine_levels: true,
+        }
+    }
+}
+
+/// One tile to draw.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DrawItem {
+    pub level: u32,
+    pub tx: u32,
+    pub ty: u32,
+    /// Refinement chosen by the bound: drawn with 2^r(m−1)+1 vertices per side.
+    pub refinement: u32,
+    /// ε of the surface drawn (level L−r), metres, curvature interpolation included.
+    pub eps_m: f32,
+    /// Its projected error bound, pixels.
+    pub rho_px: f32,
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct LevelStats {
+    pub considered: u32,
+    pub culled: u32,
+    pub drawn: u32,
+    /// Drawn tiles per refinement r (index r).
+    pub refined: [u32; MAX_REFINEMENT as usize + 1],
+    /// The level was skipped as too fine for the current height above ground.
+    pub skipped: bool,
+}
+
+#[derive(Debug, Clone, Default)]
+pub struct Selection {
+    pub items: Vec<DrawItem>,
+    pub levels: Vec<LevelStats>,
+    /// Finest level drawn this frame.
+    pub finest_level: u32,
+    /// Tiles whose bound could not be met within `max_refinement`.
+    pub unbounded: u32,
+}
+
+/// Geometry of a dataset the selection needs (from the bake).
+#[derive(Debug, Clone, Copy)]
+struct Grid {
+    q: u32,
+    spacing: DVec2,
+    valid_max: DVec2,
+}
+
+impl Grid {
+    fn of(bake: &ErrorBake) -> Self {
+        Self {
+            q: bake.params.tile_size - 1,
+            spacing: DVec2::new(bake.spacing_x, bake.spacing_y),
+            valid_max: DVec2::new(
+                (bake.valid_width - 1) as f64 * bake.spacing_x,
+                (bake.valid_height - 1) as f64 * bake.spacing_y,
+            ),
+        }
+    }
+
+    /// Horizontal rectangle of a level tile in metres, clipped to the valid data.
+    fn rect(&self, level: u32, tx: u32, ty: u32) -> (DVec2, DVec2) {
+        let side = (self.q as u64) << level;
+        let lo = DVec2::new((tx as u64 * side) as f64, (ty as u64 * side) as f64) * self.spacing;
+        let hi = lo + DVec2::splat(side as f64) * self.spacing;
+        (lo.min(self.valid_max), hi.min(self.valid_max))
+    }
+}
+
+/// Extra vertical error from drawing the curvature drop linearly between vertices: over a cell
+/// of diagonal `w` the chord of d²/2R departs from it by at most w²/8R.
+pub fn curvature_interpolation_error(cell_diagonal_m: f64) -> f64 {
+    cell_diagonal_m * cell_diagonal_m / (8.0 * EARTH_RADIUS_M)
+}
+
+/// Box of a tile in world space, curvature drop included: the drop is d²/2R for the horizontal
+/// distance d from the eye, so the box bottom moves down by the farthest corner's drop (plus the
+/// interpolation slack of the coarsest cell drawn) and the top by the nearest point's.
+pub fn tile_aabb(
+    lo: DVec2,
+    hi: DVec2,
+    min_h: f32,
+    max_h: f32,
+    eye: DVec3,
+    curvature: bool,
+    cell_diagonal_m: f64,
+) -> Aabb {
+    let (mut zlo, mut zhi) = (min_h as f64, max_h as f64);
+    if curvature {
+        let e = eye.truncate();
+        let nearest = e.clamp(lo, hi);
+        let far = DVec2::new(
+            if (e.x - lo.x).abs() > (e.x - hi.x).abs() { lo.x } else { hi.x },
+            if (e.y - lo.y).abs() > (e.y - hi.y).abs() { lo.y } else { hi.y },
+        );
+        let d_min = (nearest - e).length();
+        let d_max = (far - e).length();
+        zhi -= d_min * d_min / (2.0 * EARTH_RADIUS_M);
+        zlo -= d_max * d_max / (2.0 * EARTH_RADIUS_M) + curvature_interpolation_error(cell_diagonal_m);
+    }
+    Aabb {
+        min: DVec3::new(lo.x, lo.y, zlo),
+        max: DVec3::new(hi.x, hi.y, zhi),
+    }
+}
+
+/// Smallest view depth of a box (view depth is linear, so a corner attains it), clamped to the
+/// near plane.
+pub fn min_view_depth(camera: &Camera, aabb: &Aabb) -> f64 {
+    let m = camera.world_to_view();
+    aabb.corners()
+        .iter()
+        .map(|&c| m.transform_point3(c).z)
+        .fold(f64::INFINITY, f64::min)
+        .max(camera.near)
+}
+
+/// Largest obliquity sqrt(1 + a² + b²) (a = x/z, b = y/z) over the part of a box inside the
+/// frustum: with every corner in front of the eye the box projects inside the convex hull of
+/// its corners' (a, b), where the convex a² + b² peaks at a corner; (a, b) are clamped to the
+/// frustum. A corner at or behind the eye plane falls back to the whole frustum's maximum.
+pub fn box_obliquity(camera: &Camera, aabb: &Aabb) -> f64 {
+    let f = camera.frustum;
+    let m = camera.world_to_view();
+    let mut worst: f64 = 1.0;
+    for c in aabb.corners() {
+        let v = m.transform_point3(c);
+        if v.z <= 1e-9 {
+            return f.max_obliquity();
+        }
+        // View y is down: b = y/z lies in [−tan_up, −tan_down].
+        let a = (v.x / v.z).clamp(f.tan_left, f.tan_right);
+        let b = (v.y / v.z).clamp(-f.tan_up, -f.tan_down);
+        worst = worst.max(1.0 + a * a + b * b);
+    }
+    worst.sqrt()
+}
+
+/// The projected-error bound in pixels of a vertical error `eps` anywhere in a box whose
+/// smallest view depth is `z_min` (DESIGN.md: ρ = ε·f·c / (z_min − ε)).
+pub fn projected_error_px(eps: f64, z_min: f64, focal_px: f64, obliquity: f64) -> f64 {
+    if eps <= 0.0 {
+        return 0.0;
+    }
+    let z = z_min - eps;
+    if z <= 0.0 {
+        f64::INFINITY
+    } else {
+        eps * focal_px * obliquity / z
+    }
+}
+
+/// Whether level-L tile (tx, ty) exists and holds any real (non-padding) sample.
+fn has_terrain(bake: &ErrorBake, level: u32, tx: u32, ty: u32) -> bool {
+    let t = &bake.levels[level as usize];
+    tx < t.tiles_x && ty < t.tiles_y && t.terrain[(ty * t.tiles_x + tx) as usize]
+}
+
+/// Context shared by every tile of a frame.
+struct Frame<'a> {
+    bake: &'a ErrorBake,
+    grid: Grid,
+    camera: &'a Camera,
+    focal: f64,
+    obliquity: f64,
+    params: &'a SelectParams,
+}
+
+impl Frame<'_> {
+    fn cell_diagonal(&self, level_drawn: u32) -> f64 {
+        (self.grid.spacing * (1u64 << level_drawn) as f64).length()
+    }
+
+    /// ε of level-L tile drawn with refinement r, curvature interpolation included.
+    fn eps(&self, level: u32, tx: u32, ty: u32, r: u32) -> f64 {
+        let mut e = self.bake.eps_refined(level, tx, ty, r) as f64;
+        if self.params.curvature {
+            e += curvature_interpolation_error(self.cell_diagonal(level - r));
+        }
+        e
+    }
+
+    fn aabb(&self, level: u32, tx: u32, ty: u32) -> Aabb {
+        let (lo, hi) = self.grid.rect(level, tx, ty);
+        let (min_h, max_h) = self.bake.bounds(level, tx, ty);
+        tile_aabb(
+            lo,
+            hi,
+            min_h,
+            max_h,
+            self.camera.position,
+            self.params.curvature,
+            self.cell_diagonal(level),
+        )
+    }
+
+    fn rho(&self, eps: f64, z_min: f64, obliquity: f64) -> f64 {
+        projected_error_px(eps, z_min, self.focal, obliquity)
+    }
+
+    /// Chooses the refinement of one visible tile: (r, ε drawn, ρ, bound met).
+    fn refine(&self, level: u32, tx: u32, ty: u32, z_min: f64, c: f64) -> (u32, f64, f64, bool) {
+        let cap = self.params.max_refinement.min(level).min(MAX_REFINEMENT);
+        match self.params.mode {
+            LodMode::Clipmap => {
+                let e = self.eps(level, tx, ty, 0);
+                let rho = self.rho(e, z_min, c);
+                (0, e, rho, rho <= self.params.tau_px)
+            }
+            LodMode::Full => {
+                let r = level.min(MAX_REFINEMENT);
+                let e = self.eps(level, tx, ty, r);
+                let rho = self.rho(e, z_min, c);
+                (r, e, rho, r == level)
+            }
+            LodMode::Bounded => {
+                let mut last = (0, 0.0, 0.0);
+                for r in 0..=cap {
+                    let e = self.eps(level, tx, ty, r);
+                    let rho = self.rho(e, z_min, c);
+                    if rho <= self.params.tau_px {
+                        return (r, e, rho, true);
+                    }
+                    last = (r, e, rho);
+                }
+                (last.0, last.1, last.2, false)
+            }
+        }
+    }
+}
+
+/// Selects the tiles to draw for one camera. `placements` come from `clipmap::place_levels`
+/// (finest first). Reuses `out`'s allocations.
+pub fn select_tiles(
+    bake: &ErrorBake,
+    desc: &ClipmapDesc,
+    placements: &[LevelPlacement],
+    camera: &Camera,
+    viewport: (u32, u32),
+    params: &SelectParams,
+    out: &mut Selection,
+) {
+    out.items.clear();
+    out.levels.clear();
+    out.levels
+        .resize(placements.len(), LevelStats::default());
+    out.unbounded = 0;
+    let (fx, fy) = camera.frustum.focal_px(viewport.0, viewport.1);
+    let frame = Frame {
+        bake,
+        grid: Grid::of(bake),
+        camera,
+        focal: fx.max(fy),
+        obliquity: camera.frustum.max_obliquity(),
+        params,
+    };
+
+    let finest = if params.skip_fine_levels && params.mode == LodMode::Bounded {
+        finest_needed_level(&frame, placements)
+    } else {
+        0
+    };
+    out.finest_level = finest;
+    for s in out.levels.iter_mut().take(finest as usize) {
+        s.skipped = true;
+    }
+
+    let mut ring = Vec::new();
+    for (i, placement) in placements.iter().enumerate().skip(finest as usize) {
+        let finer = (i > finest as usize).then(|| &placements[i - 1]);
+        ring.clear();
+        ring_tiles(desc, placement, finer, &mut ring);
+        let level = placement.level;
+        let stats = &mut out.levels[i];
+        for &[tx, ty] in &ring {
+            if !has_terrain(bake, level, tx, ty) {
+                continue;
+            }
+            stats.considered += 1;
+            let aabb = frame.aabb(level, tx, ty);
+            if outside_frustum(camera, &aabb) {
+                stats.culled += 1;
+                continue;
+            }
+            let z_min = min_view_depth(camera, &aabb);
+            let c = box_obliquity(camera, &aabb);
+            let (r, eps, rho, met) = frame.refine(level, tx, ty, z_min, c);
+            if !met && params.mode == LodMode::Bounded {
+                out.unbounded += 1;
+            }
+            stats.drawn += 1;
+            stats.refined[r as usize] += 1;
+            out.items.push(DrawItem {
+                level,
+                tx,
+                ty,
+                refinement: r,
+                eps_m: eps as f32,
+                rho_px: rho as f32,
+            });
+        }
+    }
+}
+
+/// The finest level worth drawing: level L is skipped when every level-(L+1) tile under its
+/// patch already meets τ unrefined from where the eye is — drawing L would add triangles and
+/// no accuracy. Skipping never breaks the bound: the coarser level then covers that area and
+/// refines where it must.
+fn finest_needed_level(frame: &Frame, placements: &[LevelPlacement]) -> u32 {
+    let coarsest = placements.len().saturating_sub(1);
+    for i in 0..coarsest {
+        let patch = &placements[i];
+        let next = &placements[i + 1];
+        let lvl = next.level;
+        let (t0x, t0y) = (patch.patch_origin[0].div_euclid(2), patch.patch_origin[1].div_euclid(2));
+        let n = (patch.patch_tiles / 2) as i64;
+        let table = &frame.bake.levels[lvl as usize];
+        let (tiles_x, tiles_y) = (table.tiles_x, table.tiles_y);
+        let mut all_fine = true;
+        'tiles: for ty in t0y.max(0)..(t0y + n).min(tiles_y as i64) {
+            for tx in t0x.max(0)..(t0x + n).min(tiles_x as i64) {
+                let (tx, ty) = (tx as u32, ty as u32);
+                if !has_terrain(frame.bake, lvl, tx, ty) {
+                    continue;
+                }
+                let aabb = frame.aabb(lvl, tx, ty);
+                let z_min = min_view_depth(frame.camera, &aabb);
+                if frame.rho(frame.eps(lvl, tx, ty, 0), z_min, frame.obliquity) > frame.params.tau_px {
+                    all_fine = false;
+                    break 'tiles;
+                }
+            }
+        }
+        if !all_fine {
+            return i as u32;
+        }
+    }
+    coarsest as u32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn projected_error_is_monotonic_and_infinite_inside_the_error() {
+        let f = 960.0;
+        let c = 1.5;
+        let a = projected_error_px(1.0, 1000.0, f, c);
+        assert!((a - 1.0 * 960.0 * 1.5 / 999.0).abs() < 1e-12);
+        assert!(projected_error_px(1.0, 2000.0, f, c) < a);
+        assert!(projected_error_px(2.0, 1000.0, f, c) > a);
+        assert_eq!(projected_error_px(5.0, 5.0, f, c), f64::INFINITY);
+        assert_eq!(projected_error_px(0.0, 0.5, f, c), 0.0);
+    }
+
+    #[test]
+    fn curvature_lowers_the_box_by_the_far_drop() {
+        let eye = DVec3::new(0.0, 0.0, 1000.0);
+        let lo = DVec2::new(10_000.0, -500.0);
+        let hi = DVec2::new(20_000.0, 500.0);
+        let flat = tile_aabb(lo, hi, 100.0, 200.0, eye, false, 10.0);
+        let curved = tile_aabb(lo, hi, 100.0, 200.0, eye, true, 10.0);
+        assert_eq!(flat.min.z, 100.0);
+        let far = (20_000f64.powi(2) + 500f64.powi(2)) / (2.0 * EARTH_RADIUS_M);
+        let near = 10_000f64.powi(2) / (2.0 * EARTH_RADIUS_M);
+        assert!((curved.min.z - (100.0 - far - 100.0 / (8.0 * EARTH_RADIUS_M))).abs() < 1e-9);
+        assert!((curved.max.z - (200.0 - near)).abs() < 1e-9);
+        // Eye above the tile: nearest distance is 0, the top does not move.
+        let above = tile_aabb(lo, hi, 100.0, 200.0, DVec3::new(15_000.0, 0.0, 900.0), true, 10.0);
+        assert_eq!(above.max.z, 200.0);
+    }
+}
