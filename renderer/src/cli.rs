@@ -177,7 +177,10 @@ fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
     let frustum = Frustum::try_symmetric(g.fov.to_radians(), width, height)
         .map_err(|e| bad_input(format!("--fov: {e}")))?;
     if !(g.tau.is_finite() && g.tau > 0.0) {
-        return Err(bad_input(format!("--tau: {} must be a positive number of pixels", g.tau)));
+        return Err(bad_input(format!(
+            "--tau: {} must be a positive number of pixels",
+            g.tau
+        )));
     }
     let defaults = RendererDesc::default();
     let q = defaults.tile_size - 1;
@@ -211,7 +214,11 @@ fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
             mode,
             tau_px: g.tau,
             curvature: !g.no_curvature,
-            max_refinement: if mode == LodMode::Full { MAX_REFINEMENT } else { 4 },
+            max_refinement: if mode == LodMode::Full {
+                MAX_REFINEMENT
+            } else {
+                4
+            },
             ..SelectParams::default()
         },
         ..defaults
@@ -227,7 +234,10 @@ fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
 /// Loads the dataset (file or folder) and its error bake: reads `<name>.aerie-bake` when it is a
 /// valid bake of this data, else bakes and writes it; when it cannot be written (read-only
 /// folder, or a file that is not ours) the bake is kept in memory and the reason printed.
-pub fn prepare_terrain(path: &Path, tile_size: u32) -> Result<(Arc<Dataset>, Arc<ErrorBake>), Failure> {
+pub fn prepare_terrain(
+    path: &Path,
+    tile_size: u32,
+) -> Result<(Arc<Dataset>, Arc<ErrorBake>), Failure> {
     let t = Instant::now();
     let ds = load_dataset(path).map_err(bad_input)?;
     let hf = &ds.hf;
@@ -406,7 +416,9 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
     let pass = StraightPass::over(&ds, a.heading, a.pitch, a.speed, a.agl, duration);
     let mut r = TerrainRenderer::new(&s.desc).map_err(runtime)?;
     let t_upload = Instant::now();
-    let up = r.load_terrain(ds, b, pass.pose_at(0.0).0).map_err(runtime)?;
+    let up = r
+        .load_terrain(ds, b, pass.pose_at(0.0).0)
+        .map_err(runtime)?;
     eprintln!(
         "{} clipmap levels filled: {:.1} MB in {} submissions ({:.2} s) on {}",
         up.levels,

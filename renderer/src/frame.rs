@@ -315,15 +315,15 @@ impl TerrainRenderer {
             indices.extend_from_slice(&list);
         }
         let parts = Self::create_parts(&device, desc, indices.len() as u64 * 4);
-        let (frames, staging, descriptors, timer, pipeline, target, tile_index_buffer) =
-            match parts {
-                Ok(p) => p,
-                Err(e) => {
-                    device.destroy();
-                    instance.destroy();
-                    return Err(e);
-                }
-            };
+        let (frames, staging, descriptors, timer, pipeline, target, tile_index_buffer) = match parts
+        {
+            Ok(p) => p,
+            Err(e) => {
+                device.destroy();
+                instance.destroy();
+                return Err(e);
+            }
+        };
         let mut this = Self {
             instance,
             device,
@@ -599,8 +599,8 @@ impl TerrainRenderer {
         }
         // Worst selection: every ring tile of every level, plus the coarsest level's grid.
         let [cx, cy] = clipmap.dataset_tiles(level_count - 1);
-        let max_instances = (level_count * clipmap.patch_tiles * clipmap.patch_tiles
-            + cx * cy) as usize;
+        let max_instances =
+            (level_count * clipmap.patch_tiles * clipmap.patch_tiles + cx * cy) as usize;
         let mut frame_buffers = Vec::new();
         for _ in 0..FRAMES_IN_FLIGHT {
             match Self::create_frame_buffers(d, max_instances) {
@@ -801,7 +801,10 @@ impl TerrainRenderer {
         {
             let t = self.terrain.as_ref().expect("checked");
             let hf = &t.dataset.hf;
-            let viewer = [camera.position.x / hf.spacing_x, camera.position.y / hf.spacing_y];
+            let viewer = [
+                camera.position.x / hf.spacing_x,
+                camera.position.y / hf.spacing_y,
+            ];
             let placements = place_levels(&t.clipmap, viewer);
             select_tiles(
                 &t.bake,
@@ -842,7 +845,13 @@ impl TerrainRenderer {
         let mut pool_copies: [Vec<vk::BufferImageCopy>; MAX_REFINEMENT as usize] =
             Default::default();
         self.resolve_refined_tiles(&mut stats, &mut pool_copies, fixed_reserve)?;
-        self.prefetch(camera, viewport, &mut stats, &mut pool_copies, fixed_reserve)?;
+        self.prefetch(
+            camera,
+            viewport,
+            &mut stats,
+            &mut pool_copies,
+            fixed_reserve,
+        )?;
         self.build_instances(camera, &mut stats);
         let t = self.terrain.as_ref().expect("checked");
         let mut draws = [DrawIndexedIndirect::default(); RESOLUTIONS];
@@ -1048,7 +1057,8 @@ impl TerrainRenderer {
                             };
                             let p2 = &mut t.pools[lower as usize - 1];
                             if p2.lru.is_resident(&k2) {
-                                if let Request::Hit { slot: s } = p2.lru.request(k2, &mut || false) {
+                                if let Request::Hit { slot: s } = p2.lru.request(k2, &mut || false)
+                                {
                                     best = lower;
                                     slot = s;
                                     break;
@@ -1093,7 +1103,10 @@ impl TerrainRenderer {
             ..*camera
         };
         let hf = &t.dataset.hf;
-        let viewer = [ahead.position.x / hf.spacing_x, ahead.position.y / hf.spacing_y];
+        let viewer = [
+            ahead.position.x / hf.spacing_x,
+            ahead.position.y / hf.spacing_y,
+        ];
         let placements = place_levels(&t.clipmap, viewer);
         select_tiles(
             &t.bake,
@@ -1509,11 +1522,6 @@ fn frame_uniforms(camera: &Camera, t: &GpuTerrain, desc: &RendererDesc) -> Frame
             t.clipmap.tile_quads as i32,
             desc.debug_tiles as i32,
         ],
-        clipmap: [
-            t.clipmap.texture_side() as i32,
-            t.caches.len() as i32,
-            0,
-            0,
-        ],
+        clipmap: [t.clipmap.texture_side() as i32, t.caches.len() as i32, 0, 0],
     }
 }

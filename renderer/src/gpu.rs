@@ -131,7 +131,18 @@ mod tests {
         check!(
             TileInstance,
             Rules::Std430,
-            [origin_rel, origin_sample, step, level, refinement, slot, skirt_m, pad0, pad1, pad2]
+            [
+                origin_rel,
+                origin_sample,
+                step,
+                level,
+                refinement,
+                slot,
+                skirt_m,
+                pad0,
+                pad1,
+                pad2
+            ]
         );
     }
 

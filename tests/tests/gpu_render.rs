@@ -58,11 +58,17 @@ fn inn_valley_matches_golden_image() {
     assert!(s.tiles_culled > 0 && s.tiles_drawn > 0, "{s:?}");
     assert_eq!(s.tiles_drawn + s.tiles_culled, s.tiles_considered);
     assert_eq!(s.tiles_by_refinement.iter().sum::<u32>(), s.tiles_drawn);
-    assert!(s.tiles_by_refinement[0] < s.tiles_drawn, "τ = 1 px refines some tiles");
+    assert!(
+        s.tiles_by_refinement[0] < s.tiles_drawn,
+        "τ = 1 px refines some tiles"
+    );
     assert_eq!((s.draw_calls, s.tiles_late, s.tiles_unbounded), (1, 0, 0));
     // Terrain fills the lower part of the view, sky the top row.
     let sky = f.depth[..W as usize].iter().filter(|&&d| d == 0.0).count();
-    let ground = f.depth[((H - 1) * W) as usize..].iter().filter(|&&d| d > 0.0).count();
+    let ground = f.depth[((H - 1) * W) as usize..]
+        .iter()
+        .filter(|&&d| d > 0.0)
+        .count();
     assert_eq!(sky, W as usize, "top row should be sky");
     assert_eq!(ground, W as usize, "bottom row should be terrain");
     check_golden("inn_valley_320x180", f, GOLDEN_TOLERANCE);
@@ -74,7 +80,11 @@ fn debug_tiles_view_matches_golden_image() {
     let mut desc = desc_with(LodMode::Bounded, 1.0);
     desc.debug_tiles = true;
     let frames = render_frames(&desc, &hf, &[inn_camera()]);
-    check_golden("inn_valley_debug_tiles_320x180", &frames[0], GOLDEN_TOLERANCE);
+    check_golden(
+        "inn_valley_debug_tiles_320x180",
+        &frames[0],
+        GOLDEN_TOLERANCE,
+    );
 }
 
 /// At τ = 0.5 px the error-bounded clipmap and brute force (every tile at full resolution)
@@ -87,19 +97,28 @@ fn bounded_at_half_pixel_looks_like_brute_force() {
     let bounded = render_frames(&desc_with(LodMode::Bounded, 0.5), &hf, &[cam]);
     let plain = render_frames(&desc_with(LodMode::Clipmap, 0.5), &hf, &[cam]);
     let (f, b, p) = (&full[0], &bounded[0], &plain[0]);
-    assert!(b.stats.triangles < f.stats.triangles, "{} vs {}", b.stats.triangles, f.stats.triangles);
+    assert!(
+        b.stats.triangles < f.stats.triangles,
+        "{} vs {}",
+        b.stats.triangles,
+        f.stats.triangles
+    );
     let d_bounded = diff_images(&b.rgba, &f.rgba, 16);
     let d_plain = diff_images(&p.rgba, &f.rgba, 16);
     let out = test_output_dir();
     for (name, img) in [("full", f), ("bounded", b), ("clipmap", p)] {
-        aerie::output::write_png(&out.join(format!("tau_half_{name}.png")), W, H, &img.rgba).unwrap();
+        aerie::output::write_png(&out.join(format!("tau_half_{name}.png")), W, H, &img.rgba)
+            .unwrap();
     }
     assert!(
         d_bounded.fraction_over <= 0.01 && d_bounded.mean <= 1.0,
         "bounded vs brute force: {d_bounded:?}"
     );
     // The comparison can tell: plain clipmaps (no refinement) differ visibly.
-    assert!(d_plain.mean > d_bounded.mean, "plain {d_plain:?} vs bounded {d_bounded:?}");
+    assert!(
+        d_plain.mean > d_bounded.mean,
+        "plain {d_plain:?} vs bounded {d_bounded:?}"
+    );
 }
 
 /// Every pixel of a flat plane: the GPU's depth equals the f64 oracle's (ray through the pixel
@@ -207,7 +226,10 @@ fn curvature_drop_matches_f64_ray_cast() {
             let disc = dir.z * dir.z - 4.0 * a * cam.position.z;
             if disc < 0.0 {
                 sky += 1;
-                assert_eq!(gpu, 0.0, "pixel {px},{py} misses the curved plane but has depth");
+                assert_eq!(
+                    gpu, 0.0,
+                    "pixel {px},{py} misses the curved plane but has depth"
+                );
                 continue;
             }
             let t = (-dir.z - disc.sqrt()) / (2.0 * a);
@@ -217,11 +239,17 @@ fn curvature_drop_matches_f64_ray_cast() {
             }
             let (_, depth) = cam.project_px(p, W, H).expect("in front");
             let rel = (gpu - depth).abs() / depth;
-            assert!(rel < 0.02, "pixel {px},{py}: GPU depth {gpu} vs oracle {depth} at {p:?}");
+            assert!(
+                rel < 0.02,
+                "pixel {px},{py}: GPU depth {gpu} vs oracle {depth} at {p:?}"
+            );
             checked += 1;
         }
     }
-    assert!(sky > 0 && checked > (W * H / 4) as usize, "{sky} sky, {checked} checked");
+    assert!(
+        sky > 0 && checked > (W * H / 4) as usize,
+        "{sky} sky, {checked} checked"
+    );
 }
 
 /// A dataset whose first fill is larger than the per-frame staging budget is uploaded over
@@ -254,7 +282,10 @@ fn upload_split_by_staging_budget_renders_identically() {
     }
     assert_eq!(submissions[0], 1);
     assert!(submissions[1] > 1, "{submissions:?}");
-    assert!(images[0].chunks(4).any(|p| p[0] != images[0][0]), "image is blank");
+    assert!(
+        images[0].chunks(4).any(|p| p[0] != images[0][0]),
+        "image is blank"
+    );
     assert_eq!(images[0], images[1], "chunked upload changed the image");
 }
 
@@ -285,6 +316,9 @@ fn misuse_is_an_error_not_a_crash() {
     r.destroy();
     assert_validation_clean(&c);
     // Zero-sized target refused.
-    let err = TerrainRenderer::new(&test_desc(0, 10)).err().unwrap().to_string();
+    let err = TerrainRenderer::new(&test_desc(0, 10))
+        .err()
+        .unwrap()
+        .to_string();
     assert!(err.contains("0x10"), "{err}");
 }

@@ -276,13 +276,15 @@ fn matplotlib_npz_samples() {
 #[test]
 fn real_data_errors_name_the_file() {
     let Some(dir) = data_dir() else { return };
-    // GeoTIFF is not a supported format: the message lists what is.
-    let tif = dir.join("topotoolbox/bigtujunga.tif");
-    let e = load_dem(&tif).unwrap_err();
+    // An unknown extension: the message lists what is accepted.
+    let tmp = tempfile::tempdir().unwrap();
+    let dem = tmp.path().join("bigtujunga.dem");
+    std::fs::copy(dir.join("topotoolbox/bigtujunga.tif"), &dem).unwrap();
+    let e = load_dem(&dem).unwrap_err();
     assert!(matches!(e, DemError::UnknownExtension { .. }), "{e:?}");
     let msg = e.to_string();
     assert!(
-        msg.starts_with(&format!("{}: ", tif.display())) && msg.contains(".hgt"),
+        msg.starts_with(&format!("{}: ", dem.display())) && msg.contains(".hgt") && msg.contains(".tif"),
         "{msg}"
     );
 
@@ -291,7 +293,6 @@ fn real_data_errors_name_the_file() {
     assert_eq!(msg, format!("{}: no such file", missing.display()));
 
     // A real tile copied under a name that is not a tile name.
-    let tmp = tempfile::tempdir().unwrap();
     let renamed = tmp.path().join("innsbruck.hgt");
     std::fs::copy(dir.join("srtm3_single/N40W074.hgt"), &renamed).unwrap();
     let msg = load_dem(&renamed).unwrap_err().to_string();
@@ -309,4 +310,29 @@ fn real_data_errors_name_the_file() {
         msg.contains("2882400 bytes") && msg.contains("2884802"),
         "{msg}"
     );
+}
+
+#[test]
+fn bigtujunga_geotiff_projected_utm() {
+    let Some(dir) = data_dir() else { return };
+    let hf = load(&dir.join("topotoolbox/bigtujunga.tif"));
+    // SOURCES.md §4: int16, 643 rows × 1197 cols, 30 m, UTM 11N, 315 .. 2295 m, mean 1226.6,
+    // GDAL_NODATA 32767 set but unused.
+    assert_eq!((hf.width, hf.height), (1197, 643));
+    assert_eq!((hf.spacing_x, hf.spacing_y), (30.0, 30.0));
+    assert_eq!(hf.min_max(), (315.0, 2295.0));
+    assert_eq!(hf.voids_filled, 0);
+    let m = mean(&hf);
+    assert!((m - 1226.6).abs() < 0.06, "mean {m}");
+    // Upper-left corner E 376313.655, N 3807917.828 (pixel is area): the south-west sample's
+    // centre is half a pixel east of it and 642.5 pixels south.
+    match &hf.geo {
+        Some(GeoReference::Projected { crs, easting, northing }) => {
+            assert_eq!(crs, "EPSG:32611");
+            assert!((easting - (376_313.655 + 15.0)).abs() < 1e-3, "{easting}");
+            assert!((northing - (3_807_917.828 - 642.5 * 30.0)).abs() < 1e-3, "{northing}");
+        }
+        other => panic!("expected a projected reference, got {other:?}"),
+    }
+    assert!(hf.spacing_note.contains("EPSG:32611"), "{}", hf.spacing_note);
 }

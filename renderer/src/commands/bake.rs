@@ -84,7 +84,7 @@ pub fn run(a: BakeArgs) -> Result<(), Failure> {
         }
         existing => {
             if let Existing::Replace(why) = &existing {
-                eprintln!("replacing {}: {why}", out.display());
+                eprintln!("replacing the existing file: {why}");
             }
             bake_and_write(&ds, params, &out)?
         }

