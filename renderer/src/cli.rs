@@ -10,7 +10,7 @@ use glam::DVec3;
 use std::sync::Arc;
 
 use crate::camera::{parse_camera_arg, parse_size_arg, Attitude, Camera, Frustum};
-use crate::flight::StraightPass;
+use crate::flight::{StraightPass, Waypoints};
 use crate::frame::{FrameStats, RendererDesc, TerrainRenderer};
 use crate::output::{write_png, write_text};
 use crate::terrain::bake::{bake, bake_path_for, load_or_bake, BakeOutcome, BakeParams, ErrorBake};
@@ -110,9 +110,16 @@ pub struct FlyArgs {
     /// Ground speed, m/s.
     #[arg(long, default_value_t = 340.0)]
     pub speed: f64,
-    /// Height above the highest sample of the DEM, metres.
+    /// Height above the highest sample of the DEM, metres (with --follow-terrain: above the
+    /// ground under the aircraft).
     #[arg(long, default_value_t = 600.0)]
     pub agl: f64,
+    /// Fly --agl metres above the ground under the aircraft instead of above the highest sample.
+    #[arg(long)]
+    pub follow_terrain: bool,
+    /// Timed waypoints instead of the built-in pass: lines `t_s,x_m,y_m,z_m,heading,pitch,roll`.
+    #[arg(long)]
+    pub path: Option<PathBuf>,
     /// Heading of the pass, degrees clockwise from north.
     #[arg(long, default_value_t = 70.0, allow_hyphen_values = true)]
     pub heading: f64,
@@ -412,13 +419,30 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
         ))
     })?;
     let (ds, b) = prepare_terrain(&a.dem, s.desc.tile_size)?;
+    let waypoints = match &a.path {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .map_err(|e| bad_input(format!("--path {}: {e}", p.display())))?;
+            Some(Waypoints::parse(&text, &p.display().to_string()).map_err(bad_input)?)
+        }
+        None => None,
+    };
     let duration = a.frames as f64 / a.fps;
     let pass = StraightPass::over(&ds, a.heading, a.pitch, a.speed, a.agl, duration);
+    let terrain = ds.clone();
+    let pose_at = |t: f64| -> (DVec3, Attitude) {
+        if let Some(w) = &waypoints {
+            return w.pose_at(t);
+        }
+        let (mut p, att) = pass.pose_at(t);
+        if a.follow_terrain {
+            p.z = terrain.hf.height_at_m(p.x, p.y) + a.agl;
+        }
+        (p, att)
+    };
     let mut r = TerrainRenderer::new(&s.desc).map_err(runtime)?;
     let t_upload = Instant::now();
-    let up = r
-        .load_terrain(ds, b, pass.pose_at(0.0).0)
-        .map_err(runtime)?;
+    let up = r.load_terrain(ds, b, pose_at(0.0).0).map_err(runtime)?;
     eprintln!(
         "{} clipmap levels filled: {:.1} MB in {} submissions ({:.2} s) on {}",
         up.levels,
@@ -442,7 +466,7 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
     let mut pngs = 0u32;
     for f in 0..a.frames {
         let t = f as f64 / a.fps;
-        let (pos, att) = pass.pose_at(t);
+        let (pos, att) = pose_at(t);
         let camera = Camera::new(pos, att, s.frustum);
         let wall = Instant::now();
         let stats = r.render(&camera).map_err(runtime)?;

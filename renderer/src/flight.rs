@@ -77,3 +77,132 @@ mod tests {
         assert!((a.pitch + 10f64.to_radians()).abs() < 1e-12);
     }
 }
+
+/// A scripted flight from timed waypoints, linearly interpolated (heading along the shorter
+/// arc). File format: one waypoint per line, `t_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg`;
+/// blank lines and `#` comments are ignored; times strictly increase.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Waypoints {
+    points: Vec<[f64; 7]>,
+}
+
+impl Waypoints {
+    /// Parses the text of a waypoint file; errors name `source:line` and the reason.
+    pub fn parse(text: &str, source: &str) -> Result<Self, String> {
+        const FIELDS: [&str; 7] = [
+            "t_s",
+            "x_m",
+            "y_m",
+            "z_m",
+            "heading_deg",
+            "pitch_deg",
+            "roll_deg",
+        ];
+        let mut points: Vec<[f64; 7]> = Vec::new();
+        for (n, line) in text.lines().enumerate() {
+            let line = line.split('#').next().unwrap_or("").trim();
+            if line.is_empty() {
+                continue;
+            }
+            let at = |reason: String| format!("{source}:{}: {reason}", n + 1);
+            let parts: Vec<&str> = line.split(',').map(str::trim).collect();
+            if parts.len() != 7 {
+                return Err(at(format!(
+                    "expected 7 values {} , got {}",
+                    FIELDS.join(","),
+                    parts.len()
+                )));
+            }
+            let mut p = [0.0; 7];
+            for ((slot, text), name) in p.iter_mut().zip(&parts).zip(FIELDS) {
+                *slot = text
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| at(format!("{name} = {text:?} is not a finite number")))?;
+            }
+            if let Some(prev) = points.last() {
+                if p[0] <= prev[0] {
+                    return Err(at(format!(
+                        "time {} s does not increase (previous {} s)",
+                        p[0], prev[0]
+                    )));
+                }
+            }
+            points.push(p);
+        }
+        if points.is_empty() {
+            return Err(format!("{source}: no waypoints"));
+        }
+        Ok(Self { points })
+    }
+
+    /// Time of the last waypoint, seconds.
+    pub fn duration(&self) -> f64 {
+        self.points.last().map(|p| p[0]).unwrap_or(0.0)
+    }
+
+    /// Pose at time `t`, held before the first and after the last waypoint.
+    pub fn pose_at(&self, t: f64) -> (DVec3, Attitude) {
+        let pts = &self.points;
+        let k = pts.partition_point(|p| p[0] <= t);
+        let (a, b) = match k {
+            0 => (&pts[0], &pts[0]),
+            k if k == pts.len() => (&pts[k - 1], &pts[k - 1]),
+            k => (&pts[k - 1], &pts[k]),
+        };
+        let s = if b[0] > a[0] {
+            (t - a[0]) / (b[0] - a[0])
+        } else {
+            0.0
+        };
+        let lerp = |i: usize| a[i] + (b[i] - a[i]) * s;
+        let dh = (b[4] - a[4] + 540.0).rem_euclid(360.0) - 180.0;
+        (
+            DVec3::new(lerp(1), lerp(2), lerp(3)),
+            Attitude::from_degrees((a[4] + dh * s).rem_euclid(360.0), lerp(5), lerp(6)),
+        )
+    }
+}
+
+#[cfg(test)]
+mod waypoint_tests {
+    use super::*;
+
+    #[test]
+    fn interpolates_and_wraps_heading_through_north() {
+        let w = Waypoints::parse(
+            "# t,x,y,z,h,p,r\n0,0,0,100,350,0,0\n\n10,1000,0,200,10,-10,20 # turn\n",
+            "f.csv",
+        )
+        .unwrap();
+        let (p, a) = w.pose_at(5.0);
+        assert!((p - DVec3::new(500.0, 0.0, 150.0)).length() < 1e-9);
+        assert!(
+            (a.heading.to_degrees() - 0.0).abs() < 1e-9
+                || (a.heading.to_degrees() - 360.0).abs() < 1e-9
+        );
+        assert!(
+            (a.pitch.to_degrees() + 5.0).abs() < 1e-9 && (a.roll.to_degrees() - 10.0).abs() < 1e-9
+        );
+        assert_eq!(w.pose_at(-1.0).0, DVec3::new(0.0, 0.0, 100.0));
+        assert_eq!(w.pose_at(99.0).0, DVec3::new(1000.0, 0.0, 200.0));
+        assert_eq!(w.duration(), 10.0);
+    }
+
+    #[test]
+    fn errors_name_the_line_and_reason() {
+        let e = Waypoints::parse("0,0,0,0,0,0,0\n1,2,3\n", "p.csv").unwrap_err();
+        assert!(e.starts_with("p.csv:2:") && e.contains("expected 7"), "{e}");
+        let e = Waypoints::parse("0,0,0,0,0,0,0\n0,0,0,0,0,0,0\n", "p.csv").unwrap_err();
+        assert!(
+            e.contains("p.csv:2:") && e.contains("does not increase"),
+            "{e}"
+        );
+        let e = Waypoints::parse("0,0,nan,0,0,0,0\n", "p.csv").unwrap_err();
+        assert!(e.contains("y_m"), "{e}");
+        assert!(Waypoints::parse("# nothing\n", "p.csv")
+            .unwrap_err()
+            .contains("no waypoints"));
+    }
+}

@@ -179,3 +179,58 @@ fn bad_inputs_exit_2_with_a_named_reason_and_no_png() {
     assert_bad(&good, cam, "64x0", "--size");
     assert_bad(&good, cam, "wide", "--size");
 }
+
+#[test]
+fn fly_follows_waypoints_and_names_bad_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = raw_dem(dir.path());
+    let path = dir.path().join("path.csv");
+    std::fs::write(
+        &path,
+        "# t,x,y,z,h,p,r\n0,100,100,800,45,-20,0\n1,700,500,900,90,-10,5\n",
+    )
+    .unwrap();
+    let out = dir.path().join("wp");
+    let args = |p: &Path| {
+        vec![
+            "fly".to_string(),
+            "--dem".into(),
+            dem.display().to_string(),
+            "--path".into(),
+            p.display().to_string(),
+            "--frames".into(),
+            "3".into(),
+            "--fps".into(),
+            "2".into(),
+            "--size".into(),
+            "48x32".into(),
+            "--out".into(),
+            out.display().to_string(),
+        ]
+    };
+    let a = args(&path);
+    let o = aerie(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let row1: Vec<f64> = csv
+        .lines()
+        .nth(2)
+        .unwrap()
+        .split(',')
+        .take(5)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    // t = 0.5 s: halfway between the waypoints.
+    assert_eq!(row1[0], 0.5);
+    assert!(
+        (row1[1] - 400.0).abs() < 0.01 && (row1[2] - 300.0).abs() < 0.01,
+        "{row1:?}"
+    );
+    assert!((row1[4] - 67.5).abs() < 0.01, "heading {row1:?}");
+
+    std::fs::write(&path, "0,0,0,0,0,0,0\n1,2,oops,0,0,0,0\n").unwrap();
+    let o = aerie(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(err.contains("path.csv:2:") && err.contains("y_m"), "{err}");
+}

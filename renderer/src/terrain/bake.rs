@@ -516,7 +516,7 @@ fn level_row_tile_max<const S: usize>(
         // The tile's east edge: u = 1 in its last cell.
         let c0 = (first + cells_per_tile - 1) * s;
         let c = Corners::at(hs, hn, c0, s);
-        *o = gt_max(sample_err(row[c0 + s], &c, 1.0, v) * 0.0, m);
+        *o = gt_max(sample_err(row[c0 + s], &c, 1.0, v), m);
     }
 }
 
