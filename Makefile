@@ -12,9 +12,11 @@ demo: setup
 	cargo build -p aerie
 	./target/debug/aerie render --dem assets/dem/N47E011.hgt.zip \
 	    --camera 30500,12000,4500,0,-15,0 --size 1280x720 --out $(DEMO_OUT)-still.png
+	./target/debug/aerie render --dem assets/dem/N47E011.hgt.zip --debug-tiles \
+	    --camera 30500,12000,4500,0,-15,0 --size 1280x720 --out $(DEMO_OUT)-tiles.png
 	./target/debug/aerie fly --dem assets/dem/N47E011.hgt.zip \
 	    --frames 24 --every 4 --size 640x360 --out $(DEMO_OUT)
-	@echo "demo: $(DEMO_OUT)-still.png, $(DEMO_OUT)/frame_*.png, $(DEMO_OUT)/frames.csv, $(DEMO_OUT)/summary.json"
+	@echo "demo: $(DEMO_OUT)-still.png, $(DEMO_OUT)-tiles.png, $(DEMO_OUT)/frame_*.png, $(DEMO_OUT)/frames.csv, $(DEMO_OUT)/summary.json"
 
 # `make test` is what CI runs: formatting, then every test. Clippy is `make lint` (a second full
 # compilation would double the CI time on 2 cores); run it before committing.

@@ -15,12 +15,12 @@ struct FrameUniforms {
 struct TileInstance {
     vec2 origin_rel;     // tile's south-west vertex relative to the eye, metres (f64 on CPU -> f32)
     ivec2 origin_sample; // dataset sample (col, row) of that vertex
-    uint step;           // samples between adjacent vertices: 2^(level - refinement)
-    uint level;          // clipmap level L (0 = full resolution)
-    uint refinement;     // r: drawn with 2^r (m-1) + 1 vertices per side; heights from pool r when r > 0
-    uint slot;           // layer of the tile in pool r
+    uint step;           // samples between adjacent vertices: 2^(node level)
+    uint level;          // clipmap level L of the ring tile (texture layer when refinement = 0)
+    uint refinement;     // r: heights from pool r (the ring tile at level L - r) when r > 0
+    uint slot;           // layer of the ring tile in pool r
     float skirt_m;       // skirt depth below the tile edge, metres
-    uint pad0;
-    uint pad1;
-    uint pad2;
+    uint slot_x;         // pool texel of this node's south-west vertex (r > 0)
+    uint slot_y;
+    uint slot_stride;    // pool texels between adjacent vertices: 2^(node level - (L - r))
 };

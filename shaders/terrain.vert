@@ -16,14 +16,17 @@ layout(location = 1) out vec3 v_normal;
 layout(location = 2) out float v_height;
 layout(location = 3) flat out uint v_tile;
 
-float fetch(TileInstance t, ivec2 ij, int side) {
+// Height at node vertex ij (may be one outside the node, for normals).
+float fetch(TileInstance t, ivec2 ij) {
     if (t.refinement == 0u) {
         int T = frame.clipmap.x;
         // Level-L vertex coordinates; +T keeps the toroidal modulo non-negative at ij = -1.
         ivec2 v = (t.origin_sample >> int(t.level)) + ij;
         return texelFetch(clipmap, ivec3((v + T) % T, int(t.level)), 0).r;
     }
-    ivec3 c = ivec3(clamp(ij, ivec2(0), ivec2(side - 1)), int(t.slot));
+    int side = (frame.grid_size.z << t.refinement) + 1;
+    ivec2 texel = ivec2(t.slot_x, t.slot_y) + ij * int(t.slot_stride);
+    ivec3 c = ivec3(clamp(texel, ivec2(0), ivec2(side - 1)), int(t.slot));
     switch (t.refinement) {
         case 1u: return texelFetch(pools[0], c, 0).r;
         case 2u: return texelFetch(pools[1], c, 0).r;
@@ -36,8 +39,9 @@ float fetch(TileInstance t, ivec2 ij, int side) {
 
 void main() {
     TileInstance t = tiles[gl_InstanceIndex];
-    int side = (frame.grid_size.z << t.refinement) + 1;
-    int n = side - 1;
+    // Every instance is one m×m node; its vertex spacing is `step` samples.
+    int n = frame.grid_size.z;
+    int side = n + 1;
     int vi = gl_VertexIndex;
     bool skirt = vi >= side * side;
     ivec2 ij;
@@ -55,21 +59,22 @@ void main() {
     // padding added for the clipmap is never drawn as terrain.
     ivec2 lim = (frame.grid_size.xy - 1 - t.origin_sample + step - 1) / step;
     ij = min(ij, lim);
-    float h = fetch(t, ij, side);
+    float h = fetch(t, ij);
     vec2 xy = t.origin_rel + vec2(ij) * float(step) * frame.grid_spacing.xy;
     float z = h - frame.grid_spacing.z - frame.grid_spacing.w * dot(xy, xy);
     if (skirt) z -= t.skirt_m;
 
-    // Normal from central differences at the drawn resolution (one-sided at pool tile edges).
-    ivec2 lo = t.refinement == 0u ? ij - 1 : max(ij - 1, ivec2(0));
-    ivec2 hi = t.refinement == 0u ? ij + 1 : min(ij + 1, ivec2(n));
-    vec2 span = vec2(max(hi - lo, ivec2(1))) * float(step) * frame.grid_spacing.xy;
-    float dhdx = (fetch(t, ivec2(hi.x, ij.y), side) - fetch(t, ivec2(lo.x, ij.y), side)) / span.x;
-    float dhdy = (fetch(t, ivec2(ij.x, hi.y), side) - fetch(t, ivec2(ij.x, lo.y), side)) / span.y;
+    // Normal from central differences at the drawn resolution (neighbours outside the node
+    // come from the same texture; a pool slot clamps at its edge).
+    ivec2 lo = ij - 1;
+    ivec2 hi = ij + 1;
+    vec2 span = vec2(hi - lo) * float(step) * frame.grid_spacing.xy;
+    float dhdx = (fetch(t, ivec2(hi.x, ij.y)) - fetch(t, ivec2(lo.x, ij.y))) / span.x;
+    float dhdy = (fetch(t, ivec2(ij.x, hi.y)) - fetch(t, ivec2(ij.x, lo.y))) / span.y;
 
     v_rel = vec3(xy, z);
     v_normal = normalize(vec3(-dhdx, -dhdy, 1.0));
     v_height = h;
-    v_tile = t.level | (t.refinement << 8);
+    v_tile = uint(findMSB(t.step)) | (t.refinement << 8);
     gl_Position = frame.relative_world_to_clip * vec4(xy, z, 1.0);
 }

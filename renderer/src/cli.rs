@@ -336,6 +336,7 @@ fn cmd_render(a: RenderArgs) -> Result<(), Failure> {
         "tiles_culled": stats.tiles_culled,
         "tiles_by_refinement": stats.tiles_by_refinement,
         "tiles_late": stats.tiles_late,
+        "instances": stats.instances,
         "draw_calls": stats.draw_calls,
         "gpu_ms": stats.gpu_upload_ms + stats.gpu_terrain_ms,
         "cpu_select_us": stats.cpu_select_us,

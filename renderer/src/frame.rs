@@ -20,7 +20,7 @@ use crate::terrain::dataset::Dataset;
 use crate::terrain::gather::gather;
 use crate::terrain::mesh::skirted_tile_indices;
 use crate::terrain::pool::{RefinedTilePool, Request, TileKey};
-use crate::terrain::select::{select_tiles, SelectParams, Selection, MAX_REFINEMENT};
+use crate::terrain::select::{select_tiles, DrawItem, SelectParams, Selection, MAX_REFINEMENT};
 use crate::vk::descriptors::FrameDescriptorPools;
 use crate::vk::frame_context::FrameContexts;
 use crate::vk::image::{transition, Image2d, ImageDesc};
@@ -37,8 +37,10 @@ use crate::vk::{
 
 /// Vertices per tile side (m = 2^j + 1). DESIGN.md default.
 pub const DEFAULT_TILE_SIZE: u32 = 17;
-/// Resolutions drawn: unrefined (r = 0) and r = 1..=MAX_REFINEMENT.
+/// Instance groups drawn: unrefined (r = 0) and r = 1..=MAX_REFINEMENT.
 const RESOLUTIONS: usize = MAX_REFINEMENT as usize + 1;
+/// Largest number of m×m instances one frame may draw (48 bytes each per frame in flight).
+const MAX_INSTANCES: usize = 1 << 16;
 
 #[derive(Debug, Clone)]
 pub struct RendererDesc {
@@ -96,9 +98,12 @@ pub struct FrameStats {
     pub finest_level: u32,
     pub tiles_considered: u32,
     pub tiles_culled: u32,
+    /// Ring tiles drawn (considered − culled).
     pub tiles_drawn: u32,
-    /// Drawn tiles per refinement r (index r; 0 = unrefined).
+    /// Drawn ring tiles per refinement r chosen by the bound (index r; 0 = unrefined).
     pub tiles_by_refinement: [u32; RESOLUTIONS],
+    /// m×m instances drawn: one per unrefined tile, one per quadtree node of a refined tile.
+    pub instances: u32,
     /// Tiles drawn coarser than the bound asked because their upload did not fit this frame.
     pub tiles_late: u32,
     /// Tiles whose bound could not be met within the refinement cap.
@@ -122,12 +127,12 @@ pub struct FrameStats {
 }
 
 impl FrameStats {
-    pub const CSV_HEADER: &'static str = "frame,finest_level,tiles_considered,tiles_culled,tiles_drawn,refined_r0,refined_r1,refined_r2,refined_r3,refined_r4,refined_r5,refined_r6,tiles_late,tiles_unbounded,triangles,draw_calls,bytes_clipmap,bytes_refined,bytes_uploaded,budget_spills,pool_hits,pool_misses,prefetched,cpu_select_us,cpu_upload_us,cpu_record_us,gpu_upload_ms,gpu_terrain_ms";
+    pub const CSV_HEADER: &'static str = "frame,finest_level,tiles_considered,tiles_culled,tiles_drawn,refined_r0,refined_r1,refined_r2,refined_r3,refined_r4,refined_r5,refined_r6,instances,tiles_late,tiles_unbounded,triangles,draw_calls,bytes_clipmap,bytes_refined,bytes_uploaded,budget_spills,pool_hits,pool_misses,prefetched,cpu_select_us,cpu_upload_us,cpu_record_us,gpu_upload_ms,gpu_terrain_ms";
 
     pub fn csv_row(&self) -> String {
         let r = &self.tiles_by_refinement;
         format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1},{:.1},{:.1},{:.3},{:.3}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1},{:.1},{:.1},{:.3},{:.3}",
             self.frame,
             self.finest_level,
             self.tiles_considered,
@@ -140,6 +145,7 @@ impl FrameStats {
             r[4],
             r[5],
             r[6],
+            self.instances,
             self.tiles_late,
             self.tiles_unbounded,
             self.triangles,
@@ -209,7 +215,7 @@ impl ImageUpload {
     }
 }
 
-/// Where in the shared index buffer each resolution's indices live.
+/// Where in the shared index buffer the tile's indices live.
 #[derive(Debug, Clone, Copy, Default)]
 struct IndexRange {
     first: u32,
@@ -242,7 +248,7 @@ pub struct TerrainRenderer {
     pipeline: TerrainPipeline,
     target: OffscreenTarget,
     tile_index_buffer: Buffer,
-    index_ranges: [IndexRange; RESOLUTIONS],
+    index_range: IndexRange,
     terrain: Option<GpuTerrain>,
     desc: RendererDesc,
     timed: [bool; FRAMES_IN_FLIGHT],
@@ -250,8 +256,8 @@ pub struct TerrainRenderer {
     selection: Selection,
     prefetch_selection: Selection,
     instances: [Vec<TileInstance>; RESOLUTIONS],
-    /// Pool slot of each selected item (parallel to `selection.items`).
-    slots: Vec<u32>,
+    /// What is drawn this frame: selected nodes (late tiles coarsened) with their pool slot.
+    draw_list: Vec<(DrawItem, u32)>,
     destroyed: bool,
 }
 
@@ -266,14 +272,6 @@ macro_rules! or_unwind {
             }
         }
     };
-}
-
-/// Highest resolution that has an index range: the largest r with pool slots.
-fn max_resolution(desc: &RendererDesc) -> usize {
-    (1..=MAX_REFINEMENT as usize)
-        .rev()
-        .find(|&r| desc.pool_capacity[r - 1] > 0)
-        .unwrap_or(0)
 }
 
 impl TerrainRenderer {
@@ -298,22 +296,12 @@ impl TerrainRenderer {
                 return Err(e);
             }
         };
-        // Indices of every resolution, back to back: one buffer, one multi-draw.
-        let mut indices = Vec::new();
-        let mut index_ranges = [IndexRange::default(); RESOLUTIONS];
-        for (r, range) in index_ranges
-            .iter_mut()
-            .enumerate()
-            .take(max_resolution(desc) + 1)
-        {
-            let side = ((desc.tile_size - 1) << r) + 1;
-            let list = skirted_tile_indices(side);
-            *range = IndexRange {
-                first: indices.len() as u32,
-                count: list.len() as u32,
-            };
-            indices.extend_from_slice(&list);
-        }
+        // Every instance is one m×m node with its skirt: one shared index list.
+        let indices = skirted_tile_indices(desc.tile_size);
+        let index_range = IndexRange {
+            first: 0,
+            count: indices.len() as u32,
+        };
         let parts = Self::create_parts(&device, desc, indices.len() as u64 * 4);
         let (frames, staging, descriptors, timer, pipeline, target, tile_index_buffer) = match parts
         {
@@ -334,7 +322,7 @@ impl TerrainRenderer {
             pipeline,
             target,
             tile_index_buffer,
-            index_ranges,
+            index_range,
             terrain: None,
             desc: desc.clone(),
             timed: [false; FRAMES_IN_FLIGHT],
@@ -342,7 +330,7 @@ impl TerrainRenderer {
             selection: Selection::default(),
             prefetch_selection: Selection::default(),
             instances: Default::default(),
-            slots: Vec::new(),
+            draw_list: Vec::new(),
             destroyed: false,
         };
         let dst = this.tile_index_buffer.raw;
@@ -597,10 +585,13 @@ impl TerrainRenderer {
                 }
             }
         }
-        // Worst selection: every ring tile of every level, plus the coarsest level's grid.
+        // Nodes per frame: every ring tile of every level plus the coarsest grid when nothing is
+        // refined, up to 4^r nodes per refined tile — capped at MAX_INSTANCES (an error names
+        // the count if a selection ever exceeds it).
         let [cx, cy] = clipmap.dataset_tiles(level_count - 1);
-        let max_instances =
+        let ring_tiles =
             (level_count * clipmap.patch_tiles * clipmap.patch_tiles + cx * cy) as usize;
+        let max_instances = (ring_tiles * 16).clamp(4096, MAX_INSTANCES);
         let mut frame_buffers = Vec::new();
         for _ in 0..FRAMES_IN_FLIGHT {
             match Self::create_frame_buffers(d, max_instances) {
@@ -822,6 +813,10 @@ impl TerrainRenderer {
         for l in &self.selection.levels {
             stats.tiles_considered += l.considered;
             stats.tiles_culled += l.culled;
+            stats.tiles_drawn += l.drawn;
+            for (sum, n) in stats.tiles_by_refinement.iter_mut().zip(l.refined) {
+                *sum += n;
+            }
         }
 
         // Uploads: clipmap strips first (mandatory), then pool misses within what is left.
@@ -858,7 +853,7 @@ impl TerrainRenderer {
         let mut first_instance = 0u32;
         for (r, draw) in draws.iter_mut().enumerate() {
             let n = self.instances[r].len() as u32;
-            let range = self.index_ranges[r];
+            let range = self.index_range;
             *draw = DrawIndexedIndirect {
                 index_count: range.count,
                 instance_count: if range.count == 0 { 0 } else { n },
@@ -995,8 +990,9 @@ impl TerrainRenderer {
         Ok(stats)
     }
 
-    /// Finds or uploads the pool slot of every refined tile. A miss that does not fit the
-    /// budget leaves the tile at its best resident resolution (counted late).
+    /// Finds or uploads the pool slot of every refined ring tile (its nodes follow one another in
+    /// the selection). A miss that does not fit the budget leaves the tile at its best resident
+    /// resolution — its nodes coarsened to that level — and is counted late.
     fn resolve_refined_tiles(
         &mut self,
         stats: &mut FrameStats,
@@ -1009,72 +1005,98 @@ impl TerrainRenderer {
             p.lru.begin_frame(frame);
         }
         let q = t.clipmap.tile_quads;
-        self.slots.clear();
-        self.slots.resize(self.selection.items.len(), 0);
-        for k in 0..self.selection.items.len() {
-            let item = self.selection.items[k];
-            let mut r = item.refinement;
-            let mut slot = 0;
-            if r > 0 {
-                let key = TileKey {
-                    level: item.level,
-                    tx: item.tx,
-                    ty: item.ty,
-                    refinement: r,
-                };
-                let pool = &mut t.pools[r as usize - 1];
-                let slot_bytes = pool.side as u64 * pool.side as u64 * 4;
-                let staging = &self.staging;
-                let mut can = || staging.remaining() >= slot_bytes + reserve + 256;
-                match pool.lru.request(key, &mut can) {
-                    Request::Hit { slot: s } => {
-                        slot = s;
-                        stats.pool_hits += 1;
-                    }
-                    Request::Miss { slot: s, .. } => {
-                        slot = s;
-                        stats.pool_misses += 1;
-                        let job = refined_upload(q, &key, s, pool.side);
-                        let (offset, bytes) = self.staging.alloc(job.bytes(), 4)?;
-                        gather(
-                            &t.dataset.hf,
-                            job.origin_sample,
-                            job.step,
-                            job.size,
-                            bytemuck::cast_slice_mut(bytes),
-                        );
-                        copies[r as usize - 1].push(buffer_image_copy(offset, &job));
-                        stats.bytes_refined += job.bytes();
-                    }
-                    Request::Unavailable => {
-                        stats.tiles_late += 1;
-                        // Best resident resolution below r (r = 0 is always there).
-                        let mut best = 0;
-                        for lower in (1..r).rev() {
-                            let k2 = TileKey {
-                                refinement: lower,
-                                ..key
-                            };
-                            let p2 = &mut t.pools[lower as usize - 1];
-                            if p2.lru.is_resident(&k2) {
-                                if let Request::Hit { slot: s } = p2.lru.request(k2, &mut || false)
-                                {
-                                    best = lower;
-                                    slot = s;
-                                    break;
-                                }
+        self.draw_list.clear();
+        let items = &self.selection.items;
+        let mut k = 0;
+        while k < items.len() {
+            let first = items[k];
+            let end = k + items[k..]
+                .iter()
+                .take_while(|i| (i.level, i.tx, i.ty) == (first.level, first.tx, first.ty))
+                .count();
+            let group = &items[k..end];
+            k = end;
+            let r = first.refinement;
+            if r == 0 {
+                self.draw_list.extend(group.iter().map(|&i| (i, 0)));
+                continue;
+            }
+            let key = TileKey {
+                level: first.level,
+                tx: first.tx,
+                ty: first.ty,
+                refinement: r,
+            };
+            let pool = &mut t.pools[r as usize - 1];
+            let slot_bytes = pool.side as u64 * pool.side as u64 * 4;
+            let staging = &self.staging;
+            let mut can = || staging.remaining() >= slot_bytes + reserve + 256;
+            let (resident_r, slot) = match pool.lru.request(key, &mut can) {
+                Request::Hit { slot } => {
+                    stats.pool_hits += 1;
+                    (r, slot)
+                }
+                Request::Miss { slot, .. } => {
+                    stats.pool_misses += 1;
+                    let job = refined_upload(q, &key, slot, pool.side);
+                    let (offset, bytes) = self.staging.alloc(job.bytes(), 4)?;
+                    gather(
+                        &t.dataset.hf,
+                        job.origin_sample,
+                        job.step,
+                        job.size,
+                        bytemuck::cast_slice_mut(bytes),
+                    );
+                    copies[r as usize - 1].push(buffer_image_copy(offset, &job));
+                    stats.bytes_refined += job.bytes();
+                    (r, slot)
+                }
+                Request::Unavailable => {
+                    stats.tiles_late += 1;
+                    // Best resident resolution below r (r = 0, the clipmap, is always there).
+                    let mut best = (0, 0);
+                    for lower in (1..r).rev() {
+                        let k2 = TileKey {
+                            refinement: lower,
+                            ..key
+                        };
+                        let p2 = &mut t.pools[lower as usize - 1];
+                        if p2.lru.is_resident(&k2) {
+                            if let Request::Hit { slot } = p2.lru.request(k2, &mut || false) {
+                                best = (lower, slot);
+                                break;
                             }
                         }
-                        r = best;
                     }
+                    best
+                }
+            };
+            if resident_r == r {
+                self.draw_list.extend(group.iter().map(|&i| (i, slot)));
+                continue;
+            }
+            // Coarsen: nodes finer than level L − r' become their ancestor at that level.
+            let floor = first.level - resident_r;
+            let start = self.draw_list.len();
+            for &i in group {
+                let up = floor.saturating_sub(i.node_level);
+                let node_level = i.node_level.max(floor);
+                let (node_tx, node_ty) = (i.node_tx >> up, i.node_ty >> up);
+                let coarse = DrawItem {
+                    refinement: resident_r,
+                    node_level,
+                    node_tx,
+                    node_ty,
+                    eps_m: t.bake.eps(node_level, node_tx, node_ty),
+                    ..i
+                };
+                let seen = self.draw_list[start..].iter().any(|(d, _)| {
+                    (d.node_level, d.node_tx, d.node_ty) == (node_level, node_tx, node_ty)
+                });
+                if !seen {
+                    self.draw_list.push((coarse, slot));
                 }
             }
-            let it = &mut self.selection.items[k];
-            if r != it.refinement {
-                it.eps_m = t.bake.eps_refined(it.level, it.tx, it.ty, r);
-                it.refinement = r;
-            }
-            self.slots[k] = slot;
         }
         Ok(())
     }
@@ -1118,10 +1140,12 @@ impl TerrainRenderer {
             &mut self.prefetch_selection,
         );
         let q = t.clipmap.tile_quads;
+        let mut last = None;
         for item in &self.prefetch_selection.items {
-            if item.refinement == 0 {
+            if item.refinement == 0 || last == Some((item.level, item.tx, item.ty)) {
                 continue;
             }
+            last = Some((item.level, item.tx, item.ty));
             let key = TileKey {
                 level: item.level,
                 tx: item.tx,
@@ -1155,8 +1179,9 @@ impl TerrainRenderer {
         Ok(())
     }
 
-    /// Per-instance data grouped by resolution (unrefined first, then r = 1..): tile origin
-    /// relative to the eye (f64 → f32), sample origin, vertex step, level, refinement, slot, skirt.
+    /// Per-instance data grouped by refinement (unrefined first, then r = 1..): node origin
+    /// relative to the eye (f64 → f32), sample origin, vertex step, level, pool slot and the
+    /// node's place in it, skirt depth.
     fn build_instances(&mut self, camera: &Camera, stats: &mut FrameStats) {
         let t = self.terrain.as_ref().expect("checked");
         let q = t.clipmap.tile_quads as i64;
@@ -1164,27 +1189,35 @@ impl TerrainRenderer {
         for g in &mut self.instances {
             g.clear();
         }
-        for (item, &slot) in self.selection.items.iter().zip(&self.slots) {
-            let tile = q << item.level;
-            let origin = [item.tx as i64 * tile, item.ty as i64 * tile];
+        for &(item, slot) in &self.draw_list {
+            let node = q << item.node_level;
+            let origin = [item.node_tx as i64 * node, item.node_ty as i64 * node];
             let r = item.refinement;
+            let (mut slot_x, mut slot_y, mut slot_stride) = (0, 0, 1);
+            if r > 0 {
+                // The slot holds the ring tile at level L − r.
+                let tile = q << item.level;
+                let slot_step = 1i64 << (item.level - r);
+                slot_x = ((origin[0] - item.tx as i64 * tile) / slot_step) as u32;
+                slot_y = ((origin[1] - item.ty as i64 * tile) / slot_step) as u32;
+                slot_stride = 1u32 << (item.node_level - (item.level - r));
+            }
             self.instances[r as usize].push(TileInstance {
                 origin_rel: [
                     (origin[0] as f64 * hf.spacing_x - camera.position.x) as f32,
                     (origin[1] as f64 * hf.spacing_y - camera.position.y) as f32,
                 ],
                 origin_sample: [origin[0] as i32, origin[1] as i32],
-                step: 1 << (item.level - r),
+                step: 1 << item.node_level,
                 level: item.level,
                 refinement: r,
                 slot,
                 skirt_m: self.desc.skirt_factor * item.eps_m + self.desc.skirt_min_m,
-                pad0: 0,
-                pad1: 0,
-                pad2: 0,
+                slot_x,
+                slot_y,
+                slot_stride,
             });
-            stats.tiles_drawn += 1;
-            stats.tiles_by_refinement[r as usize] += 1;
+            stats.instances += 1;
         }
     }
 

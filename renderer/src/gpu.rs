@@ -27,9 +27,9 @@ pub struct TileInstance {
     pub refinement: u32,
     pub slot: u32,
     pub skirt_m: f32,
-    pub pad0: u32,
-    pub pad1: u32,
-    pub pad2: u32,
+    pub slot_x: u32,
+    pub slot_y: u32,
+    pub slot_stride: u32,
 }
 
 /// `VkDrawIndexedIndirectCommand`, as the device reads it (a Pod twin of ash's struct).

@@ -4,6 +4,11 @@ use glam::DVec3;
 
 use crate::geodesy::{Geodetic, LocalTangentPlane};
 
+/// Lowest geodetic altitude a pose may have, metres (below the Dead Sea shore, with margin).
+pub const MIN_ALT_M: f64 = -1000.0;
+/// Highest geodetic altitude a pose may have, metres.
+pub const MAX_ALT_M: f64 = 100_000.0;
+
 /// Where the aircraft is: WGS84 geodetic, or already in the world's local ENU frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PosePosition {
@@ -125,8 +130,9 @@ impl Pose {
         DVec3::from_array(self.attitude_deg).map(f64::to_radians)
     }
 
-    /// Checks that every value is finite, latitude is in [−90, 90], longitude in [−180, 360)
-    /// and pitch in [−90, 90]. Returns the first problem found, naming its field.
+    /// Checks that every value is finite, latitude is in [−90, 90], longitude in [−180, 360),
+    /// geodetic altitude in [−1,000, 100,000] m and pitch in [−90, 90]. Returns the first problem
+    /// found, naming its field.
     pub fn validate(&self) -> Result<(), PoseError> {
         match self.position {
             PosePosition::Geodetic {
@@ -146,7 +152,12 @@ impl Pose {
                     (-180.0..360.0).contains(&lon_deg),
                     "[-180, 360)",
                 )?;
-                finite("position.alt_m", alt_m)?;
+                in_range(
+                    "position.alt_m",
+                    alt_m,
+                    (MIN_ALT_M..=MAX_ALT_M).contains(&alt_m),
+                    "[-1000, 100000] m",
+                )?;
             }
             PosePosition::LocalEnu { x, y, z } => {
                 finite("position.x", x)?;
@@ -281,6 +292,14 @@ mod tests {
             "position.alt_m",
             true,
         );
+    }
+
+    #[test]
+    fn altitude_out_of_range_is_rejected() {
+        with_position(0.0, 0.0, -1000.0).validate().unwrap();
+        with_position(0.0, 0.0, 100_000.0).validate().unwrap();
+        expect_err(with_position(0.0, 0.0, -1000.5), "position.alt_m", false);
+        expect_err(with_position(0.0, 0.0, 100_001.0), "position.alt_m", false);
     }
 
     #[test]

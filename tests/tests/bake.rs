@@ -55,7 +55,13 @@ fn level_surface(ds: &Dataset, level: u32, c: usize, r: usize) -> f64 {
 
 /// (ε in f64, min, max, holds a real sample) of the samples of tile (tx, ty) of tile side
 /// `t` samples − 1, against the level-`surface_level` surface.
-fn oracle_tile(ds: &Dataset, t: usize, tx: usize, ty: usize, surface_level: u32) -> (f64, f32, f32, bool) {
+fn oracle_tile(
+    ds: &Dataset,
+    t: usize,
+    tx: usize,
+    ty: usize,
+    surface_level: u32,
+) -> (f64, f32, f32, bool) {
     let (mut e, mut lo, mut hi, mut real) = (0f64, f32::INFINITY, f32::NEG_INFINITY, false);
     for r in ty * t..=(ty + 1) * t {
         for c in tx * t..=(tx + 1) * t {
@@ -127,7 +133,11 @@ fn dataset(w: usize, h: usize, heights: Vec<f32>, spacing: f64) -> Dataset {
 fn oracle_surface_is_the_mesh_surface() {
     // The oracle's own interpolation agrees with the one function the GPU mesh and the bake use.
     assert_eq!(TILE_DIAGONAL, Diagonal::SouthWestToNorthEast);
-    let corners = [(0.0, 0.0, 0.0, 10.0), (3.5, -7.25, 120.0, 44.0), (1e3, 2e3, -5e2, 7.0)];
+    let corners = [
+        (0.0, 0.0, 0.0, 10.0),
+        (3.5, -7.25, 120.0, 44.0),
+        (1e3, 2e3, -5e2, 7.0),
+    ];
     for &(sw, se, nw, ne) in &corners {
         for s in [2u32, 4, 16] {
             for i in 0..=s {
@@ -135,7 +145,10 @@ fn oracle_surface_is_the_mesh_surface() {
                     let (u, v) = (f64::from(i) / f64::from(s), f64::from(j) / f64::from(s));
                     let a = barycentric(sw, se, nw, ne, u, v);
                     let b = quad_surface(sw, se, nw, ne, u, v);
-                    assert!((a - b).abs() <= 1e-9 * (1.0 + a.abs()), "({u},{v}): {a} vs {b}");
+                    assert!(
+                        (a - b).abs() <= 1e-9 * (1.0 + a.abs()),
+                        "({u},{v}): {a} vs {b}"
+                    );
                 }
             }
         }
@@ -210,23 +223,37 @@ proptest! {
 // ---------------------------------------------------------------------------------------------
 
 fn shared_dem(rel: &str) -> Option<PathBuf> {
-    let p = aerie_tests::repo_root().join("../shared/data/dem").join(rel);
+    let p = aerie_tests::repo_root()
+        .join("../shared/data/dem")
+        .join(rel);
     if p.exists() {
         Some(p)
     } else {
-        eprintln!("skipping: {} not found (fresh clone without ../shared)", p.display());
+        eprintln!(
+            "skipping: {} not found (fresh clone without ../shared)",
+            p.display()
+        );
         None
     }
 }
 
 #[test]
 fn alpine_npy_every_tile_every_level() {
-    let Some(p) = shared_dem("forge3d_codec_corpus/alpine.npy") else { return };
+    let Some(p) = shared_dem("forge3d_codec_corpus/alpine.npy") else {
+        return;
+    };
     let ds = load_dataset(&p).unwrap();
     assert_eq!((ds.valid_width, ds.valid_height), (256, 256));
     assert_eq!((ds.hf.width, ds.hf.height), (257, 257));
     for m in [9, 17] {
-        let b = bake(&ds, BakeParams { tile_size: m, levels: 0 }, &|_, _| {});
+        let b = bake(
+            &ds,
+            BakeParams {
+                tile_size: m,
+                levels: 0,
+            },
+            &|_, _| {},
+        );
         let n = check_tiles(&ds, &b, &|_, _, _| true);
         assert!(n > 100, "{n}");
         // Mount Rainier is steep: coarse levels have large errors, which grow with the level.
@@ -237,19 +264,23 @@ fn alpine_npy_every_tile_every_level() {
 
 #[test]
 fn n47e011_subset_of_tiles() {
-    let Some(p) = shared_dem("srtm3_single/N47E011.hgt.zip") else { return };
+    let Some(p) = shared_dem("srtm3_single/N47E011.hgt.zip") else {
+        return;
+    };
     let ds = load_dataset(&p).unwrap();
     assert_eq!((ds.hf.width, ds.hf.height), (2049, 2049));
     let b = bake(&ds, BakeParams::default(), &|_, _| {});
     assert_eq!(b.levels.len(), 8); // 2048 = 2^11, m − 1 = 2^4 → levels 0..=7
-    // Per level: a strided sample of tiles, the tile of the level's largest ε, and the tiles on
-    // the real/padding boundary, within a budget of samples per level.
+                                   // Per level: a strided sample of tiles, the tile of the level's largest ε, and the tiles on
+                                   // the real/padding boundary, within a budget of samples per level.
     let q = 16usize;
     let mut picks: Vec<Vec<(u32, u32)>> = Vec::new();
     for t in &b.levels {
         let side = (q << t.level) + 1;
         let budget = (300_000 / (side * side)).max(1);
-        let argmax = (0..t.len()).max_by(|&a, &b| t.eps[a].total_cmp(&t.eps[b])).unwrap() as u32;
+        let argmax = (0..t.len())
+            .max_by(|&a, &b| t.eps[a].total_cmp(&t.eps[b]))
+            .unwrap() as u32;
         let mut v = vec![(argmax % t.tiles_x, argmax / t.tiles_x)];
         let boundary = ((1200 / (q << t.level)) as u32).min(t.tiles_x - 1);
         v.push((boundary, boundary));
@@ -284,7 +315,14 @@ fn small_ds(seed: u32) -> Dataset {
 
 fn fresh_bake(dir: &Path) -> (Dataset, ErrorBake, PathBuf) {
     let ds = small_ds(1);
-    let b = bake(&ds, BakeParams { tile_size: 5, levels: 0 }, &|_, _| {});
+    let b = bake(
+        &ds,
+        BakeParams {
+            tile_size: 5,
+            levels: 0,
+        },
+        &|_, _| {},
+    );
     let p = dir.join("small.f32.aerie-bake");
     write_bake(&p, &b).unwrap();
     (ds, b, p)
@@ -336,7 +374,14 @@ fn stale_truncated_other_version_bad_magic_and_corrupt_are_rejected() {
             matches!(e, BakeError::Truncated { offset, .. } if offset == cut as u64),
             "cut {cut}: {e:?}"
         );
-        assert_mentions(&e, &[&ps, &format!("truncated at byte offset {cut}"), "aerie bake"]);
+        assert_mentions(
+            &e,
+            &[
+                &ps,
+                &format!("truncated at byte offset {cut}"),
+                "aerie bake",
+            ],
+        );
     }
 
     // Another version (the version is read before anything that could depend on it).
@@ -345,7 +390,15 @@ fn stale_truncated_other_version_bad_magic_and_corrupt_are_rejected() {
     std::fs::write(&p, &v).unwrap();
     let e = read_bake(&p, &ds).unwrap_err();
     assert!(matches!(e, BakeError::Version { found, .. } if found == BAKE_VERSION + 1));
-    assert_mentions(&e, &[&ps, &format!("version {}", BAKE_VERSION + 1), "byte offset 8", "aerie bake"]);
+    assert_mentions(
+        &e,
+        &[
+            &ps,
+            &format!("version {}", BAKE_VERSION + 1),
+            "byte offset 8",
+            "aerie bake",
+        ],
+    );
 
     // Not a bake at all.
     std::fs::write(&p, b"P6\n320 200\n255\n and so on, an image").unwrap();
@@ -358,7 +411,10 @@ fn stale_truncated_other_version_bad_magic_and_corrupt_are_rejected() {
     c[96 + 16 + 5] ^= 0x40;
     std::fs::write(&p, &c).unwrap();
     let e = read_bake(&p, &ds).unwrap_err();
-    assert!(matches!(e, BakeError::Corrupt { ref field, .. } if field == "file CRC-32"), "{e:?}");
+    assert!(
+        matches!(e, BakeError::Corrupt { ref field, .. } if field == "file CRC-32"),
+        "{e:?}"
+    );
     assert_mentions(&e, &[&format!("byte offset {}", good.len() - 4)]);
     // A flipped bit in the header: the header CRC.
     let mut c = good.clone();
@@ -387,7 +443,10 @@ impl WithSpacing for Dataset {
 fn nothing_is_overwritten_silently() {
     let dir = tempfile::tempdir().unwrap();
     let ds = small_ds(2);
-    let params = BakeParams { tile_size: 5, levels: 0 };
+    let params = BakeParams {
+        tile_size: 5,
+        levels: 0,
+    };
     let p = dir.path().join("x.aerie-bake");
     let noop = |_: u64, _: u64| {};
 
@@ -400,10 +459,26 @@ fn nothing_is_overwritten_silently() {
     assert_eq!(std::fs::read(&p).unwrap(), bytes);
 
     // Other parameters or stale data → replaced, and the outcome says why.
-    let (_, o) = load_or_bake(&ds, &p, BakeParams { tile_size: 3, levels: 2 }, false, &noop).unwrap();
-    assert!(matches!(o, BakeOutcome::Replaced(ref why) if why.contains("m = 5")), "{o:?}");
+    let (_, o) = load_or_bake(
+        &ds,
+        &p,
+        BakeParams {
+            tile_size: 3,
+            levels: 2,
+        },
+        false,
+        &noop,
+    )
+    .unwrap();
+    assert!(
+        matches!(o, BakeOutcome::Replaced(ref why) if why.contains("m = 5")),
+        "{o:?}"
+    );
     let (_, o) = load_or_bake(&small_ds(3), &p, params, false, &noop).unwrap();
-    assert!(matches!(o, BakeOutcome::Replaced(ref why) if why.contains("stale")), "{o:?}");
+    assert!(
+        matches!(o, BakeOutcome::Replaced(ref why) if why.contains("stale")),
+        "{o:?}"
+    );
 
     // Not a bake → refused, untouched; --force replaces it.
     std::fs::write(&p, b"my precious notes").unwrap();
@@ -425,7 +500,10 @@ fn nothing_is_overwritten_silently() {
     v[8..12].copy_from_slice(&0u32.to_le_bytes());
     std::fs::write(&p, &v).unwrap();
     let (_, o) = load_or_bake(&ds, &p, params, false, &noop).unwrap();
-    assert!(matches!(o, BakeOutcome::Replaced(ref why) if why.contains("version 0")), "{o:?}");
+    assert!(
+        matches!(o, BakeOutcome::Replaced(ref why) if why.contains("version 0")),
+        "{o:?}"
+    );
 }
 
 #[test]
@@ -477,19 +555,29 @@ fn gen_dem_is_deterministic_and_loads() {
     let a = gen(dir.path(), "a.f32", "mixed", 42, 129);
     let b = gen(dir.path(), "b.f32", "mixed", 42, 129);
     let c = gen(dir.path(), "c.f32", "mixed", 43, 129);
-    let (ba, bb, bc) = (std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap(), std::fs::read(&c).unwrap());
+    let (ba, bb, bc) = (
+        std::fs::read(&a).unwrap(),
+        std::fs::read(&b).unwrap(),
+        std::fs::read(&c).unwrap(),
+    );
     assert_eq!(ba.len(), 129 * 129 * 4);
     assert_eq!(ba, bb, "same seed, different bytes");
     assert_ne!(ba, bc, "different seed, same bytes");
     let hf = aerie::terrain::load_dem(&a).unwrap();
-    assert_eq!((hf.width, hf.height, hf.spacing_x, hf.spacing_y), (129, 129, 10.0, 10.0));
+    assert_eq!(
+        (hf.width, hf.height, hf.spacing_x, hf.spacing_y),
+        (129, 129, 10.0, 10.0)
+    );
     let mem = aerie::terrain::gen::generate(&aerie::terrain::gen::GenParams {
         size: 129,
         spacing: 10.0,
         kind: aerie::terrain::gen::DemKind::Mixed,
         seed: 42,
     });
-    assert_eq!(hf.heights, mem.heights, "file rows are south first, as generated");
+    assert_eq!(
+        hf.heights, mem.heights,
+        "file rows are south first, as generated"
+    );
 }
 
 fn load(p: &Path) -> Heightfield {
@@ -550,7 +638,10 @@ fn gen_dem_kinds_have_their_character() {
     assert!(nd.len() >= 50, "{} needles", nd.len());
     for (i, a) in nd.iter().enumerate() {
         for b in &nd[i + 1..] {
-            assert!(a.0.abs_diff(b.0) > 1 || a.1.abs_diff(b.1) > 1, "needles {a:?} {b:?} touch");
+            assert!(
+                a.0.abs_diff(b.0) > 1 || a.1.abs_diff(b.1) > 1,
+                "needles {a:?} {b:?} touch"
+            );
         }
     }
     let smooth = max_step(&hf, &|c, r| nd.contains(&(c, r)));
@@ -566,7 +657,9 @@ fn gen_dem_kinds_have_their_character() {
     let hf = load(&gen(dir.path(), "mixed.f32", "mixed", 5, n));
     let h0 = hf.at(n - 1, n - 1);
     assert!((n / 2..n).all(|r| (n / 2..n).all(|c| hf.at(c, r) == h0)));
-    assert!(needles(&hf, 250.0).iter().any(|&(c, r)| c < n / 2 && r >= n / 2));
+    assert!(needles(&hf, 250.0)
+        .iter()
+        .any(|&(c, r)| c < n / 2 && r >= n / 2));
 }
 
 #[test]
@@ -601,7 +694,11 @@ fn bake_command_writes_reports_and_refuses() {
     std::fs::write(&notes, "keep me").unwrap();
     let f = aerie(&["bake", d, "--out", notes.to_str().unwrap()]).unwrap_err();
     assert_eq!(f.code, 2);
-    assert!(f.message.contains("not an aerie bake file"), "{}", f.message);
+    assert!(
+        f.message.contains("not an aerie bake file"),
+        "{}",
+        f.message
+    );
     assert_eq!(std::fs::read_to_string(&notes).unwrap(), "keep me");
     aerie(&["bake", d, "--out", notes.to_str().unwrap(), "--force"]).unwrap();
     assert!(read_bake(&notes, &ds).is_ok());

@@ -221,22 +221,24 @@ fn every_drawn_tile_is_within_tau_for_a_thousand_random_cameras() {
         for j in 0..n.min(6) {
             let item = sel.items[(rng.next() * n as f64) as usize % n];
             let _ = j;
+            // The node is drawn as the level-`node_level` surface over its own tile.
             let err = tile_error_px(
                 &s.ds.hf,
                 &cam,
-                item.level,
-                item.tx,
-                item.ty,
-                item.refinement,
+                item.node_level,
+                item.node_tx,
+                item.node_ty,
+                0,
             );
             assert!(
                 err <= tau + 1e-6,
-                "{}: camera {k} {:?}: tile L{} ({}, {}) r{} projects {err:.4} px > τ (bound said {:.4})",
+                "{}: camera {k} {:?}: node L{} ({}, {}) of tile L{} r{} projects {err:.4} px > τ (bound said {:.4})",
                 s.name,
                 cam.position,
+                item.node_level,
+                item.node_tx,
+                item.node_ty,
                 item.level,
-                item.tx,
-                item.ty,
                 item.refinement,
                 item.rho_px
             );
@@ -276,8 +278,8 @@ fn drawn_tiles_cover_the_visible_ground_exactly_once() {
         let sel = select(&s, &cam, 1.0);
         let mut count = vec![0u8; cells];
         for item in &sel.items {
-            let side = q << item.level;
-            let (c0, r0) = (item.tx as usize * side, item.ty as usize * side);
+            let side = q << item.node_level;
+            let (c0, r0) = (item.node_tx as usize * side, item.node_ty as usize * side);
             for row in r0..(r0 + side).min(hf.height - 1) {
                 for c in c0..(c0 + side).min(hf.width - 1) {
                     count[row * (hf.width - 1) + c] += 1;

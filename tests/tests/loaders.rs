@@ -284,7 +284,9 @@ fn real_data_errors_name_the_file() {
     assert!(matches!(e, DemError::UnknownExtension { .. }), "{e:?}");
     let msg = e.to_string();
     assert!(
-        msg.starts_with(&format!("{}: ", dem.display())) && msg.contains(".hgt") && msg.contains(".tif"),
+        msg.starts_with(&format!("{}: ", dem.display()))
+            && msg.contains(".hgt")
+            && msg.contains(".tif"),
         "{msg}"
     );
 
@@ -327,12 +329,23 @@ fn bigtujunga_geotiff_projected_utm() {
     // Upper-left corner E 376313.655, N 3807917.828 (pixel is area): the south-west sample's
     // centre is half a pixel east of it and 642.5 pixels south.
     match &hf.geo {
-        Some(GeoReference::Projected { crs, easting, northing }) => {
+        Some(GeoReference::Projected {
+            crs,
+            easting,
+            northing,
+        }) => {
             assert_eq!(crs, "EPSG:32611");
             assert!((easting - (376_313.655 + 15.0)).abs() < 1e-3, "{easting}");
-            assert!((northing - (3_807_917.828 - 642.5 * 30.0)).abs() < 1e-3, "{northing}");
+            assert!(
+                (northing - (3_807_917.828 - 642.5 * 30.0)).abs() < 1e-3,
+                "{northing}"
+            );
         }
         other => panic!("expected a projected reference, got {other:?}"),
     }
-    assert!(hf.spacing_note.contains("EPSG:32611"), "{}", hf.spacing_note);
+    assert!(
+        hf.spacing_note.contains("EPSG:32611"),
+        "{}",
+        hf.spacing_note
+    );
 }

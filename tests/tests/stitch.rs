@@ -25,7 +25,11 @@ fn mosaic_sha256(ds: &Dataset) -> String {
     for r in (0..ds.valid_height).rev() {
         for c in 0..ds.valid_width {
             let h = ds.hf.at(c, r);
-            assert_eq!(h, h.round(), "SRTM sample ({c},{r}) = {h} is not an integer");
+            assert_eq!(
+                h,
+                h.round(),
+                "SRTM sample ({c},{r}) = {h} is not an integer"
+            );
             bytes.extend_from_slice(&(h as i16).to_be_bytes());
         }
     }
@@ -46,10 +50,20 @@ fn expected_spacing(lat: f64) -> (f64, f64) {
 }
 
 fn tiles(dir: &Path, folder: &str, names: &[&str]) -> Vec<PathBuf> {
-    names.iter().map(|n| dir.join(folder).join(format!("{n}.hgt"))).collect()
+    names
+        .iter()
+        .map(|n| dir.join(folder).join(format!("{n}.hgt")))
+        .collect()
 }
 
-fn check_mosaic(ds: &Dataset, rows: usize, cols: usize, range: (f32, f32), sha: &str, centre_lat: f64) {
+fn check_mosaic(
+    ds: &Dataset,
+    rows: usize,
+    cols: usize,
+    range: (f32, f32),
+    sha: &str,
+    centre_lat: f64,
+) {
     assert_eq!((ds.valid_width, ds.valid_height), (cols, rows));
     assert_eq!(ds.hf.voids_filled, 0);
     assert_eq!(mosaic_sha256(ds), sha);
@@ -62,8 +76,16 @@ fn check_mosaic(ds: &Dataset, rows: usize, cols: usize, range: (f32, f32), sha: 
     }
     assert_eq!((lo, hi), range);
     let (ew, ns) = expected_spacing(centre_lat);
-    assert!((ds.hf.spacing_x - ew).abs() < 1e-6, "{} vs {ew}", ds.hf.spacing_x);
-    assert!((ds.hf.spacing_y - ns).abs() < 1e-6, "{} vs {ns}", ds.hf.spacing_y);
+    assert!(
+        (ds.hf.spacing_x - ew).abs() < 1e-6,
+        "{} vs {ew}",
+        ds.hf.spacing_x
+    );
+    assert!(
+        (ds.hf.spacing_y - ns).abs() < 1e-6,
+        "{} vs {ns}",
+        ds.hf.spacing_y
+    );
     assert!(
         ds.hf.spacing_note.contains(&format!("{centre_lat:.3}°N")),
         "{}",
@@ -90,13 +112,21 @@ fn sierra_nevada_folder_2x3_matches_sources_checksum() {
         Some(GeoReference::Geographic { south_lat_deg, west_lon_deg, .. })
             if south_lat_deg == 36.0 && west_lon_deg == -5.0
     ));
-    assert!(ds.source.contains("2×3 SRTM3 tiles") && ds.source.contains("0 seam mismatches"), "{}", ds.source);
+    assert!(
+        ds.source.contains("2×3 SRTM3 tiles") && ds.source.contains("0 seam mismatches"),
+        "{}",
+        ds.source
+    );
 }
 
 #[test]
 fn sierra_nevada_east_2x2_list_matches_sources_checksum() {
     let Some(dir) = dem_dir() else { return };
-    let list = tiles(&dir, "srtm3_sierra_nevada_es", &["N36W004", "N37W003", "N36W003", "N37W004"]);
+    let list = tiles(
+        &dir,
+        "srtm3_sierra_nevada_es",
+        &["N36W004", "N37W003", "N36W003", "N37W004"],
+    );
     let ds = load_dataset_tiles(&list).unwrap();
     check_mosaic(
         &ds,
@@ -122,7 +152,11 @@ fn northern_england_mosaics_match_sources_checksums() {
         "c897cb1f5b3f792a54c5ff32e2246138581e37a086b10213e5f5ab8dfd798db2",
         54.0,
     );
-    let list = tiles(&dir, "srtm3_northern_england", &["N54W003", "N54W002", "N53W003", "N53W002"]);
+    let list = tiles(
+        &dir,
+        "srtm3_northern_england",
+        &["N54W003", "N54W002", "N53W003", "N53W002"],
+    );
     let ds = load_dataset_tiles(&list).unwrap();
     check_mosaic(
         &ds,
@@ -158,7 +192,10 @@ fn gaps_and_wrong_sets_are_clear_errors() {
     // Diagonal neighbours only: a gap.
     let list = tiles(&dir, "srtm3_sierra_nevada_es", &["N36W005", "N37W004"]);
     let msg = load_dataset_tiles(&list).unwrap_err().to_string();
-    assert!(msg.contains("full rectangle") && msg.contains("N37W005") && msg.contains("N36W004"), "{msg}");
+    assert!(
+        msg.contains("full rectangle") && msg.contains("N37W005") && msg.contains("N36W004"),
+        "{msg}"
+    );
     // Tiles from two regions far apart.
     let list = vec![
         dir.join("srtm3_sierra_nevada_es/N36W005.hgt"),

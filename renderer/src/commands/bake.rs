@@ -10,8 +10,8 @@ use clap::Args;
 use super::{check_out_folder, human_bytes, progress_bar};
 use crate::cli::{bad_input, runtime, Failure};
 use crate::terrain::bake::{
-    bake, bake_path_for, check_existing, report_csv, write_bake, BakeError, BakeParams,
-    ErrorBake, Existing,
+    bake, bake_path_for, check_existing, report_csv, write_bake, BakeError, BakeParams, ErrorBake,
+    Existing,
 };
 use crate::terrain::dataset::{load_dataset, Dataset};
 
@@ -95,7 +95,11 @@ pub fn run(a: BakeArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn bake_and_write(ds: &Dataset, params: BakeParams, out: &std::path::Path) -> Result<ErrorBake, Failure> {
+fn bake_and_write(
+    ds: &Dataset,
+    params: BakeParams,
+    out: &std::path::Path,
+) -> Result<ErrorBake, Failure> {
     let samples = (ds.hf.width * ds.hf.height) as u64;
     let bar = progress_bar(samples, &format!("baking {} levels", params.levels));
     let t = Instant::now();

@@ -88,7 +88,8 @@ pub fn run(a: GenDemArgs) -> Result<(), Failure> {
     let mut tmp_name = a.out.file_name().map(|n| n.to_owned()).unwrap_or_default();
     tmp_name.push(format!(".tmp{}", std::process::id()));
     let tmp = a.out.with_file_name(tmp_name);
-    let wfail = |e: &dyn std::fmt::Display| runtime(format!("{}: cannot write: {e}", tmp.display()));
+    let wfail =
+        |e: &dyn std::fmt::Display| runtime(format!("{}: cannot write: {e}", tmp.display()));
     let result = (|| -> Result<(f32, f32), Failure> {
         let f = std::fs::OpenOptions::new()
             .read(true)
@@ -104,7 +105,9 @@ pub fn run(a: GenDemArgs) -> Result<(), Failure> {
         generate_into(&p, 0, heights, &|rows| bar.set_position(rows * n as u64));
         let (lo, hi) = heights
             .iter()
-            .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &v| {
+                (l.min(v), h.max(v))
+            });
         if cfg!(target_endian = "big") {
             for v in heights.iter_mut() {
                 *v = f32::from_bits(v.to_bits().to_le());

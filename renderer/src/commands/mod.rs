@@ -32,7 +32,10 @@ pub(crate) fn human_bytes(n: u64) -> String {
 }
 
 /// Refuses an output path whose folder does not exist.
-pub(crate) fn check_out_folder(flag: &str, out: &std::path::Path) -> Result<(), crate::cli::Failure> {
+pub(crate) fn check_out_folder(
+    flag: &str,
+    out: &std::path::Path,
+) -> Result<(), crate::cli::Failure> {
     let parent = out.parent().filter(|p| !p.as_os_str().is_empty());
     if let Some(p) = parent {
         if !p.is_dir() {

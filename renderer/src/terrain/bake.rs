@@ -99,9 +99,7 @@ impl BakeParams {
         let q = m.wrapping_sub(1);
         if !(3..=257).contains(&m) || !q.is_power_of_two() {
             return Err(BakeError::Params {
-                reason: format!(
-                    "tile size {m} is not 2^j + 1 in 3..=257 (e.g. 9, 17, 33, 65)"
-                ),
+                reason: format!("tile size {m} is not 2^j + 1 in 3..=257 (e.g. 9, 17, 33, 65)"),
             });
         }
         Ok(q.trailing_zeros())
@@ -240,8 +238,13 @@ impl ErrorBake {
 
     /// Total size of the bake file in bytes.
     pub fn file_size(&self) -> u64 {
-        file_layout(self.width, self.height, self.params.tile_size, self.levels.len() as u32)
-            .total
+        file_layout(
+            self.width,
+            self.height,
+            self.params.tile_size,
+            self.levels.len() as u32,
+        )
+        .total
     }
 
     /// Per-level distribution of ε over the tiles that hold terrain.
@@ -337,7 +340,9 @@ pub enum BakeError {
     BadMagic { path: String, found: String },
     #[error("{path}: format version {found} (byte offset 8) is not supported: this build reads version {BAKE_VERSION}; re-run `aerie bake` to rebuild it")]
     Version { path: String, found: u32 },
-    #[error("{path}: truncated at byte offset {offset}: {reason}; re-run `aerie bake` to rebuild it")]
+    #[error(
+        "{path}: truncated at byte offset {offset}: {reason}; re-run `aerie bake` to rebuild it"
+    )]
     Truncated {
         path: String,
         offset: u64,
@@ -384,7 +389,11 @@ pub fn round_up_f32(x: f64) -> f32 {
 #[inline]
 fn tile_rows_of(r: usize, t: usize, tiles_y: usize) -> (usize, usize) {
     let hi = (r / t).min(tiles_y - 1);
-    let lo = if r % t == 0 && r > 0 { r / t - 1 } else { hi };
+    let lo = if r.is_multiple_of(t) && r > 0 {
+        r / t - 1
+    } else {
+        hi
+    };
     (lo, hi)
 }
 
@@ -468,7 +477,7 @@ fn block_max<const B: usize>(h: &[f32], c: &Corners, v: f64, i0: usize, inv: f64
 /// The same as [`cell_max_const`] for `s ≥ 64` known at run time (coarse levels).
 #[inline(always)]
 fn cell_max_dyn(h: &[f32], c: &Corners, v: f64, s: usize) -> f64 {
-    debug_assert!(s >= 64 && s % 64 == 0);
+    debug_assert!(s >= 64 && s.is_multiple_of(64));
     let inv = 1.0 / s as f64;
     let (mut a, mut b) = (0f64, 0f64);
     for i0 in (0..s).step_by(64) {
@@ -572,6 +581,7 @@ impl Acc {
 
 /// Rows `r0..r1` into the worker's maxima, with AVX2 when the CPU has it (same IEEE
 /// operations in the same order either way, so the results are bit-identical).
+#[allow(clippy::too_many_arguments)]
 fn process_rows(
     ds: &Dataset,
     geo: &[LevelGeom],
@@ -580,9 +590,10 @@ fn process_rows(
     r1: usize,
     acc: &mut Acc,
     tile_max: &mut [f64],
+    simd: bool,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if simd && std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2 (checked just above).
         unsafe { process_rows_avx2(ds, geo, q, r0, r1, acc, tile_max) };
         return;
@@ -669,9 +680,17 @@ fn process_rows_impl(
 /// `progress(done, total)` is called from the calling thread, in samples (rows × width).
 /// Panics when `params` do not fit the dataset: check with [`BakeParams::resolve_levels`] first.
 pub fn bake(ds: &Dataset, params: BakeParams, progress: &dyn Fn(u64, u64)) -> ErrorBake {
-    let levels = params
-        .resolve_levels(ds)
-        .unwrap_or_else(|e| panic!("{e}"));
+    bake_with(ds, params, progress, true)
+}
+
+/// [`bake`]; `simd = false` keeps to the baseline instruction set (tests compare the two).
+fn bake_with(
+    ds: &Dataset,
+    params: BakeParams,
+    progress: &dyn Fn(u64, u64),
+    simd: bool,
+) -> ErrorBake {
+    let levels = params.resolve_levels(ds).unwrap_or_else(|e| panic!("{e}"));
     let (w, h) = (ds.hf.width, ds.hf.height);
     let q = (params.tile_size - 1) as usize;
     let geo = level_geoms(q, w, h, levels);
@@ -698,7 +717,7 @@ pub fn bake(ds: &Dataset, params: BakeParams, progress: &dyn Fn(u64, u64)) -> Er
                         }
                         let r0 = c * CHUNK_ROWS;
                         let r1 = (r0 + CHUNK_ROWS).min(h);
-                        process_rows(ds, &geo, q, r0, r1, &mut acc, &mut tile_max);
+                        process_rows(ds, &geo, q, r0, r1, &mut acc, &mut tile_max, simd);
                         rows_done.fetch_add((r1 - r0) as u64, Ordering::Relaxed);
                     }
                     finished.fetch_add(1, Ordering::Release);
@@ -795,7 +814,11 @@ fn build_tables(
                         (2 * ty + 1) * fx + 2 * tx + 1,
                     ];
                     mn.push(kids.iter().map(|&k| f.min[k]).fold(f32::INFINITY, f32::min));
-                    mx.push(kids.iter().map(|&k| f.max[k]).fold(f32::NEG_INFINITY, f32::max));
+                    mx.push(
+                        kids.iter()
+                            .map(|&k| f.max[k])
+                            .fold(f32::NEG_INFINITY, f32::max),
+                    );
                 }
             }
             (mn, mx)
@@ -1068,7 +1091,9 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
             format!("{vw}×{vh} real samples in a {width}×{height} grid"),
         ));
     }
-    let kmin = (width - 1).trailing_zeros().min((height - 1).trailing_zeros());
+    let kmin = (width - 1)
+        .trailing_zeros()
+        .min((height - 1).trailing_zeros());
     let j = (m - 1).trailing_zeros();
     if levels == 0 || kmin < j || levels > kmin - j + 1 {
         return Err(corrupt(
@@ -1085,10 +1110,7 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
         return Err(corrupt(
             "file size",
             64,
-            format!(
-                "{promised}, but the parameters give {} bytes",
-                layout.total
-            ),
+            format!("{promised}, but the parameters give {} bytes", layout.total),
         ));
     }
     if len < layout.total {
@@ -1098,7 +1120,11 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
             let n = s.tiles_x as u64 * s.tiles_y as u64;
             let o = s.offset as u64;
             let parts: &[(u64, &str)] = if l == 0 {
-                &[(o, "section header"), (o + 16, "min array"), (o + 16 + 4 * n, "max array")]
+                &[
+                    (o, "section header"),
+                    (o + 16, "min array"),
+                    (o + 16 + 4 * n, "max array"),
+                ]
             } else {
                 &[(o, "section header"), (o + 16, "ε array")]
             };
@@ -1150,7 +1176,11 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
     for (l, s) in layout.sections.iter().enumerate() {
         let o = s.offset;
         let n = s.tiles_x as usize * s.tiles_y as usize;
-        let (lv, tx, ty) = (get_u32(bytes, o), get_u32(bytes, o + 4), get_u32(bytes, o + 8));
+        let (lv, tx, ty) = (
+            get_u32(bytes, o),
+            get_u32(bytes, o + 4),
+            get_u32(bytes, o + 8),
+        );
         if (lv, tx, ty) != (l as u32, s.tiles_x, s.tiles_y) {
             return Err(corrupt(
                 "level section header",
@@ -1374,12 +1404,26 @@ mod tests {
     #[test]
     fn planes_have_zero_error_and_a_spike_shows_at_every_level() {
         let d = ds(33, 33, |c, r| 3.0 * c as f32 - 2.0 * r as f32);
-        let b = bake(&d, BakeParams { tile_size: 5, levels: 0 }, &|_, _| {});
+        let b = bake(
+            &d,
+            BakeParams {
+                tile_size: 5,
+                levels: 0,
+            },
+            &|_, _| {},
+        );
         assert_eq!(b.levels.len(), 4); // 32 = 2^5, m − 1 = 4 = 2^2 → levels 0..=3
         assert!(b.levels.iter().all(|t| t.eps.iter().all(|&e| e == 0.0)));
         // One needle at an odd sample: invisible to every coarse level, error = its height.
         let d = ds(33, 33, |c, r| if (c, r) == (5, 7) { 100.0 } else { 0.0 });
-        let b = bake(&d, BakeParams { tile_size: 5, levels: 0 }, &|_, _| {});
+        let b = bake(
+            &d,
+            BakeParams {
+                tile_size: 5,
+                levels: 0,
+            },
+            &|_, _| {},
+        );
         assert_eq!(b.eps(0, 1, 1), 0.0);
         assert_eq!(b.eps(1, 0, 0), 100.0);
         assert_eq!(b.eps(2, 0, 0), 100.0);
@@ -1400,16 +1444,87 @@ mod tests {
             (4, 3) | (3, 4) | (3, 3) => 4.0,
             _ => 0.0,
         };
-        let b = bake(&ds(5, 5, f), BakeParams { tile_size: 3, levels: 2 }, &|_, _| {});
+        let b = bake(
+            &ds(5, 5, f),
+            BakeParams {
+                tile_size: 3,
+                levels: 2,
+            },
+            &|_, _| {},
+        );
         assert_eq!(b.eps(1, 0, 0), 0.0);
         let g = |c: usize, r: usize| if (c, r) == (3, 3) { 0.0 } else { f(c, r) };
-        let b = bake(&ds(5, 5, g), BakeParams { tile_size: 3, levels: 2 }, &|_, _| {});
+        let b = bake(
+            &ds(5, 5, g),
+            BakeParams {
+                tile_size: 3,
+                levels: 2,
+            },
+            &|_, _| {},
+        );
         assert_eq!(b.eps(1, 0, 0), 4.0);
+    }
+
+    /// The bake's fast loops give bit for bit what evaluating `quad_surface` at every sample
+    /// gives (before and after rounding up), with and without AVX2.
+    #[test]
+    fn kernels_equal_per_sample_quad_surface() {
+        let mut seed = 7u64;
+        let mut rnd = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 33) as f64 / (1u64 << 31) as f64) as f32
+        };
+        let vals: Vec<f32> = (0..300 * 260).map(|_| rnd() * 900.0 - 100.0).collect();
+        let d = ds(300, 260, |c, r| vals[r * 300 + c]);
+        for m in [3, 5, 17] {
+            let params = BakeParams {
+                tile_size: m,
+                levels: 0,
+            };
+            let fast = bake_with(&d, params, &|_, _| {}, true);
+            let plain = bake_with(&d, params, &|_, _| {}, false);
+            assert_eq!(fast, plain, "m = {m}");
+            let q = (m - 1) as usize;
+            for t in &fast.levels {
+                let l = t.level;
+                let s = 1usize << l;
+                let side = q << l;
+                for ty in 0..t.tiles_y as usize {
+                    for tx in 0..t.tiles_x as usize {
+                        let mut e = 0f64;
+                        for r in ty * side..=(ty + 1) * side {
+                            for c in tx * side..=(tx + 1) * side {
+                                if l == 0 {
+                                    continue;
+                                }
+                                let cx = (c / s).min((d.hf.width - 1) / s - 1);
+                                let cy = (r / s).min((d.hf.height - 1) / s - 1);
+                                let h = |c, r| f64::from(d.hf.at(c, r));
+                                let (c0, r0) = (cx * s, cy * s);
+                                let surf = quad_surface(
+                                    h(c0, r0),
+                                    h(c0 + s, r0),
+                                    h(c0, r0 + s),
+                                    h(c0 + s, r0 + s),
+                                    (c - c0) as f64 / s as f64,
+                                    (r - r0) as f64 / s as f64,
+                                );
+                                e = e.max((h(c, r) - surf).abs());
+                            }
+                        }
+                        let got = t.eps[ty * t.tiles_x as usize + tx];
+                        assert_eq!(got.to_bits(), round_up_f32(e).to_bits(), "L{l} ({tx},{ty})");
+                    }
+                }
+            }
+        }
     }
 
     #[test]
     fn round_up_never_goes_below() {
-        for x in [0.0, 1.0, 0.1, 1e-30, 3.000_000_000_1, 12345.678_901_234] {
+        for x in [0.0, 1.0, 0.1, 1e-30, 3.000_000_000_100, 12_345.678_901_234] {
             let f = round_up_f32(x);
             assert!(f64::from(f) >= x);
             assert!(f64::from(f) - x <= f64::from(f) * 1.2e-7 + 1e-45);
@@ -1419,10 +1534,33 @@ mod tests {
     #[test]
     fn params_are_checked() {
         let d = ds(9, 9, |_, _| 0.0);
-        assert!(BakeParams { tile_size: 16, levels: 0 }.resolve_levels(&d).is_err());
-        assert!(BakeParams { tile_size: 17, levels: 0 }.resolve_levels(&d).is_err());
-        assert_eq!(BakeParams { tile_size: 9, levels: 0 }.resolve_levels(&d).unwrap(), 1);
-        let e = BakeParams { tile_size: 3, levels: 5 }.resolve_levels(&d).unwrap_err();
+        assert!(BakeParams {
+            tile_size: 16,
+            levels: 0
+        }
+        .resolve_levels(&d)
+        .is_err());
+        assert!(BakeParams {
+            tile_size: 17,
+            levels: 0
+        }
+        .resolve_levels(&d)
+        .is_err());
+        assert_eq!(
+            BakeParams {
+                tile_size: 9,
+                levels: 0
+            }
+            .resolve_levels(&d)
+            .unwrap(),
+            1
+        );
+        let e = BakeParams {
+            tile_size: 3,
+            levels: 5,
+        }
+        .resolve_levels(&d)
+        .unwrap_err();
         assert!(e.to_string().contains("only 3 fit"), "{e}");
     }
 
@@ -1432,6 +1570,9 @@ mod tests {
             bake_path_for(Path::new("/d/N47E011.hgt.zip")),
             Path::new("/d/N47E011.hgt.zip.aerie-bake")
         );
-        assert_eq!(bake_path_for(Path::new("/d/srtm/")), Path::new("/d/srtm.aerie-bake"));
+        assert_eq!(
+            bake_path_for(Path::new("/d/srtm/")),
+            Path::new("/d/srtm.aerie-bake")
+        );
     }
 }

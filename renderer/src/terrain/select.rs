@@ -56,27 +56,62 @@ impl Default for SelectParams {
     }
 }
 
-/// One tile to draw.
+/// One m×m tile instance to draw: a *node* of a ring tile.
+///
+/// An unrefined ring tile (L, tx, ty) is one node: itself, heights from its clipmap level. A
+/// refined ring tile takes its heights from one pool slot holding the tile at level L−r, and is
+/// drawn as a quadtree of nodes: each node is the level-ℓ tile (node_tx, node_ty) for some
+/// L−r ≤ ℓ ≤ L, split further only while its own projected error exceeds τ — so the far part of
+/// a big coarse tile is not drawn at the resolution its near corner needs (beyond the document,
+/// which refines the whole tile). Every node meets the bound on its own.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DrawItem {
+    /// The ring tile: clipmap level and tile coordinates (the pool key with `refinement`).
     pub level: u32,
     pub tx: u32,
     pub ty: u32,
-    /// Refinement chosen by the bound: drawn with 2^r(m−1)+1 vertices per side.
+    /// r: the pool slot holds the ring tile at level L−r (0 = unrefined, from the clipmap).
     pub refinement: u32,
-    /// ε of the surface drawn (level L−r), metres, curvature interpolation included.
+    /// The node drawn: a level-`node_level` tile, L−r ≤ node_level ≤ L.
+    pub node_level: u32,
+    pub node_tx: u32,
+    pub node_ty: u32,
+    /// ε of the surface drawn over the node (level `node_level`), metres, curvature
+    /// interpolation included.
     pub eps_m: f32,
     /// Its projected error bound, pixels.
     pub rho_px: f32,
 }
 
+impl DrawItem {
+    /// The node of an unrefined ring tile: the tile itself.
+    pub fn whole(level: u32, tx: u32, ty: u32, eps_m: f32, rho_px: f32) -> Self {
+        Self {
+            level,
+            tx,
+            ty,
+            refinement: 0,
+            node_level: level,
+            node_tx: tx,
+            node_ty: ty,
+            eps_m,
+            rho_px,
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct LevelStats {
+    /// Ring tiles of this level over the dataset.
     pub considered: u32,
+    /// Ring tiles outside the frustum.
     pub culled: u32,
+    /// Ring tiles drawn.
     pub drawn: u32,
-    /// Drawn tiles per refinement r (index r).
+    /// Drawn ring tiles per refinement r (index r).
     pub refined: [u32; MAX_REFINEMENT as usize + 1],
+    /// Nodes (m×m instances) drawn for this level's tiles.
+    pub nodes: u32,
     /// The level was skipped as too fine for the current height above ground.
     pub skipped: bool,
 }
@@ -242,6 +277,11 @@ impl Frame<'_> {
         e
     }
 
+    /// ε of the level-ℓ surface over the level-ℓ tile (tx, ty), curvature slack included.
+    fn eps_node(&self, level: u32, tx: u32, ty: u32) -> f64 {
+        self.eps(level, tx, ty, 0)
+    }
+
     fn aabb(&self, level: u32, tx: u32, ty: u32) -> Aabb {
         let (lo, hi) = self.grid.rect(level, tx, ty);
         let (min_h, max_h) = self.bake.bounds(level, tx, ty);
@@ -260,34 +300,42 @@ impl Frame<'_> {
         projected_error_px(eps, z_min, self.focal, obliquity)
     }
 
-    /// Chooses the refinement of one visible tile: (r, ε drawn, ρ, bound met).
-    fn refine(&self, level: u32, tx: u32, ty: u32, z_min: f64, c: f64) -> (u32, f64, f64, bool) {
-        let cap = self.params.max_refinement.min(level).min(MAX_REFINEMENT);
-        match self.params.mode {
-            LodMode::Clipmap => {
-                let e = self.eps(level, tx, ty, 0);
-                let rho = self.rho(e, z_min, c);
-                (0, e, rho, rho <= self.params.tau_px)
-            }
-            LodMode::Full => {
-                let r = level.min(MAX_REFINEMENT);
-                let e = self.eps(level, tx, ty, r);
-                let rho = self.rho(e, z_min, c);
-                (r, e, rho, r == level)
-            }
-            LodMode::Bounded => {
-                let mut last = (0, 0.0, 0.0);
-                for r in 0..=cap {
-                    let e = self.eps(level, tx, ty, r);
-                    let rho = self.rho(e, z_min, c);
-                    if rho <= self.params.tau_px {
-                        return (r, e, rho, true);
-                    }
-                    last = (r, e, rho);
-                }
-                (last.0, last.1, last.2, false)
+    /// Bound of one node: (ε, ρ).
+    fn node_bound(&self, level: u32, tx: u32, ty: u32, aabb: &Aabb) -> (f64, f64) {
+        let z_min = min_view_depth(self.camera, aabb);
+        let c = box_obliquity(self.camera, aabb);
+        let e = self.eps_node(level, tx, ty);
+        (e, self.rho(e, z_min, c))
+    }
+
+    /// Splits node (ℓ, tx, ty) of a ring tile until every part meets τ or reaches `finest`;
+    /// culled parts are dropped. Appends (ℓ, tx, ty, ε, ρ) and returns how many nodes miss τ.
+    fn subdivide(
+        &self,
+        level: u32,
+        tx: u32,
+        ty: u32,
+        finest: u32,
+        out: &mut Vec<(u32, u32, u32, f32, f32)>,
+    ) -> u32 {
+        let aabb = self.aabb(level, tx, ty);
+        if outside_frustum(self.camera, &aabb) {
+            return 0;
+        }
+        let (e, rho) = self.node_bound(level, tx, ty, &aabb);
+        let force_split = self.params.mode == LodMode::Full && level > finest;
+        if (rho <= self.params.tau_px && !force_split) || level == finest {
+            out.push((level, tx, ty, e as f32, rho as f32));
+            return (rho > self.params.tau_px && self.params.mode == LodMode::Bounded) as u32;
+        }
+        let mut missed = 0;
+        for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let (cx, cy) = (2 * tx + dx, 2 * ty + dy);
+            if has_terrain(self.bake, level - 1, cx, cy) {
+                missed += self.subdivide(level - 1, cx, cy, finest, out);
             }
         }
+        missed
     }
 }
 
@@ -327,6 +375,7 @@ pub fn select_tiles(
     }
 
     let mut ring = Vec::new();
+    let mut nodes = Vec::new();
     for (i, placement) in placements.iter().enumerate().skip(finest as usize) {
         let finer = (i > finest as usize).then(|| &placements[i - 1]);
         ring.clear();
@@ -343,22 +392,36 @@ pub fn select_tiles(
                 stats.culled += 1;
                 continue;
             }
-            let z_min = min_view_depth(camera, &aabb);
-            let c = box_obliquity(camera, &aabb);
-            let (r, eps, rho, met) = frame.refine(level, tx, ty, z_min, c);
-            if !met && params.mode == LodMode::Bounded {
-                out.unbounded += 1;
-            }
+            let (eps, rho) = frame.node_bound(level, tx, ty, &aabb);
             stats.drawn += 1;
+            if params.mode == LodMode::Clipmap
+                || (params.mode == LodMode::Bounded && rho <= params.tau_px)
+            {
+                stats.refined[0] += 1;
+                stats.nodes += 1;
+                out.items
+                    .push(DrawItem::whole(level, tx, ty, eps as f32, rho as f32));
+                continue;
+            }
+            let cap = params.max_refinement.min(level).min(MAX_REFINEMENT);
+            nodes.clear();
+            out.unbounded += frame.subdivide(level, tx, ty, level - cap, &mut nodes);
+            let r = nodes.iter().map(|n| level - n.0).max().unwrap_or(0);
             stats.refined[r as usize] += 1;
-            out.items.push(DrawItem {
-                level,
-                tx,
-                ty,
-                refinement: r,
-                eps_m: eps as f32,
-                rho_px: rho as f32,
-            });
+            stats.nodes += nodes.len() as u32;
+            for &(node_level, node_tx, node_ty, eps_m, rho_px) in &nodes {
+                out.items.push(DrawItem {
+                    level,
+                    tx,
+                    ty,
+                    refinement: r,
+                    node_level,
+                    node_tx,
+                    node_ty,
+                    eps_m,
+                    rho_px,
+                });
+            }
         }
     }
 }

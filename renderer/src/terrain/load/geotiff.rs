@@ -77,16 +77,17 @@ pub(super) fn load_geotiff(path: &Path) -> Result<Heightfield, DemError> {
         }
         Err(e) => return Err(tiff_err(path, "unsupported pixel layout", e)),
     }
-    let find_f64s = |dec: &mut Decoder<_>, tag: Tag, name: &str| -> Result<Option<Vec<f64>>, DemError> {
-        match dec.find_tag(tag) {
-            Ok(None) => Ok(None),
-            Ok(Some(v)) => v
-                .into_f64_vec()
-                .map(Some)
-                .map_err(|e| tiff_err(path, &format!("tag {name}"), e)),
-            Err(e) => Err(tiff_err(path, &format!("tag {name}"), e)),
-        }
-    };
+    let find_f64s =
+        |dec: &mut Decoder<_>, tag: Tag, name: &str| -> Result<Option<Vec<f64>>, DemError> {
+            match dec.find_tag(tag) {
+                Ok(None) => Ok(None),
+                Ok(Some(v)) => v
+                    .into_f64_vec()
+                    .map(Some)
+                    .map_err(|e| tiff_err(path, &format!("tag {name}"), e)),
+                Err(e) => Err(tiff_err(path, &format!("tag {name}"), e)),
+            }
+        };
     let scale = find_f64s(&mut dec, Tag::ModelPixelScaleTag, "ModelPixelScale")?;
     let tie = find_f64s(&mut dec, Tag::ModelTiepointTag, "ModelTiepoint")?;
     let keys = match dec.find_tag(Tag::GeoKeyDirectoryTag) {
@@ -153,8 +154,15 @@ pub(super) fn load_geotiff(path: &Path) -> Result<Heightfield, DemError> {
         ));
     }
 
-    let (spacing_x, spacing_y, geo, spacing_note) =
-        placement(path, width, height, scale.as_deref(), tie.as_deref(), &keys, kind)?;
+    let (spacing_x, spacing_y, geo, spacing_note) = placement(
+        path,
+        width,
+        height,
+        scale.as_deref(),
+        tie.as_deref(),
+        &keys,
+        kind,
+    )?;
     finish(
         path,
         Grid {
@@ -205,7 +213,10 @@ fn placement(
         Some(t) => {
             return Err(format_err(
                 path,
-                format!("tag ModelTiepoint: {} values, expected 6 finite ones", t.len()),
+                format!(
+                    "tag ModelTiepoint: {} values, expected 6 finite ones",
+                    t.len()
+                ),
             ))
         }
         None => (0.0, 0.0, 0.0, 0.0),
@@ -253,7 +264,7 @@ fn placement(
     let note = format!(
         "GeoTIFF {kind} {crs} grid (ModelPixelScale in {unit_name}): {spacing_x} m E-W, {spacing_y} m N-S"
     );
-    let geo = (model == Some(1) || tie.is_some()).then(|| GeoReference::Projected {
+    let geo = (model == Some(1) || tie.is_some()).then_some(GeoReference::Projected {
         crs,
         easting: west * unit,
         northing: south * unit,
@@ -323,7 +334,11 @@ mod tests {
                 northing: 5000.0 - 2.5 * 30.0,
             })
         );
-        assert!(hf.spacing_note.contains("EPSG:32611"), "{}", hf.spacing_note);
+        assert!(
+            hf.spacing_note.contains("EPSG:32611"),
+            "{}",
+            hf.spacing_note
+        );
     }
 
     #[test]
@@ -354,13 +369,17 @@ mod tests {
         {
             let f = std::fs::File::create(&p).unwrap();
             let mut enc = TiffEncoder::new(f).unwrap();
-            enc.write_image::<colortype::RGB8>(2, 2, &[0u8; 12]).unwrap();
+            enc.write_image::<colortype::RGB8>(2, 2, &[0u8; 12])
+                .unwrap();
         }
         let msg = load_dem(&p).unwrap_err().to_string();
         assert!(msg.contains("one sample per pixel"), "{msg}");
         let p = dir.path().join("bad.tif");
         std::fs::write(&p, b"II*\0garbage").unwrap();
         let msg = load_dem(&p).unwrap_err().to_string();
-        assert!(msg.starts_with(&p.display().to_string()) && !msg.contains('\n'), "{msg}");
+        assert!(
+            msg.starts_with(&p.display().to_string()) && !msg.contains('\n'),
+            "{msg}"
+        );
     }
 }

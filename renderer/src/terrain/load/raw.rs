@@ -158,7 +158,16 @@ fn read_samples(
                 format!("expected {expected} bytes, reading failed at byte offset {done}: {e}"),
             )
         })?;
-        decode(path, &buf[..n], format, width, scale, offset, out.len(), &mut out)?;
+        decode(
+            path,
+            &buf[..n],
+            format,
+            width,
+            scale,
+            offset,
+            out.len(),
+            &mut out,
+        )?;
         done += n as u64;
     }
     Ok(out)

@@ -123,7 +123,8 @@ fn tile_label(lat: i32, lon: i32) -> String {
 /// `whole` names the set in messages about the set (a folder, or the first file).
 fn stitch_at(whole: &Path, paths: &[PathBuf]) -> Result<(Heightfield, StitchInfo), DemError> {
     // Read and decode all tiles (2.9 MB each for SRTM3), two at a time.
-    let mut tiles: Vec<Option<Result<HgtTile, DemError>>> = (0..paths.len()).map(|_| None).collect();
+    let mut tiles: Vec<Option<Result<HgtTile, DemError>>> =
+        (0..paths.len()).map(|_| None).collect();
     let threads = std::thread::available_parallelism()
         .map(|n| n.get())
         .unwrap_or(1)
@@ -180,7 +181,10 @@ fn stitch_at(whole: &Path, paths: &[PathBuf]) -> Result<(Heightfield, StitchInfo
     let lat_max = by_pos.keys().map(|k| k.0).max().unwrap_or(0);
     let lon_min = by_pos.keys().map(|k| k.1).min().unwrap_or(0);
     let lon_max = by_pos.keys().map(|k| k.1).max().unwrap_or(0);
-    let (rows, cols) = ((lat_max - lat_min + 1) as usize, (lon_max - lon_min + 1) as usize);
+    let (rows, cols) = (
+        (lat_max - lat_min + 1) as usize,
+        (lon_max - lon_min + 1) as usize,
+    );
     let missing: Vec<String> = (lat_min..=lat_max)
         .rev()
         .flat_map(|la| (lon_min..=lon_max).map(move |lo| (la, lo)))
@@ -188,7 +192,12 @@ fn stitch_at(whole: &Path, paths: &[PathBuf]) -> Result<(Heightfield, StitchInfo
         .map(|(la, lo)| tile_label(la, lo))
         .collect();
     if !missing.is_empty() {
-        let mut list = missing.iter().take(8).cloned().collect::<Vec<_>>().join(", ");
+        let mut list = missing
+            .iter()
+            .take(8)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join(", ");
         if missing.len() > 8 {
             list.push_str(", …");
         }
@@ -318,7 +327,9 @@ mod tests {
             "{msg}"
         );
         let a = dir.path().join("N11E020.hgt");
-        let msg = stitch_tiles(&[a.clone(), a.clone()]).unwrap_err().to_string();
+        let msg = stitch_tiles(&[a.clone(), a.clone()])
+            .unwrap_err()
+            .to_string();
         assert!(msg.contains("given twice"), "{msg}");
         let big = dir.path().join("N12E020.hgt");
         std::fs::write(&big, vec![0u8; 3601 * 3601 * 2]).unwrap();

@@ -1,0 +1,351 @@
+//! Packet codecs: aerie native v1, CIGI 3.3 (host → IG subset), X-Plane `RPOS`, FlightGear
+//! FGNetFDM v24. Layouts are specified in `sim-bridge/PROTOCOL.md`.
+//!
+//! Every decoder takes arbitrary bytes and either returns a validated [`Pose`] (plus whatever
+//! else the packet carried) or a [`DecodeError`] that names the reason; none panics.
+
+pub mod cigi;
+pub mod fgfs;
+pub mod native;
+pub(crate) mod wire;
+pub mod xplane;
+
+use crate::pose::{Pose, PoseError};
+use crate::stats::DropReason;
+
+pub use wire::ByteOrder;
+
+/// A supported wire protocol.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Protocol {
+    /// aerie native v1 (little-endian, CRC-32).
+    Aerie,
+    /// CIGI 3.3, host → IG subset.
+    Cigi,
+    /// X-Plane `RPOS` position output.
+    XPlane,
+    /// FlightGear `--native-fdm` (FGNetFDM v24).
+    Fgfs,
+}
+
+impl Protocol {
+    /// Every protocol, in detection order.
+    pub const ALL: [Protocol; 4] = [
+        Protocol::Aerie,
+        Protocol::Cigi,
+        Protocol::XPlane,
+        Protocol::Fgfs,
+    ];
+
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Protocol::Aerie => "aerie",
+            Protocol::Cigi => "cigi",
+            Protocol::XPlane => "xplane",
+            Protocol::Fgfs => "fgfs",
+        }
+    }
+}
+
+impl std::fmt::Display for Protocol {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Which protocol(s) a port accepts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ProtocolChoice {
+    /// Detect each datagram's protocol from its first bytes ([`detect`]).
+    #[default]
+    Auto,
+    /// Accept only this protocol; anything else is dropped as unknown.
+    Only(Protocol),
+}
+
+impl std::str::FromStr for ProtocolChoice {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Ok(match s.to_ascii_lowercase().as_str() {
+            "auto" => ProtocolChoice::Auto,
+            "aerie" | "native" => ProtocolChoice::Only(Protocol::Aerie),
+            "cigi" => ProtocolChoice::Only(Protocol::Cigi),
+            "xplane" | "x-plane" | "rpos" => ProtocolChoice::Only(Protocol::XPlane),
+            "fgfs" | "flightgear" => ProtocolChoice::Only(Protocol::Fgfs),
+            other => {
+                return Err(format!(
+                    "unknown protocol `{other}` (expected auto, aerie, cigi, xplane or fgfs)"
+                ))
+            }
+        })
+    }
+}
+
+/// Why a datagram could not be decoded.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DecodeError {
+    /// No protocol recognised the first bytes.
+    #[error("not a known pose protocol ({len} bytes)")]
+    Unknown {
+        /// Datagram length.
+        len: usize,
+    },
+    /// The configured protocol's magic is absent.
+    #[error("{protocol}: wrong magic")]
+    BadMagic {
+        /// The protocol the datagram was decoded as.
+        protocol: Protocol,
+    },
+    /// Wrong length for a fixed-size packet.
+    #[error("{protocol}: {len} bytes, expected {expected}")]
+    BadSize {
+        /// The protocol the datagram was decoded as.
+        protocol: Protocol,
+        /// Datagram length.
+        len: usize,
+        /// The protocol's size.
+        expected: usize,
+    },
+    /// Unsupported version number.
+    #[error("{protocol}: version {found}, this decoder reads version {expected}")]
+    BadVersion {
+        /// The protocol the datagram was decoded as.
+        protocol: Protocol,
+        /// The version in the packet.
+        found: u32,
+        /// The version decoded here.
+        expected: u32,
+    },
+    /// CRC-32 mismatch.
+    #[error("{protocol}: CRC-32 {found:#010x} does not match the computed {computed:#010x}")]
+    BadCrc {
+        /// The protocol the datagram was decoded as.
+        protocol: Protocol,
+        /// CRC in the packet.
+        found: u32,
+        /// CRC of the received bytes.
+        computed: u32,
+    },
+    /// Structurally broken.
+    #[error("{protocol}: malformed: {what}")]
+    Malformed {
+        /// The protocol the datagram was decoded as.
+        protocol: Protocol,
+        /// What is wrong, with its byte offset where it applies.
+        what: String,
+    },
+    /// A pose field is non-finite or out of range.
+    #[error("{protocol}: {error}")]
+    Invalid {
+        /// The protocol the datagram was decoded as.
+        protocol: Protocol,
+        /// The offending field.
+        error: PoseError,
+    },
+    /// Well formed but not supported.
+    #[error("{protocol}: unsupported: {what}")]
+    Unsupported {
+        /// The protocol the datagram was decoded as.
+        protocol: Protocol,
+        /// What is not supported.
+        what: &'static str,
+    },
+}
+
+impl DecodeError {
+    /// The counter this error is reported under.
+    pub fn reason(&self) -> DropReason {
+        match self {
+            DecodeError::Unknown { .. } | DecodeError::BadMagic { .. } => DropReason::Unknown,
+            DecodeError::BadSize { .. } => DropReason::BadSize,
+            DecodeError::BadVersion { .. } => DropReason::BadVersion,
+            DecodeError::BadCrc { .. } => DropReason::BadCrc,
+            DecodeError::Malformed { .. } => DropReason::Malformed,
+            DecodeError::Invalid { .. } => DropReason::Invalid,
+            DecodeError::Unsupported { .. } => DropReason::Unsupported,
+        }
+    }
+
+    pub(crate) fn malformed(protocol: Protocol, what: impl Into<String>) -> Self {
+        DecodeError::Malformed {
+            protocol,
+            what: what.into(),
+        }
+    }
+
+    /// "Packet ends early" for a read that ran past a size already checked (defensive).
+    pub(crate) fn truncated(protocol: Protocol) -> Self {
+        Self::malformed(protocol, "packet ends inside a field")
+    }
+}
+
+/// A decoded datagram.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Decoded {
+    /// The protocol it was decoded as.
+    pub protocol: Protocol,
+    /// The ownship pose, validated, if the datagram carried one.
+    pub pose: Option<Pose>,
+    /// The sender's sequence number (native sequence, CIGI host frame), for ordering.
+    pub sequence: Option<u32>,
+    /// The whole CIGI message (IG Control, views) when `protocol` is CIGI.
+    pub cigi: Option<cigi::CigiMessage>,
+}
+
+impl Decoded {
+    fn pose(protocol: Protocol, pose: Pose, sequence: Option<u32>) -> Self {
+        Self {
+            protocol,
+            pose: Some(pose),
+            sequence,
+            cigi: None,
+        }
+    }
+}
+
+/// Recognises a datagram's protocol from its first bytes (and, for FGNetFDM, its size):
+/// `AERP` → aerie; `RPOS` → X-Plane; packet ID 1 with size 24 (a CIGI 3 IG Control) → CIGI;
+/// big-endian u32 24 at offset 0, or exactly 408 bytes → FlightGear.
+pub fn detect(bytes: &[u8]) -> Option<Protocol> {
+    if bytes.starts_with(&native::MAGIC) {
+        Some(Protocol::Aerie)
+    } else if bytes.starts_with(xplane::HEADER) {
+        Some(Protocol::XPlane)
+    } else if bytes.len() >= 2 && bytes[0] == cigi::IG_CONTROL_ID && bytes[1] == cigi::IG_CONTROL_SIZE
+    {
+        Some(Protocol::Cigi)
+    } else if bytes.starts_with(&fgfs::VERSION.to_be_bytes()) || bytes.len() == fgfs::SIZE {
+        Some(Protocol::Fgfs)
+    } else {
+        None
+    }
+}
+
+/// Decodes one datagram as `protocol`.
+pub fn decode_as(protocol: Protocol, bytes: &[u8]) -> Result<Decoded, DecodeError> {
+    match protocol {
+        Protocol::Aerie => {
+            let p = native::decode(bytes)?;
+            Ok(Decoded::pose(protocol, p.pose, Some(p.sequence)))
+        }
+        Protocol::Cigi => {
+            let m = cigi::decode(bytes)?;
+            Ok(Decoded {
+                protocol,
+                pose: m.ownship_pose(),
+                sequence: Some(m.ig_control.host_frame),
+                cigi: Some(m),
+            })
+        }
+        Protocol::XPlane => Ok(Decoded::pose(protocol, xplane::decode(bytes)?, None)),
+        Protocol::Fgfs => Ok(Decoded::pose(protocol, fgfs::decode(bytes)?, None)),
+    }
+}
+
+/// Decodes one datagram, detecting its protocol or insisting on the configured one.
+pub fn decode(choice: ProtocolChoice, bytes: &[u8]) -> Result<Decoded, DecodeError> {
+    match choice {
+        ProtocolChoice::Only(p) => decode_as(p, bytes),
+        ProtocolChoice::Auto => match detect(bytes) {
+            Some(p) => decode_as(p, bytes),
+            None => Err(DecodeError::Unknown { len: bytes.len() }),
+        },
+    }
+}
+
+/// Validates a decoded pose, tagging an error with the protocol.
+pub(crate) fn validated(protocol: Protocol, pose: Pose) -> Result<Pose, DecodeError> {
+    pose.validate()
+        .map(|()| pose)
+        .map_err(|error| DecodeError::Invalid { protocol, error })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pose::PosePosition;
+    use proptest::prelude::*;
+
+    fn pose() -> Pose {
+        Pose {
+            position: PosePosition::Geodetic {
+                lat_deg: 47.26,
+                lon_deg: 11.35,
+                alt_m: 1800.0,
+            },
+            attitude_deg: [92.0, 3.0, -8.0],
+            sim_time_s: 10.0,
+            frame: 600,
+            velocity_enu: Some([120.0, -4.0, 1.0]),
+            angular_rates_deg_s: Some([1.0, 0.0, -3.0]),
+        }
+    }
+
+    #[test]
+    fn detection_by_first_bytes() {
+        let n = native::encode(&pose(), 1);
+        assert_eq!(detect(&n), Some(Protocol::Aerie));
+        let x = xplane::encode(&xplane::Rpos::default());
+        assert_eq!(detect(&x), Some(Protocol::XPlane));
+        let f = fgfs::encode(&fgfs::FdmPose::default());
+        assert_eq!(detect(&f), Some(Protocol::Fgfs));
+        let c = cigi::IgControl::default().encode(ByteOrder::Big);
+        assert_eq!(detect(&c), Some(Protocol::Cigi));
+        assert_eq!(detect(b"hello"), None);
+        assert_eq!(detect(&[]), None);
+        assert_eq!(
+            decode(ProtocolChoice::Auto, b"hello").unwrap_err().reason(),
+            DropReason::Unknown
+        );
+        // A configured protocol refuses the others.
+        let e = decode(ProtocolChoice::Only(Protocol::Aerie), &x).unwrap_err();
+        assert_eq!(e.reason(), DropReason::Unknown, "{e}");
+    }
+
+    #[test]
+    fn protocol_names_parse() {
+        for p in Protocol::ALL {
+            assert_eq!(p.name().parse::<ProtocolChoice>(), Ok(ProtocolChoice::Only(p)));
+        }
+        assert_eq!("AUTO".parse::<ProtocolChoice>(), Ok(ProtocolChoice::Auto));
+        assert!("dis".parse::<ProtocolChoice>().unwrap_err().contains("dis"));
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(4096))]
+
+        /// Random bytes never panic any decoder (auto-detected or forced).
+        #[test]
+        fn random_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..600)) {
+            let _ = decode(ProtocolChoice::Auto, &bytes);
+            for p in Protocol::ALL {
+                let _ = decode_as(p, &bytes);
+            }
+        }
+
+        /// Random bodies behind each protocol's real header never panic either (reaching past
+        /// the magic/size checks into field decoding).
+        #[test]
+        fn random_bodies_never_panic(
+            body in prop::collection::vec(any::<u8>(), 0..600),
+            which in 0usize..4,
+            len_hint in prop::sample::select(vec![69usize, 132, 408, 24, 72, 104, 0]),
+        ) {
+            let mut bytes = match which {
+                0 => native::MAGIC.to_vec(),
+                1 => vec![1, 24, 3, 0, 0, 0, 0x80, 0x00],
+                2 => b"RPOS4".to_vec(),
+                _ => fgfs::VERSION.to_be_bytes().to_vec(),
+            };
+            bytes.extend_from_slice(&body);
+            if len_hint > 0 {
+                bytes.resize(len_hint, 0);
+            }
+            let _ = decode(ProtocolChoice::Auto, &bytes);
+            let _ = cigi::decode(&bytes);
+        }
+    }
+}

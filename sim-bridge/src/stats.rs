@@ -1,0 +1,206 @@
+//! Input counters: shared between the receiving thread (writes, relaxed atomics) and whoever
+//! reports them (reads a [`StatsSnapshot`]). No locks.
+
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+/// Why a datagram (or shared-memory sample) was not used. Each is counted separately.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum DropReason {
+    /// Not any known protocol, or the wrong magic for the configured one.
+    Unknown,
+    /// Shorter or longer than the protocol's fixed size.
+    BadSize,
+    /// Known protocol, unsupported version.
+    BadVersion,
+    /// CRC-32 mismatch (aerie native).
+    BadCrc,
+    /// Structurally broken: bad packet size inside a CIGI message, reserved bits set, …
+    Malformed,
+    /// A pose value is NaN/infinite or out of range (latitude, altitude, pitch, …).
+    Invalid,
+    /// Well formed but asks for something aerie does not do (e.g. an attached ownship).
+    Unsupported,
+    /// The sender's address is not on the allow-list.
+    NotAllowed,
+    /// Older sequence number than the last accepted one.
+    OutOfOrder,
+    /// Same sequence number as the last accepted one.
+    Duplicate,
+}
+
+impl DropReason {
+    /// Every reason, in reporting order.
+    pub const ALL: [DropReason; 10] = [
+        DropReason::Unknown,
+        DropReason::BadSize,
+        DropReason::BadVersion,
+        DropReason::BadCrc,
+        DropReason::Malformed,
+        DropReason::Invalid,
+        DropReason::Unsupported,
+        DropReason::NotAllowed,
+        DropReason::OutOfOrder,
+        DropReason::Duplicate,
+    ];
+
+    /// Short snake_case name used in logs and JSON summaries.
+    pub fn name(self) -> &'static str {
+        match self {
+            DropReason::Unknown => "unknown",
+            DropReason::BadSize => "bad_size",
+            DropReason::BadVersion => "bad_version",
+            DropReason::BadCrc => "bad_crc",
+            DropReason::Malformed => "malformed",
+            DropReason::Invalid => "invalid",
+            DropReason::Unsupported => "unsupported",
+            DropReason::NotAllowed => "not_allowed",
+            DropReason::OutOfOrder => "out_of_order",
+            DropReason::Duplicate => "duplicate",
+        }
+    }
+
+    fn index(self) -> usize {
+        self as usize
+    }
+}
+
+impl std::fmt::Display for DropReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Live counters of one input (one UDP port or one shared-memory file).
+#[derive(Debug, Default)]
+pub struct Counters {
+    received: AtomicU64,
+    accepted: AtomicU64,
+    no_pose: AtomicU64,
+    dropped: [AtomicU64; DropReason::ALL.len()],
+    gaps: AtomicU64,
+    missed: AtomicU64,
+    resyncs: AtomicU64,
+    replies: AtomicU64,
+    retries: AtomicU64,
+    busy: AtomicU64,
+}
+
+impl Counters {
+    pub(crate) fn received(&self) {
+        self.received.fetch_add(1, Relaxed);
+    }
+    pub(crate) fn accepted(&self) {
+        self.accepted.fetch_add(1, Relaxed);
+    }
+    pub(crate) fn no_pose(&self) {
+        self.no_pose.fetch_add(1, Relaxed);
+    }
+    pub(crate) fn dropped(&self, r: DropReason) {
+        self.dropped[r.index()].fetch_add(1, Relaxed);
+    }
+    pub(crate) fn gap(&self, missed: u64) {
+        self.gaps.fetch_add(1, Relaxed);
+        self.missed.fetch_add(missed, Relaxed);
+    }
+    pub(crate) fn resync(&self) {
+        self.resyncs.fetch_add(1, Relaxed);
+    }
+    pub(crate) fn reply(&self) {
+        self.replies.fetch_add(1, Relaxed);
+    }
+    pub(crate) fn retries(&self, n: u64) {
+        self.retries.fetch_add(n, Relaxed);
+    }
+    pub(crate) fn busy(&self) {
+        self.busy.fetch_add(1, Relaxed);
+    }
+
+    /// A consistent-enough copy for reporting (each counter read once, relaxed).
+    pub fn snapshot(&self) -> StatsSnapshot {
+        let mut dropped = [0; DropReason::ALL.len()];
+        for (d, a) in dropped.iter_mut().zip(&self.dropped) {
+            *d = a.load(Relaxed);
+        }
+        StatsSnapshot {
+            received: self.received.load(Relaxed),
+            accepted: self.accepted.load(Relaxed),
+            no_pose: self.no_pose.load(Relaxed),
+            dropped,
+            gaps: self.gaps.load(Relaxed),
+            missed: self.missed.load(Relaxed),
+            resyncs: self.resyncs.load(Relaxed),
+            replies: self.replies.load(Relaxed),
+            retries: self.retries.load(Relaxed),
+            busy: self.busy.load(Relaxed),
+        }
+    }
+}
+
+/// Counter values at one moment. `received = accepted + no_pose + dropped_total()` once the
+/// receiving thread is idle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StatsSnapshot {
+    /// Datagrams received (UDP) or new samples seen (shared memory).
+    pub received: u64,
+    /// Poses accepted and handed to the frame loop.
+    pub accepted: u64,
+    /// Valid messages that carried no ownship pose (e.g. a CIGI message with views only).
+    pub no_pose: u64,
+    /// Dropped, indexed like [`DropReason::ALL`]; see [`StatsSnapshot::dropped`].
+    pub dropped: [u64; DropReason::ALL.len()],
+    /// Sequence gaps (a jump forward by more than one).
+    pub gaps: u64,
+    /// Sequence numbers skipped over by those gaps (packets lost or reordered away).
+    pub missed: u64,
+    /// Times the sequence tracker restarted (sender restarted, or silent for a long time).
+    pub resyncs: u64,
+    /// CIGI Start of Frame answers sent.
+    pub replies: u64,
+    /// Shared memory: torn reads retried.
+    pub retries: u64,
+    /// Shared memory: polls that gave up after the bounded retries (writer busy).
+    pub busy: u64,
+}
+
+impl StatsSnapshot {
+    /// How many were dropped for `reason`.
+    pub fn dropped(&self, reason: DropReason) -> u64 {
+        self.dropped[reason.index()]
+    }
+
+    /// Dropped for any reason.
+    pub fn dropped_total(&self) -> u64 {
+        self.dropped.iter().sum()
+    }
+
+    /// `(reason, count)` for every reason with a non-zero count.
+    pub fn dropped_by_reason(&self) -> Vec<(DropReason, u64)> {
+        DropReason::ALL
+            .iter()
+            .map(|&r| (r, self.dropped(r)))
+            .filter(|&(_, n)| n > 0)
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reasons_index_in_order() {
+        for (i, r) in DropReason::ALL.iter().enumerate() {
+            assert_eq!(r.index(), i);
+        }
+        let c = Counters::default();
+        c.received();
+        c.dropped(DropReason::BadCrc);
+        c.dropped(DropReason::BadCrc);
+        c.gap(3);
+        let s = c.snapshot();
+        assert_eq!(s.dropped(DropReason::BadCrc), 2);
+        assert_eq!(s.dropped_total(), 2);
+        assert_eq!((s.gaps, s.missed), (1, 3));
+        assert_eq!(s.dropped_by_reason(), vec![(DropReason::BadCrc, 2)]);
+    }
+}
