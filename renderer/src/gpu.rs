@@ -139,9 +139,9 @@ mod tests {
                 refinement,
                 slot,
                 skirt_m,
-                pad0,
-                pad1,
-                pad2
+                slot_x,
+                slot_y,
+                slot_stride
             ]
         );
     }
