@@ -58,7 +58,8 @@ pub struct GpuArgs {
     /// Screen-space error bound τ, pixels.
     #[arg(long, default_value_t = 1.0)]
     pub tau: f64,
-    /// Level-of-detail decision: bounded (ours), clipmap (no refinement), full (brute force).
+    /// Level-of-detail decision: bounded (ours), clipmap (no refinement), full (brute force),
+    /// distance (discrete LOD by distance with 10 % hysteresis).
     #[arg(long, value_enum, default_value_t = LodArg::Bounded)]
     pub lod: LodArg,
     /// Clipmap patch side n in vertices (129 or 257; n = P(m−1)+1).
@@ -77,6 +78,7 @@ pub enum LodArg {
     Bounded,
     Clipmap,
     Full,
+    Distance,
 }
 
 #[derive(Debug, Args)]
@@ -191,7 +193,7 @@ fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
     }
     let defaults = RendererDesc::default();
     let q = defaults.tile_size - 1;
-    if g.patch < 8 * q + 1 || (g.patch - 1) % (2 * q) != 0 {
+    if g.patch < 8 * q + 1 || !(g.patch - 1).is_multiple_of(2 * q) {
         return Err(bad_input(format!(
             "--patch: {} must be P·{q}+1 with P even and ≥ 8 (e.g. 129 or 257)",
             g.patch
@@ -201,6 +203,7 @@ fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
         LodArg::Bounded => LodMode::Bounded,
         LodArg::Clipmap => LodMode::Clipmap,
         LodArg::Full => LodMode::Full,
+        LodArg::Distance => LodMode::Distance,
     };
     let mut pool_capacity = defaults.pool_capacity;
     if mode == LodMode::Full {

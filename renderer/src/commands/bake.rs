@@ -40,7 +40,8 @@ pub struct BakeArgs {
 
 fn bake_failure(e: BakeError) -> Failure {
     match e {
-        BakeError::Write { .. } | BakeError::Io { .. } => runtime(e),
+        BakeError::Write { .. } => runtime(format!("{e} (use --out to write the bake elsewhere)")),
+        BakeError::Io { .. } => runtime(e),
         _ => bad_input(e),
     }
 }
@@ -53,10 +54,10 @@ pub fn run(a: BakeArgs) -> Result<(), Failure> {
     params
         .log2_quads()
         .map_err(|e| bad_input(format!("--tile-size: {e}")))?;
-    let out = a.out.clone().unwrap_or_else(|| bake_path_for(&a.dataset));
-    check_out_folder("--out", &out)?;
     let t = Instant::now();
     let ds = load_dataset(&a.dataset).map_err(bad_input)?;
+    let out = a.out.clone().unwrap_or_else(|| bake_path_for(&a.dataset));
+    check_out_folder("--out", &out)?;
     eprintln!(
         "loaded {}: {}, {} voids filled; {} ({:.2} s)",
         ds.source,

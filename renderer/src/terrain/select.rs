@@ -28,6 +28,9 @@ pub enum LodMode {
     Clipmap,
     /// Brute force: every visible tile at full resolution (r = L).
     Full,
+    /// Classic discrete LOD by distance alone (seed 004): a node is split while the eye is
+    /// closer than `distance_factor` × its side, with 10 % hysteresis against popping.
+    Distance,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,6 +45,8 @@ pub struct SelectParams {
     pub max_refinement: u32,
     /// Skip fine levels that the next coarser level already draws within τ.
     pub skip_fine_levels: bool,
+    /// `Distance` mode: split a node while the eye is nearer than this many node sides.
+    pub distance_factor: f64,
 }
 
 impl Default for SelectParams {
@@ -52,6 +57,7 @@ impl Default for SelectParams {
             curvature: true,
             max_refinement: 4,
             skip_fine_levels: true,
+            distance_factor: 3.0,
         }
     }
 }
@@ -124,6 +130,8 @@ pub struct Selection {
     pub finest_level: u32,
     /// Tiles whose bound could not be met within `max_refinement`.
     pub unbounded: u32,
+    /// `Distance` mode: nodes split this frame (level, tx, ty), the hysteresis state for the next.
+    pub split: std::collections::HashSet<(u32, u32, u32)>,
 }
 
 /// Geometry of a dataset the selection needs (from the bake).
@@ -255,6 +263,9 @@ fn has_terrain(bake: &ErrorBake, level: u32, tx: u32, ty: u32) -> bool {
 
 /// Context shared by every tile of a frame.
 struct Frame<'a> {
+    /// Distance mode: nodes split last frame, and the set being filled this frame.
+    split_prev: Option<&'a std::collections::HashSet<(u32, u32, u32)>>,
+    split_now: Option<&'a std::cell::RefCell<std::collections::HashSet<(u32, u32, u32)>>>,
     bake: &'a ErrorBake,
     grid: Grid,
     camera: &'a Camera,
@@ -300,6 +311,21 @@ impl Frame<'_> {
         projected_error_px(eps, z_min, self.focal, obliquity)
     }
 
+    /// Distance LOD: split while the eye is within `distance_factor` node sides of the node's
+    /// box; a node split last frame stays split until 10 % beyond, an unsplit one splits only
+    /// 10 % inside (hysteresis).
+    fn wants_distance_split(&self, level: u32, aabb: &Aabb, was_split: bool) -> bool {
+        let side = (self.grid.q as f64) * (1u64 << level) as f64 * self.grid.spacing.max_element();
+        let p = self.camera.position;
+        let d = (p.clamp(aabb.min, aabb.max) - p).length();
+        let threshold = self.params.distance_factor * side;
+        if was_split {
+            d < threshold * 1.1
+        } else {
+            d < threshold * 0.9
+        }
+    }
+
     /// Bound of one node: (ε, ρ).
     fn node_bound(&self, level: u32, tx: u32, ty: u32, aabb: &Aabb) -> (f64, f64) {
         let z_min = min_view_depth(self.camera, aabb);
@@ -323,8 +349,22 @@ impl Frame<'_> {
             return 0;
         }
         let (e, rho) = self.node_bound(level, tx, ty, &aabb);
-        let force_split = self.params.mode == LodMode::Full && level > finest;
-        if (rho <= self.params.tau_px && !force_split) || level == finest {
+        let split = match self.params.mode {
+            LodMode::Full => true,
+            LodMode::Distance => {
+                let key = (level, tx, ty);
+                let was_split = self.split_prev.is_some_and(|s| s.contains(&key));
+                let want = self.wants_distance_split(level, &aabb, was_split);
+                if want && level > finest {
+                    if let Some(s) = self.split_now {
+                        s.borrow_mut().insert(key);
+                    }
+                }
+                want
+            }
+            _ => rho > self.params.tau_px,
+        };
+        if !split || level == finest {
             out.push((level, tx, ty, e as f32, rho as f32));
             return (rho > self.params.tau_px && self.params.mode == LodMode::Bounded) as u32;
         }
@@ -355,7 +395,12 @@ pub fn select_tiles(
     out.levels.resize(placements.len(), LevelStats::default());
     out.unbounded = 0;
     let (fx, fy) = camera.frustum.focal_px(viewport.0, viewport.1);
+    let split_prev = std::mem::take(&mut out.split);
+    let split_now = std::cell::RefCell::new(std::collections::HashSet::new());
+    let distance = params.mode == LodMode::Distance;
     let frame = Frame {
+        split_prev: distance.then_some(&split_prev),
+        split_now: distance.then_some(&split_now),
         bake,
         grid: Grid::of(bake),
         camera,
@@ -424,6 +469,8 @@ pub fn select_tiles(
             }
         }
     }
+    drop(frame);
+    out.split = split_now.into_inner();
 }
 
 /// The finest level worth drawing: level L is skipped when every level-(L+1) tile under its
@@ -481,6 +528,71 @@ mod tests {
         assert!(projected_error_px(2.0, 1000.0, f, c) > a);
         assert_eq!(projected_error_px(5.0, 5.0, f, c), f64::INFINITY);
         assert_eq!(projected_error_px(0.0, 0.5, f, c), 0.0);
+    }
+
+    /// Distance LOD keeps its previous decision inside the ±10 % band: the same camera position
+    /// selects different nodes when approached from near than from far.
+    #[test]
+    fn distance_mode_has_hysteresis() {
+        use crate::camera::{Attitude, Frustum};
+        use crate::terrain::bake::{bake, BakeParams};
+        use crate::terrain::clipmap::place_levels;
+        use crate::terrain::dataset::Dataset;
+        use crate::terrain::Heightfield;
+        let n = 257;
+        let hf = Heightfield {
+            width: n,
+            height: n,
+            spacing_x: 10.0,
+            spacing_y: 10.0,
+            heights: (0..n * n)
+                .map(|k| ((k % n) as f32 * 0.3).sin() * 20.0)
+                .collect(),
+            geo: None,
+            voids_filled: 0,
+            spacing_note: String::new(),
+        };
+        let ds = Dataset::from_heightfield(hf, "t".into());
+        let b = bake(
+            &ds,
+            BakeParams {
+                tile_size: 17,
+                levels: 0,
+            },
+            &|_, _| {},
+        );
+        let desc = ClipmapDesc {
+            tile_quads: 16,
+            patch_tiles: 8,
+            margin_tiles: 2,
+            width: n as u32,
+            height: n as u32,
+        };
+        let params = SelectParams {
+            mode: LodMode::Distance,
+            skip_fine_levels: false,
+            ..SelectParams::default()
+        };
+        let run = |heights: &[f64]| {
+            let mut sel = Selection::default();
+            for &z in heights {
+                let cam = Camera::new(
+                    DVec3::new(1280.0, 1280.0, z),
+                    Attitude::from_degrees(0.0, -89.0, 0.0),
+                    Frustum::symmetric(170f64.to_radians(), 64, 64),
+                );
+                let placements = place_levels(&desc, [128.0, 128.0]);
+                select_tiles(&b, &desc, &placements, &cam, (64, 64), &params, &mut sel);
+            }
+            sel.items.len()
+        };
+        // Level-1 ring tiles are 320 m wide: split below 3 × 320 = 960 m (± 10 %). The nearest
+        // ones are 640 m away horizontally, so at 716 m up the eye is 960 m from them.
+        let from_near = run(&[100.0, 700.0, 716.0]);
+        let from_far = run(&[5000.0, 800.0, 716.0]);
+        assert!(from_near > from_far, "near {from_near} vs far {from_far}");
+        // Far outside the band, history does not matter.
+        assert_eq!(run(&[100.0, 30_000.0]), run(&[30_000.0]));
     }
 
     #[test]
