@@ -255,6 +255,9 @@ pub fn projected_error_px(eps: f64, z_min: f64, focal_px: f64, obliquity: f64) -
     }
 }
 
+/// Nodes (level, tx, ty).
+type NodeSet = std::collections::HashSet<(u32, u32, u32)>;
+
 /// Whether level-L tile (tx, ty) exists and holds any real (non-padding) sample.
 fn has_terrain(bake: &ErrorBake, level: u32, tx: u32, ty: u32) -> bool {
     let t = &bake.levels[level as usize];
@@ -264,8 +267,8 @@ fn has_terrain(bake: &ErrorBake, level: u32, tx: u32, ty: u32) -> bool {
 /// Context shared by every tile of a frame.
 struct Frame<'a> {
     /// Distance mode: nodes split last frame, and the set being filled this frame.
-    split_prev: Option<&'a std::collections::HashSet<(u32, u32, u32)>>,
-    split_now: Option<&'a std::cell::RefCell<std::collections::HashSet<(u32, u32, u32)>>>,
+    split_prev: Option<&'a NodeSet>,
+    split_now: Option<&'a std::cell::RefCell<NodeSet>>,
     bake: &'a ErrorBake,
     grid: Grid,
     camera: &'a Camera,
@@ -469,7 +472,6 @@ pub fn select_tiles(
             }
         }
     }
-    drop(frame);
     out.split = split_now.into_inner();
 }
 
