@@ -3,7 +3,7 @@
 SHELL := /bin/bash
 DEMO_OUT ?= out/demo
 
-.PHONY: setup demo test lint fmt
+.PHONY: setup demo test lint fmt bench bench-run
 
 setup:
 	@scripts/setup-debian.sh
@@ -24,9 +24,22 @@ lint:
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
 
+# aerie-bench (criterion) is left out: compiling criterion is not worth CI's 2-core budget.
 test: setup
 	cargo fmt --all -- --check
-	cargo test --workspace
+	cargo test --workspace --exclude aerie-bench
 
 fmt:
 	cargo fmt --all
+
+# criterion micro-benchmarks (tile selection on a generated 16385² dataset — AERIE_BENCH_SIZE
+# overrides —, bake throughput, staging-ring cursor, gather); reports in target/criterion/.
+bench: setup
+	cargo bench -p aerie-bench
+
+# Time against image-space error, every LOD mode on the same frames (README "Benchmark").
+BENCH_OUT ?= out/bench
+bench-run: setup
+	cargo build --release -p aerie
+	./target/release/aerie bench --dem assets/dem/N47E011.hgt.zip --out $(BENCH_OUT) \
+	    --size 1280x720 --frames 60 --modes bounded,clipmap,distance,full --tau 0.5,1,2,5

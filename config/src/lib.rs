@@ -21,8 +21,12 @@
 //!
 //! [dem]
 //! path = "data/dem.tif"     # optional: elevation dataset
+//!
+//! [[channel]]               # optional, repeated: display channels (see [`Channel`])
+//! name = "centre"
 //! ```
 
+mod channels;
 mod error;
 mod path_de;
 
@@ -31,6 +35,10 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+pub use channels::{
+    Channel, ChannelDisplay, ChannelFrustum, EyeOffset, FullscreenMode, MonitorSelector,
+    PresentMode, ViewOffset,
+};
 pub use error::{ConfigError, Location};
 
 /// Allowed tile sizes `m = 2^j + 1` (vertices per tile side).
@@ -47,6 +55,9 @@ pub struct RenderConfig {
     pub render: RenderSettings,
     /// The `[dem]` table.
     pub dem: DemSettings,
+    /// The `[[channel]]` tables, in file order (empty: none configured).
+    #[serde(rename = "channel", skip_serializing_if = "Vec::is_empty")]
+    pub channels: Vec<Channel>,
 }
 
 /// Renderer settings (`[render]`).
@@ -157,13 +168,25 @@ pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError>
     })?;
 
     // 3. Ranges and cross-key rules.
-    raw.validate()
+    let mut raw = raw;
+    let raw_channels = std::mem::take(&mut raw.channel);
+    let mut cfg = raw
+        .validate()
         .map_err(|(key, message)| ConfigError::Invalid {
             source_name: source_name.to_owned(),
             location: locate_key(text, key),
             key: key.to_owned(),
             message,
-        })
+        })?;
+    cfg.channels = channels::validate(raw_channels, &cfg.render).map_err(|e| {
+        ConfigError::Invalid {
+            source_name: source_name.to_owned(),
+            location: channels::locate(text, &e.path),
+            key: e.dotted(),
+            message: e.message,
+        }
+    })?;
+    Ok(cfg)
 }
 
 /// Line and column of the value of a `table.key` leaf, if it can be found.
@@ -182,6 +205,8 @@ struct RawConfig {
     render: RawRender,
     #[serde(default)]
     dem: RawDem,
+    #[serde(default)]
+    channel: Vec<channels::RawChannel>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -337,6 +362,7 @@ impl RawConfig {
             dem: DemSettings {
                 path: self.dem.path,
             },
+            channels: Vec::new(),
         })
     }
 }

@@ -323,6 +323,7 @@ fn arb_config() -> impl Strategy<Value = RenderConfig> {
                     dem: DemSettings {
                         path: path.map(PathBuf::from),
                     },
+                    channels: Vec::new(),
                 }
             },
         )

@@ -39,6 +39,11 @@ pub enum Command {
     GenDem(crate::commands::gen_dem::GenDemArgs),
     /// Bake the per-tile error table of a dataset (file or folder of SRTM tiles).
     Bake(crate::commands::bake::BakeArgs),
+    /// Receive aircraft poses (UDP or shared memory) without rendering: progress, summary,
+    /// optional recording.
+    Listen(crate::commands::listen::ListenArgs),
+    /// Send a recording's datagrams to a UDP address (original timing or --fast).
+    Replay(crate::commands::replay::ReplayArgs),
 }
 
 #[derive(Debug, Args)]
@@ -165,6 +170,8 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Fly(a) => cmd_fly(a),
         Command::GenDem(a) => crate::commands::gen_dem::run(a),
         Command::Bake(a) => crate::commands::bake::run(a),
+        Command::Listen(a) => crate::commands::listen::run(a),
+        Command::Replay(a) => crate::commands::replay::run(a),
     }
 }
 
@@ -214,6 +221,7 @@ fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
         validation: g.validate || cfg!(debug_assertions),
         device: DeviceDesc {
             name_filter: g.gpu.clone(),
+            swapchain: false,
         },
         width,
         height,

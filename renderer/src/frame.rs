@@ -45,6 +45,8 @@ const MAX_INSTANCES: usize = 1 << 16;
 #[derive(Debug, Clone)]
 pub struct RendererDesc {
     pub validation: bool,
+    /// Extra instance extensions, e.g. the surface extensions a window needs.
+    pub instance_extensions: Vec<std::ffi::CString>,
     pub device: DeviceDesc,
     pub width: u32,
     pub height: u32,
@@ -74,6 +76,7 @@ impl Default for RendererDesc {
     fn default() -> Self {
         Self {
             validation: cfg!(debug_assertions),
+            instance_extensions: Vec::new(),
             device: DeviceDesc::default(),
             width: 1920,
             height: 1080,
@@ -198,6 +201,17 @@ struct PoolTexture {
     lru: RefinedTilePool,
 }
 
+/// A swapchain image to present a frame in (see [`TerrainRenderer::render_frame`]).
+#[derive(Debug, Clone, Copy)]
+pub struct PresentTarget {
+    pub image: vk::Image,
+    pub extent: vk::Extent2D,
+    /// Signaled by the presentation engine when the image is acquired; waited before the copy.
+    pub acquired: vk::Semaphore,
+    /// Signaled when the copy is done; the present waits for it.
+    pub rendered: vk::Semaphore,
+}
+
 /// One region of a texture to fill from the dataset: texel rectangle in `layer`, and the
 /// dataset samples `origin + (i, j)·step`.
 #[derive(Debug, Clone, Copy)]
@@ -288,7 +302,12 @@ impl TerrainRenderer {
                 desc.skirt_factor, desc.skirt_min_m
             )));
         }
-        let mut instance = Instance::new(desc.validation)?;
+        let extra: Vec<&std::ffi::CStr> = desc
+            .instance_extensions
+            .iter()
+            .map(|e| e.as_c_str())
+            .collect();
+        let mut instance = Instance::with_extensions(desc.validation, &extra)?;
         let mut device = match Device::new(&instance, &desc.device) {
             Ok(d) => d,
             Err(e) => {
@@ -441,18 +460,45 @@ impl TerrainRenderer {
             .unwrap_or_default()
     }
 
-    /// Starts the next frame context: waits for its fence, collects its timestamps, opens its
-    /// staging region and resets its descriptor pool.
+    /// Starts the next frame context: waits for its fence, opens its staging region and resets
+    /// its descriptor pool.
     fn begin_context(&mut self) -> Result<usize, VkError> {
+        self.begin_context_timed().map(|(i, _)| i)
+    }
+
+    /// As [`Self::begin_context`], also returning the GPU pass times of the frame that last used
+    /// the context when it was submitted without waiting (windowed presentation).
+    fn begin_context_timed(&mut self) -> Result<(usize, Option<[f64; 2]>), VkError> {
         let i = self.frames.wait_next(&self.device)?;
-        if self.timed[i] {
-            // A frame submitted without waiting: its timings are no longer needed.
+        let gpu = if self.timed[i] {
             self.timed[i] = false;
-        }
+            Some(self.timer.read_ms(&self.device, i)?)
+        } else {
+            None
+        };
         self.staging
             .begin_frame(&self.device, i, self.frames.frames[i].fence)?;
         self.descriptors.reset(&self.device, i)?;
-        Ok(i)
+        Ok((i, gpu))
+    }
+
+    /// The Vulkan instance and device, for creating window surfaces and swapchains on them.
+    pub fn vulkan(&self) -> (&Instance, &Device) {
+        (&self.instance, &self.device)
+    }
+
+    /// Recreates the offscreen target at a new size (e.g. after a window resize).
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<(), VkError> {
+        if (width, height) == (self.target.width, self.target.height) {
+            return Ok(());
+        }
+        self.wait_all()?;
+        let new = OffscreenTarget::new(&self.device, width, height)?;
+        let mut old = std::mem::replace(&mut self.target, new);
+        old.destroy(&self.device);
+        self.desc.width = width;
+        self.desc.height = height;
+        Ok(())
     }
 
     /// Uploads bytes into a device buffer through the ring, in as many submissions as the
@@ -777,6 +823,18 @@ impl TerrainRenderer {
     /// Renders one frame from `camera` into the offscreen target and waits for it, so that
     /// [`Self::colour_rgba`] / [`Self::depth`] and the GPU timings are ready on return.
     pub fn render(&mut self, camera: &Camera) -> Result<FrameStats, VkError> {
+        self.render_frame(camera, None)
+    }
+
+    /// Renders one frame and, with `present`, copies it into a swapchain image instead of
+    /// reading it back: the submission waits for `present.acquired` before the copy, signals
+    /// `present.rendered` after it, and does not wait for the GPU (frames stay in flight; the
+    /// GPU timings returned are those of the frame that last used this frame context).
+    pub fn render_frame(
+        &mut self,
+        camera: &Camera,
+        present: Option<&PresentTarget>,
+    ) -> Result<FrameStats, VkError> {
         if self.terrain.is_none() {
             return Err(VkError::Other("render called before load_terrain".into()));
         }
@@ -831,7 +889,7 @@ impl TerrainRenderer {
             stats.bytes_clipmap += clip_bytes;
             clip_jobs.clear();
         }
-        let i = self.begin_context()?;
+        let (i, previous_gpu) = self.begin_context_timed()?;
         let mut clip_copies = Vec::with_capacity(clip_jobs.len());
         for job in &clip_jobs {
             clip_copies.push(self.stage_upload(job)?);
@@ -972,17 +1030,36 @@ impl TerrainRenderer {
         );
         stats.draw_calls = (draw_count > 0) as u32;
         self.timer.end(d, cmd, i, Pass::Terrain);
-        self.target.record_readback(d, cmd);
-        self.frames.submit(d, i)?;
+        match present {
+            None => {
+                self.target.record_readback(d, cmd);
+                self.frames.submit(d, i)?;
+            }
+            Some(p) => {
+                self.target.record_blit_to(d, cmd, p.image, p.extent);
+                self.frames.submit_with(
+                    d,
+                    i,
+                    &[p.acquired],
+                    &[vk::PipelineStageFlags::TRANSFER],
+                    &[p.rendered],
+                )?;
+            }
+        }
         self.timed[i] = true;
         stats.cpu_record_us = t2.elapsed().as_secs_f64() * 1e6;
 
-        // Headless: wait for this frame so its image and timings can be read.
-        self.frames.wait(&self.device, i)?;
-        self.timed[i] = false;
-        let gpu = self.timer.read_ms(&self.device, i)?;
-        stats.gpu_upload_ms = gpu[Pass::Upload as usize];
-        stats.gpu_terrain_ms = gpu[Pass::Terrain as usize];
+        if present.is_none() {
+            // Headless: wait for this frame so its image and timings can be read.
+            self.frames.wait(&self.device, i)?;
+            self.timed[i] = false;
+            let gpu = self.timer.read_ms(&self.device, i)?;
+            stats.gpu_upload_ms = gpu[Pass::Upload as usize];
+            stats.gpu_terrain_ms = gpu[Pass::Terrain as usize];
+        } else if let Some(gpu) = previous_gpu {
+            stats.gpu_upload_ms = gpu[Pass::Upload as usize];
+            stats.gpu_terrain_ms = gpu[Pass::Terrain as usize];
+        }
         if let Some(t) = self.terrain.as_mut() {
             t.prev_eye = Some(camera.position);
         }

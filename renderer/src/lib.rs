@@ -9,6 +9,7 @@ pub mod commands;
 pub mod flight;
 pub mod frame;
 pub mod gpu;
+pub mod image_error;
 pub mod output;
 pub mod terrain;
 pub mod vk;

@@ -1,14 +1,39 @@
-//! Pose input for aerie: the aircraft pose a flight simulator sends each frame, its validation,
-//! and the WGS84 geodesy that places geodetic poses in the world's local East-North-Up frame.
+//! Pose input for aerie: the aircraft pose a flight simulator sends each frame, how it gets
+//! here (UDP, shared memory), how it is decoded and checked, and how the frame loop gets the
+//! pose at its display time.
 //!
-//! Transports (UDP, shared memory), packet codecs, extrapolation and record/replay build on
-//! these types. Everything here is f64; degrees at the API boundary, radians inside.
+//! ```text
+//! UDP datagram ─► codec (aerie / CIGI / RPOS / FGNetFDM) ─► sequence check ─┐
+//! shared memory ─► seqlock read ──────────────────────────────► validate ───┴► Ingest
+//!   ─► triple buffer (lock-free) ─► PoseReader::pose_at(display time) ─► extrapolated pose
+//! ```
+//!
+//! - [`udp::UdpReceiver`] / [`shm::ShmSource`]: transport threads; each returns a
+//!   [`PoseReader`] for the frame loop.
+//! - [`codec`]: the packet layouts (`sim-bridge/PROTOCOL.md`).
+//! - [`timing`]: pure decisions (sequence acceptance, extrapolation, staleness).
+//! - [`record`]: recordings of raw datagrams and their replay.
+//!
+//! Everything is f64; degrees at the API boundary, radians inside.
 
+pub mod codec;
 pub mod geodesy;
+pub mod handoff;
+pub mod ingest;
 pub mod pose;
+pub mod record;
+pub mod shm;
+pub mod stats;
+pub mod timing;
+pub mod udp;
 
+pub use codec::{decode, detect, DecodeError, Decoded, Protocol, ProtocolChoice};
 pub use geodesy::{
     ecef_to_geodetic, geodetic_to_ecef, Geodetic, LocalTangentPlane, WGS84_A, WGS84_B, WGS84_E2,
     WGS84_EP2, WGS84_F,
 };
+pub use ingest::{input_channel, InputParams, Ingest, PoseReader, PoseSample, Verdict};
 pub use pose::{Pose, PoseError, PosePosition};
+pub use stats::{DropReason, StatsSnapshot};
+pub use timing::{ExtrapolationParams, FramePose, Motion, StreamState};
+pub use udp::{UdpConfig, UdpReceiver, DEFAULT_PORT};

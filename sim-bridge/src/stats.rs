@@ -83,14 +83,22 @@ pub struct Counters {
     replies: AtomicU64,
     retries: AtomicU64,
     busy: AtomicU64,
+    /// f64 bits of the first accepted pose's arrival (0 bits = none yet).
+    first_accept_bits: AtomicU64,
+    /// f64 bits of the latest accepted pose's arrival.
+    last_accept_bits: AtomicU64,
 }
 
 impl Counters {
     pub(crate) fn received(&self) {
         self.received.fetch_add(1, Relaxed);
     }
-    pub(crate) fn accepted(&self) {
-        self.accepted.fetch_add(1, Relaxed);
+    /// One more pose accepted, arriving at `arrival_s` (seconds on the monotonic timeline).
+    pub(crate) fn accepted(&self, arrival_s: f64) {
+        if self.accepted.fetch_add(1, Relaxed) == 0 {
+            self.first_accept_bits.store(arrival_s.to_bits(), Relaxed);
+        }
+        self.last_accept_bits.store(arrival_s.to_bits(), Relaxed);
     }
     pub(crate) fn no_pose(&self) {
         self.no_pose.fetch_add(1, Relaxed);
@@ -132,13 +140,15 @@ impl Counters {
             replies: self.replies.load(Relaxed),
             retries: self.retries.load(Relaxed),
             busy: self.busy.load(Relaxed),
+            first_accept_s: f64::from_bits(self.first_accept_bits.load(Relaxed)),
+            last_accept_s: f64::from_bits(self.last_accept_bits.load(Relaxed)),
         }
     }
 }
 
 /// Counter values at one moment. `received = accepted + no_pose + dropped_total()` once the
 /// receiving thread is idle.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StatsSnapshot {
     /// Datagrams received (UDP) or new samples seen (shared memory).
     pub received: u64,
@@ -160,6 +170,10 @@ pub struct StatsSnapshot {
     pub retries: u64,
     /// Shared memory: polls that gave up after the bounded retries (writer busy).
     pub busy: u64,
+    /// Arrival of the first accepted pose, seconds on the monotonic timeline (0 if none).
+    pub first_accept_s: f64,
+    /// Arrival of the latest accepted pose (0 if none).
+    pub last_accept_s: f64,
 }
 
 impl StatsSnapshot {
@@ -171,6 +185,13 @@ impl StatsSnapshot {
     /// Dropped for any reason.
     pub fn dropped_total(&self) -> u64 {
         self.dropped.iter().sum()
+    }
+
+    /// Accepted poses per second between the first and the latest accepted arrival (`None`
+    /// with fewer than two poses or no time between them).
+    pub fn pose_rate_hz(&self) -> Option<f64> {
+        let span = self.last_accept_s - self.first_accept_s;
+        (self.accepted >= 2 && span > 0.0).then(|| (self.accepted - 1) as f64 / span)
     }
 
     /// `(reason, count)` for every reason with a non-zero count.
@@ -202,5 +223,10 @@ mod tests {
         assert_eq!(s.dropped_total(), 2);
         assert_eq!((s.gaps, s.missed), (1, 3));
         assert_eq!(s.dropped_by_reason(), vec![(DropReason::BadCrc, 2)]);
+        assert_eq!(s.pose_rate_hz(), None);
+        c.accepted(10.0);
+        c.accepted(10.5);
+        c.accepted(11.0);
+        assert_eq!(c.snapshot().pose_rate_hz(), Some(2.0));
     }
 }

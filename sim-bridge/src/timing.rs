@@ -327,7 +327,7 @@ pub fn extrapolate(
     p: &ExtrapolationParams,
 ) -> FramePose {
     let age_s = display_s - latest.arrival_s;
-    let stale = !(age_s <= p.cap_s);
+    let stale = age_s.is_nan() || age_s > p.cap_s;
     let ahead_s = if age_s.is_nan() {
         0.0
     } else {
@@ -375,7 +375,9 @@ pub fn extrapolate(
                 r + rr * ahead_s,
             ];
         }
-        out.sim_time_s = pose.sim_time_s + ahead_s;
+        if velocity.is_some() || rates.is_some() {
+            out.sim_time_s = pose.sim_time_s + ahead_s;
+        }
     }
     FramePose {
         pose: out,
@@ -655,18 +657,25 @@ mod tests {
         let mut p = local(0.0, 0.0, 0.0, [0.0, 89.0, 0.0], 0.0);
         p.velocity_enu = Some([100.0, 0.0, 0.0]);
         p.angular_rates_deg_s = Some([0.0, 50.0, 0.0]);
-        let params = ExtrapolationParams::default();
+        // A cap exact in binary, so that "age == cap" is exact too.
+        let params = ExtrapolationParams {
+            cap_s: 0.125,
+            ..ExtrapolationParams::default()
+        };
         let s = stamped(p, 1.0);
-        let at_cap = extrapolate(&s, None, 1.1, &params);
+        let at_cap = extrapolate(&s, None, 1.125, &params);
         assert!(!at_cap.stale);
         let late = extrapolate(&s, None, 1.5, &params);
         assert!(late.stale);
-        assert!((late.age_s - 0.5).abs() < 1e-12);
-        assert!((late.ahead_s - 0.1).abs() < 1e-12);
-        // Held at the cap: 10 m, not 50 m; pitch clamped at 90.
-        assert!((xyz(&late.pose.position)[0] - 10.0).abs() < 1e-9);
+        assert_eq!((late.age_s, late.ahead_s), (0.5, 0.125));
+        // Held at the cap: 12.5 m, not 50 m; pitch 89 + 6.25 clamped at 90.
+        assert_eq!(xyz(&late.pose.position)[0], 12.5);
         assert_eq!(late.pose.attitude_deg[1], 90.0);
         assert_eq!(late.pose, at_cap.pose);
+        // The default cap is 100 ms.
+        assert_eq!(ExtrapolationParams::default().cap_s, 0.1);
+        assert!(extrapolate(&s, None, 1.2, &ExtrapolationParams::default()).stale);
+        assert!(!extrapolate(&s, None, 1.09, &ExtrapolationParams::default()).stale);
         // A display time before the arrival never extrapolates backwards.
         let early = extrapolate(&s, None, 0.99, &params);
         assert_eq!(early.ahead_s, 0.0);
@@ -678,15 +687,15 @@ mod tests {
         let mut m = StreamMonitor::default();
         assert_eq!(m.update(None, 1.0, 0.1), None);
         assert_eq!(m.state(), StreamState::Waiting);
-        assert_eq!(m.update(Some(1.0), 1.01, 0.1), Some(StreamEvent::Started));
-        assert_eq!(m.update(Some(1.0), 1.1, 0.1), None);
-        match m.update(Some(1.0), 1.15, 0.1) {
+        assert_eq!(m.update(Some(1.0), 1.01, 0.125), Some(StreamEvent::Started));
+        assert_eq!(m.update(Some(1.0), 1.125, 0.125), None);
+        match m.update(Some(1.0), 1.15, 0.125) {
             Some(StreamEvent::Lost { silent_s }) => assert!((silent_s - 0.15).abs() < 1e-12),
             e => panic!("{e:?}"),
         }
         assert_eq!(m.state(), StreamState::Lost);
-        assert_eq!(m.update(Some(1.0), 3.0, 0.1), None);
-        match m.update(Some(3.5), 3.5, 0.1) {
+        assert_eq!(m.update(Some(1.0), 3.0, 0.125), None);
+        match m.update(Some(3.5), 3.5, 0.125) {
             Some(StreamEvent::Regained { outage_s }) => assert!((outage_s - 2.5).abs() < 1e-12),
             e => panic!("{e:?}"),
         }

@@ -3,6 +3,8 @@
 
 pub mod bake;
 pub mod gen_dem;
+pub mod listen;
+pub mod replay;
 
 /// A progress bar on stderr with the common style (hidden when stderr is not a terminal).
 pub(crate) fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {

@@ -15,6 +15,12 @@
 //! the min/max full-resolution height per tile (for culling boxes) and whether the tile holds
 //! any real (non-padding) sample.
 //!
+//! **Padding.** Padding samples are part of the surface and of every tile that also holds a
+//! real sample (their ε includes them). Tiles made only of padding are not terrain
+//! (`terrain = false`): their ε is not measured and is stored as 0. Every real sample lies in a
+//! terrain tile at every level, so [`ErrorBake::eps_refined`] still bounds the error at every
+//! real sample; it ignores the error over padding-only subtiles.
+//!
 //! **Tiles.** Level-`L` tile `(tx, ty)` covers samples `cols tx·(m−1)·2^L ..= (tx+1)·(m−1)·2^L`
 //! and the same for rows; neighbouring tiles share their edge samples. The dataset is padded to
 //! `(2^Kx+1) × (2^Ky+1)` ([`Dataset`]), so every level has whole tiles:
@@ -150,7 +156,8 @@ pub struct LevelTable {
     pub level: u32,
     pub tiles_x: u32,
     pub tiles_y: u32,
-    /// Maximum absolute vertical error of the level surface over the tile, metres (rounded up).
+    /// Maximum absolute vertical error of the level surface over the tile, metres (rounded
+    /// up); 0 for tiles that are all padding.
     pub eps: Vec<f32>,
     /// Smallest / largest full-resolution height in the tile (edges included), metres.
     pub min: Vec<f32>,
@@ -223,7 +230,8 @@ impl ErrorBake {
 
     /// ε of level-L tile (tx, ty) drawn with refinement r, i.e. with the level (L−r) surface:
     /// the max of ε over its `2^r × 2^r` level-(L−r) subtiles (exact: the subtiles' samples
-    /// are the tile's samples and their surfaces are the level-(L−r) surface over the tile).
+    /// are the tile's samples and their surfaces are the level-(L−r) surface over the tile;
+    /// padding-only subtiles count 0, see the module documentation).
     /// `r` larger than `level` is taken as `level` (full resolution, ε = 0).
     pub fn eps_refined(&self, level: u32, tx: u32, ty: u32, r: u32) -> f32 {
         let r = r.min(level);
@@ -649,8 +657,14 @@ fn process_rows_impl(
                 acc.max0[i] = acc.max0[i].max(mx);
             }
         }
-        // Levels ≥ 1: errors against the level surface.
+        // Levels ≥ 1: errors against the level surface, for tiles holding real samples only
+        // (a tile is real when its south-west sample is; all-padding tiles keep ε = 0).
         for (l, g) in geo.iter().enumerate().skip(1) {
+            let (lo, hi) = tile_rows_of(r, g.t, g.tiles_y);
+            if lo * g.t >= ds.valid_height {
+                continue;
+            }
+            let real_tiles_x = ds.valid_width.div_ceil(g.t).min(g.tiles_x);
             let s = 1usize << l;
             let j = r & (s - 1);
             let south = r - j;
@@ -658,7 +672,7 @@ fn process_rows_impl(
             let hs = &heights[south * w..(south + 1) * w];
             let hn = &heights[north * w..(north + 1) * w];
             let v = j as f64 / s as f64;
-            let out = &mut tile_max[..g.tiles_x];
+            let out = &mut tile_max[..real_tiles_x];
             match s {
                 2 => level_row_tile_max::<2>(row, hs, hn, s, v, q, out),
                 4 => level_row_tile_max::<4>(row, hs, hn, s, v, q, out),
@@ -667,7 +681,6 @@ fn process_rows_impl(
                 32 => level_row_tile_max::<32>(row, hs, hn, s, v, q, out),
                 _ => level_row_tile_max::<0>(row, hs, hn, s, v, q, out),
             }
-            let (lo, hi) = tile_rows_of(r, g.t, g.tiles_y);
             let a = &mut acc.eps[l];
             for (tx, &m) in out.iter().enumerate() {
                 for ty in [lo, hi] {
@@ -790,7 +803,7 @@ fn level_geoms(q: usize, width: usize, height: usize, levels: u32) -> Vec<LevelG
 /// The level tables from what is measured (level-0 min/max, ε of levels ≥ 1; `eps[0]` is
 /// ignored) and what follows from it: level-0 ε = 0; a level-L tile is exactly its 2×2
 /// level-(L−1) children (edges included), so its min/max is theirs; a tile is terrain when its
-/// south-west sample is real. The bake file stores only the measured part.
+/// south-west sample is real; all-padding tiles have ε = 0. The file stores the measured part.
 fn build_tables(
     geo: &[LevelGeom],
     min0: Vec<f32>,
@@ -827,17 +840,23 @@ fn build_tables(
             }
             (mn, mx)
         };
-        let e = if l == 0 {
-            vec![0.0; n]
-        } else {
-            std::mem::take(&mut eps[l])
-        };
-        let terrain = (0..n)
+        let terrain: Vec<bool> = (0..n)
             .map(|i| {
                 let (tx, ty) = (i % g.tiles_x, i / g.tiles_x);
                 tx * g.t < valid_width && ty * g.t < valid_height
             })
             .collect();
+        let e = if l == 0 {
+            vec![0.0; n]
+        } else {
+            let mut e = std::mem::take(&mut eps[l]);
+            for (e, &t) in e.iter_mut().zip(&terrain) {
+                if !t {
+                    *e = 0.0;
+                }
+            }
+            e
+        };
         tables.push(LevelTable {
             level: l as u32,
             tiles_x: g.tiles_x as u32,
@@ -1518,8 +1537,9 @@ mod tests {
                                 e = e.max((h(c, r) - surf).abs());
                             }
                         }
-                        let got = t.eps[ty * t.tiles_x as usize + tx];
-                        assert_eq!(got.to_bits(), round_up_f32(e).to_bits(), "L{l} ({tx},{ty})");
+                        let i = ty * t.tiles_x as usize + tx;
+                        let want = if t.terrain[i] { round_up_f32(e) } else { 0.0 };
+                        assert_eq!(t.eps[i].to_bits(), want.to_bits(), "L{l} ({tx},{ty})");
                     }
                 }
             }

@@ -271,10 +271,33 @@ struct Frame<'a> {
     split_now: Option<&'a std::cell::RefCell<NodeSet>>,
     bake: &'a ErrorBake,
     grid: Grid,
+    views: Vec<ViewCtx<'a>>,
+    params: &'a SelectParams,
+}
+
+/// One channel's camera with what the bound needs from it.
+struct ViewCtx<'a> {
     camera: &'a Camera,
     focal: f64,
     obliquity: f64,
-    params: &'a SelectParams,
+    tau: f64,
+}
+
+/// One display channel for [`select_tiles_multi`]: its camera, viewport and error bound.
+#[derive(Debug, Clone, Copy)]
+pub struct View<'a> {
+    pub camera: &'a Camera,
+    pub viewport: (u32, u32),
+    pub tau_px: f64,
+}
+
+/// A node as the views see it.
+struct NodeEval {
+    eps: f64,
+    /// Largest ρ (px) among the views that see the node.
+    rho_px: f64,
+    /// Largest ρ/τ among them: the node meets every channel's bound when ≤ 1.
+    rho_norm: f64,
 }
 
 impl Frame<'_> {
@@ -296,7 +319,8 @@ impl Frame<'_> {
         self.eps(level, tx, ty, 0)
     }
 
-    fn aabb(&self, level: u32, tx: u32, ty: u32) -> Aabb {
+    /// The node's box as seen from `eye` (the curvature drop depends on the eye).
+    fn aabb(&self, level: u32, tx: u32, ty: u32, eye: DVec3) -> Aabb {
         let (lo, hi) = self.grid.rect(level, tx, ty);
         let (min_h, max_h) = self.bake.bounds(level, tx, ty);
         tile_aabb(
@@ -304,37 +328,61 @@ impl Frame<'_> {
             hi,
             min_h,
             max_h,
-            self.camera.position,
+            eye,
             self.params.curvature,
             self.cell_diagonal(level),
         )
     }
 
-    fn rho(&self, eps: f64, z_min: f64, obliquity: f64) -> f64 {
-        projected_error_px(eps, z_min, self.focal, obliquity)
+    /// ε and the projected error in every view that sees the node; `None` when no view does.
+    /// With `cull` false, views that do not see it count too (for level skipping).
+    fn evaluate(&self, level: u32, tx: u32, ty: u32, cull: bool) -> Option<NodeEval> {
+        let eps = self.eps_node(level, tx, ty);
+        let mut seen = false;
+        let (mut rho_px, mut rho_norm) = (0.0f64, 0.0f64);
+        for v in &self.views {
+            let aabb = self.aabb(level, tx, ty, v.camera.position);
+            if cull && outside_frustum(v.camera, &aabb) {
+                continue;
+            }
+            seen = true;
+            let z_min = min_view_depth(v.camera, &aabb);
+            let c = if cull {
+                box_obliquity(v.camera, &aabb)
+            } else {
+                v.obliquity
+            };
+            let rho = projected_error_px(eps, z_min, v.focal, c);
+            rho_px = rho_px.max(rho);
+            rho_norm = rho_norm.max(rho / v.tau);
+        }
+        seen.then_some(NodeEval {
+            eps,
+            rho_px,
+            rho_norm,
+        })
     }
 
     /// Distance LOD: split while the eye is within `distance_factor` node sides of the node's
     /// box; a node split last frame stays split until 10 % beyond, an unsplit one splits only
     /// 10 % inside (hysteresis).
-    fn wants_distance_split(&self, level: u32, aabb: &Aabb, was_split: bool) -> bool {
+    fn wants_distance_split(&self, level: u32, tx: u32, ty: u32, was_split: bool) -> bool {
         let side = (self.grid.q as f64) * (1u64 << level) as f64 * self.grid.spacing.max_element();
-        let p = self.camera.position;
-        let d = (p.clamp(aabb.min, aabb.max) - p).length();
+        let d = self
+            .views
+            .iter()
+            .map(|v| {
+                let p = v.camera.position;
+                let aabb = self.aabb(level, tx, ty, p);
+                (p.clamp(aabb.min, aabb.max) - p).length()
+            })
+            .fold(f64::INFINITY, f64::min);
         let threshold = self.params.distance_factor * side;
         if was_split {
             d < threshold * 1.1
         } else {
             d < threshold * 0.9
         }
-    }
-
-    /// Bound of one node: (ε, ρ).
-    fn node_bound(&self, level: u32, tx: u32, ty: u32, aabb: &Aabb) -> (f64, f64) {
-        let z_min = min_view_depth(self.camera, aabb);
-        let c = box_obliquity(self.camera, aabb);
-        let e = self.eps_node(level, tx, ty);
-        (e, self.rho(e, z_min, c))
     }
 
     /// Splits node (ℓ, tx, ty) of a ring tile until every part meets τ or reaches `finest`;
@@ -347,17 +395,20 @@ impl Frame<'_> {
         finest: u32,
         out: &mut Vec<(u32, u32, u32, f32, f32)>,
     ) -> u32 {
-        let aabb = self.aabb(level, tx, ty);
-        if outside_frustum(self.camera, &aabb) {
+        let Some(NodeEval {
+            eps: e,
+            rho_px: rho,
+            rho_norm,
+        }) = self.evaluate(level, tx, ty, true)
+        else {
             return 0;
-        }
-        let (e, rho) = self.node_bound(level, tx, ty, &aabb);
+        };
         let split = match self.params.mode {
             LodMode::Full => true,
             LodMode::Distance => {
                 let key = (level, tx, ty);
                 let was_split = self.split_prev.is_some_and(|s| s.contains(&key));
-                let want = self.wants_distance_split(level, &aabb, was_split);
+                let want = self.wants_distance_split(level, tx, ty, was_split);
                 if want && level > finest {
                     if let Some(s) = self.split_now {
                         s.borrow_mut().insert(key);
@@ -365,11 +416,11 @@ impl Frame<'_> {
                 }
                 want
             }
-            _ => rho > self.params.tau_px,
+            _ => rho_norm > 1.0,
         };
         if !split || level == finest {
             out.push((level, tx, ty, e as f32, rho as f32));
-            return (rho > self.params.tau_px && self.params.mode == LodMode::Bounded) as u32;
+            return (rho_norm > 1.0 && self.params.mode == LodMode::Bounded) as u32;
         }
         let mut missed = 0;
         for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
@@ -393,11 +444,44 @@ pub fn select_tiles(
     params: &SelectParams,
     out: &mut Selection,
 ) {
+    let view = View {
+        camera,
+        viewport,
+        tau_px: params.tau_px,
+    };
+    select_tiles_multi(bake, desc, placements, &[view], params, out);
+}
+
+/// One selection for several channels (DESIGN.md "Multi-channel"; issue 7): a tile is drawn
+/// when any channel sees it, at the resolution the most demanding channel that sees it needs
+/// (largest ρ/τ) — so a tile never differs between two adjacent channels and seams match.
+pub fn select_tiles_multi(
+    bake: &ErrorBake,
+    desc: &ClipmapDesc,
+    placements: &[LevelPlacement],
+    views: &[View],
+    params: &SelectParams,
+    out: &mut Selection,
+) {
     out.items.clear();
     out.levels.clear();
     out.levels.resize(placements.len(), LevelStats::default());
     out.unbounded = 0;
-    let (fx, fy) = camera.frustum.focal_px(viewport.0, viewport.1);
+    if views.is_empty() {
+        return;
+    }
+    let views: Vec<ViewCtx> = views
+        .iter()
+        .map(|v| {
+            let (fx, fy) = v.camera.frustum.focal_px(v.viewport.0, v.viewport.1);
+            ViewCtx {
+                camera: v.camera,
+                focal: fx.max(fy),
+                obliquity: v.camera.frustum.max_obliquity(),
+                tau: v.tau_px,
+            }
+        })
+        .collect();
     let split_prev = std::mem::take(&mut out.split);
     let split_now = std::cell::RefCell::new(std::collections::HashSet::new());
     let distance = params.mode == LodMode::Distance;
@@ -406,9 +490,7 @@ pub fn select_tiles(
         split_now: distance.then_some(&split_now),
         bake,
         grid: Grid::of(bake),
-        camera,
-        focal: fx.max(fy),
-        obliquity: camera.frustum.max_obliquity(),
+        views,
         params,
     };
 
@@ -435,15 +517,18 @@ pub fn select_tiles(
                 continue;
             }
             stats.considered += 1;
-            let aabb = frame.aabb(level, tx, ty);
-            if outside_frustum(camera, &aabb) {
+            let Some(NodeEval {
+                eps,
+                rho_px: rho,
+                rho_norm,
+            }) = frame.evaluate(level, tx, ty, true)
+            else {
                 stats.culled += 1;
                 continue;
-            }
-            let (eps, rho) = frame.node_bound(level, tx, ty, &aabb);
+            };
             stats.drawn += 1;
             if params.mode == LodMode::Clipmap
-                || (params.mode == LodMode::Bounded && rho <= params.tau_px)
+                || (params.mode == LodMode::Bounded && rho_norm <= 1.0)
             {
                 stats.refined[0] += 1;
                 stats.nodes += 1;
@@ -499,11 +584,10 @@ fn finest_needed_level(frame: &Frame, placements: &[LevelPlacement]) -> u32 {
                 if !has_terrain(frame.bake, lvl, tx, ty) {
                     continue;
                 }
-                let aabb = frame.aabb(lvl, tx, ty);
-                let z_min = min_view_depth(frame.camera, &aabb);
-                if frame.rho(frame.eps(lvl, tx, ty, 0), z_min, frame.obliquity)
-                    > frame.params.tau_px
-                {
+                let needs_more = frame
+                    .evaluate(lvl, tx, ty, false)
+                    .is_some_and(|n| n.rho_norm > 1.0);
+                if needs_more {
                     all_fine = false;
                     break 'tiles;
                 }

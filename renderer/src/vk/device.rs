@@ -13,6 +13,8 @@ use super::{Instance, VkError, VkResultExt};
 pub struct DeviceDesc {
     /// `--gpu <substring>`: only devices whose name contains this (case-insensitive).
     pub name_filter: Option<String>,
+    /// Enable `VK_KHR_swapchain` (windowed presentation); devices without it are unsuitable.
+    pub swapchain: bool,
 }
 
 /// Plain description of one physical device, for the (pure) choice below.
@@ -90,7 +92,11 @@ pub struct Device {
     allocator: ManuallyDrop<Mutex<Allocator>>,
 }
 
-fn candidate(instance: &ash::Instance, pd: vk::PhysicalDevice) -> (DeviceCandidate, Option<u32>) {
+fn candidate(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    desc: &DeviceDesc,
+) -> (DeviceCandidate, Option<u32>) {
     let props = unsafe { instance.get_physical_device_properties(pd) };
     let name = props
         .device_name_as_c_str()
@@ -107,6 +113,16 @@ fn candidate(instance: &ash::Instance, pd: vk::PhysicalDevice) -> (DeviceCandida
         .map(|i| i as u32);
     if family.is_none() {
         missing.push("a graphics queue");
+    }
+    if desc.swapchain {
+        let exts =
+            unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
+        let has = exts
+            .iter()
+            .any(|e| e.extension_name_as_c_str().ok() == Some(ash::khr::swapchain::NAME));
+        if !has {
+            missing.push("VK_KHR_swapchain");
+        }
     }
     let features = unsafe { instance.get_physical_device_features(pd) };
     if features.multi_draw_indirect == vk::FALSE {
@@ -146,7 +162,7 @@ impl Device {
             .call("vkEnumeratePhysicalDevices")?;
         let described: Vec<_> = physicals
             .iter()
-            .map(|&pd| candidate(&instance.raw, pd))
+            .map(|&pd| candidate(&instance.raw, pd, desc))
             .collect();
         let candidates: Vec<_> = described.iter().map(|(c, _)| c.clone()).collect();
         let index = choose_device(&candidates, desc.name_filter.as_deref())
@@ -173,8 +189,14 @@ impl Device {
             .multi_draw_indirect(true)
             .draw_indirect_first_instance(true);
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true);
+        let extensions = if desc.swapchain {
+            vec![ash::khr::swapchain::NAME.as_ptr()]
+        } else {
+            Vec::new()
+        };
         let create_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
+            .enabled_extension_names(&extensions)
             .enabled_features(&features)
             .push_next(&mut f13);
         let raw = unsafe { instance.raw.create_device(physical, &create_info, None) }

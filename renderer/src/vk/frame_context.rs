@@ -118,6 +118,19 @@ impl FrameContexts {
 
     /// Ends and submits context `i`'s command buffer, signaling its fence; advances to the next.
     pub fn submit(&mut self, device: &Device, i: usize) -> Result<(), VkError> {
+        self.submit_with(device, i, &[], &[], &[])
+    }
+
+    /// As [`Self::submit`], waiting for `waits` (at `wait_stages`) before the work and signaling
+    /// `signals` after it (e.g. a swapchain image's acquire and render-finished semaphores).
+    pub fn submit_with(
+        &mut self,
+        device: &Device,
+        i: usize,
+        waits: &[vk::Semaphore],
+        wait_stages: &[vk::PipelineStageFlags],
+        signals: &[vk::Semaphore],
+    ) -> Result<(), VkError> {
         let f = &mut self.frames[i];
         unsafe {
             device
@@ -125,7 +138,11 @@ impl FrameContexts {
                 .end_command_buffer(f.cmd)
                 .call("vkEndCommandBuffer")?;
             let cmds = [f.cmd];
-            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            let submit = vk::SubmitInfo::default()
+                .command_buffers(&cmds)
+                .wait_semaphores(waits)
+                .wait_dst_stage_mask(wait_stages)
+                .signal_semaphores(signals);
             device
                 .raw
                 .queue_submit(device.queue, &[submit], f.fence)

@@ -84,11 +84,18 @@ impl Instance {
     /// Creates the instance. With `validation`, the Khronos layer is required (an error names the
     /// package when it is missing) and every message is counted.
     pub fn new(validation: bool) -> Result<Self, VkError> {
+        Self::with_extensions(validation, &[])
+    }
+
+    /// As [`Self::new`], also enabling `extra` instance extensions (e.g. the surface extensions
+    /// `ash_window::enumerate_required_extensions` names for a window).
+    pub fn with_extensions(validation: bool, extra: &[&CStr]) -> Result<Self, VkError> {
         let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::Loader(e.to_string()))?;
         let counters = Arc::new(ValidationCounters::default());
 
         let mut layers = Vec::new();
-        let mut extensions = Vec::new();
+        let mut extensions: Vec<*const std::ffi::c_char> =
+            extra.iter().map(|e| e.as_ptr()).collect();
         if validation {
             let available = unsafe { entry.enumerate_instance_layer_properties() }
                 .call("vkEnumerateInstanceLayerProperties")?;

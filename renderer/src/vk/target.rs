@@ -220,6 +220,93 @@ impl OffscreenTarget {
         }
     }
 
+    /// Blits the rendered colour into a swapchain image (scaled to its extent) and leaves that
+    /// image ready to present.
+    pub fn record_blit_to(
+        &self,
+        device: &Device,
+        cmd: vk::CommandBuffer,
+        image: vk::Image,
+        extent: vk::Extent2D,
+    ) {
+        transition(
+            device,
+            cmd,
+            self.colour.raw,
+            vk::ImageAspectFlags::COLOR,
+            (
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
+                vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
+            ),
+            (
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_READ,
+            ),
+        );
+        transition(
+            device,
+            cmd,
+            image,
+            vk::ImageAspectFlags::COLOR,
+            (
+                vk::ImageLayout::UNDEFINED,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::empty(),
+            ),
+            (
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_WRITE,
+            ),
+        );
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let corner = |w: u32, h: u32| vk::Offset3D {
+            x: w as i32,
+            y: h as i32,
+            z: 1,
+        };
+        let blit = vk::ImageBlit {
+            src_subresource: layers,
+            src_offsets: [vk::Offset3D::default(), corner(self.width, self.height)],
+            dst_subresource: layers,
+            dst_offsets: [vk::Offset3D::default(), corner(extent.width, extent.height)],
+        };
+        unsafe {
+            device.raw.cmd_blit_image(
+                cmd,
+                self.colour.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[blit],
+                vk::Filter::LINEAR,
+            )
+        };
+        transition(
+            device,
+            cmd,
+            image,
+            vk::ImageAspectFlags::COLOR,
+            (
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::PipelineStageFlags::TRANSFER,
+                vk::AccessFlags::TRANSFER_WRITE,
+            ),
+            (
+                vk::ImageLayout::PRESENT_SRC_KHR,
+                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                vk::AccessFlags::empty(),
+            ),
+        );
+    }
+
     /// RGBA8 (sRGB-encoded) pixels, rows top to bottom. Valid after the frame's fence.
     pub fn colour_rgba(&self) -> Vec<u8> {
         self.readback

@@ -901,7 +901,7 @@ mod tests {
     ];
 
     const VIEW_WIDTHS: [usize; 12] = [1, 1, 2, 1, 1, 2, 4, 4, 4, 4, 4, 4];
-    const VIEW_DEF_WIDTHS: [usize; 12] = [1, 1, 2, 1, 1, 1, 1, 4, 4, 4, 4, 4];
+    const VIEW_DEF_WIDTHS: [usize; 13] = [1, 1, 2, 1, 1, 1, 1, 4, 4, 4, 4, 4, 4];
 
     fn expected_ig() -> IgControl {
         IgControl {

@@ -270,9 +270,9 @@ mod tests {
         // 8 (version, padding) + 3·8 + 6·4 (positions) + 10·4 (velocities) + 3·4 (accels)
         // + 2·4 (stall, slip) + 4 + 10·4·4 (engines) + 4 + 4·4 (tanks) + 4 + 4·3·4 (gear)
         // + 3·4 (time, warp, visibility) + 10·4 (surfaces) = 404, padded to 8 → 408.
-        let fields = 8 + 24 + 24 + 40 + 12 + 8 + 4 + 160 + 4 + 16 + 4 + 48 + 12 + 40;
+        let fields: usize = 8 + 24 + 24 + 40 + 12 + 8 + 4 + 160 + 4 + 16 + 4 + 48 + 12 + 40;
         assert_eq!(fields, 404);
-        assert_eq!((fields + 7) / 8 * 8, SIZE);
+        assert_eq!(fields.div_ceil(8) * 8, SIZE);
     }
 
     #[test]
@@ -309,8 +309,8 @@ mod tests {
         assert!((lon_deg - 14.323_944_878_3).abs() < 1e-9, "{lon_deg}");
         assert_eq!(alt_m, 1000.0);
         let want_att = [85.943_669_269_9, -3.580_986_219_6, 7.161_972_439_1];
-        for i in 0..3 {
-            assert!((p.attitude_deg[i] - want_att[i]).abs() < 1e-9, "{:?}", p.attitude_deg);
+        for (got, want) in p.attitude_deg.iter().zip(want_att) {
+            assert!((got - want).abs() < 1e-9, "{:?}", p.attitude_deg);
         }
         // Heading, pitch, roll rates from psidot, thetadot, phidot.
         let rates = p.angular_rates_deg_s.unwrap();
