@@ -39,11 +39,17 @@ pub enum Command {
     GenDem(crate::commands::gen_dem::GenDemArgs),
     /// Bake the per-tile error table of a dataset (file or folder of SRTM tiles).
     Bake(crate::commands::bake::BakeArgs),
+    /// Time against measured image-space error: every LOD mode (× τ) on the same frames,
+    /// results.csv, summary.csv/.md, time_vs_error.png in --out.
+    Bench(crate::commands::bench::BenchArgs),
     /// Receive aircraft poses (UDP or shared memory) without rendering: progress, summary,
     /// optional recording.
     Listen(crate::commands::listen::ListenArgs),
     /// Send a recording's datagrams to a UDP address (original timing or --fast).
     Replay(crate::commands::replay::ReplayArgs),
+    /// Show the terrain on screen: one window or fullscreen display per channel of a config
+    /// (all in this process, or only --channel NAME), flying the built-in pass.
+    Run(crate::commands::run::RunArgs),
 }
 
 #[derive(Debug, Args)]
@@ -170,8 +176,10 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Fly(a) => cmd_fly(a),
         Command::GenDem(a) => crate::commands::gen_dem::run(a),
         Command::Bake(a) => crate::commands::bake::run(a),
+        Command::Bench(a) => crate::commands::bench::run(a),
         Command::Listen(a) => crate::commands::listen::run(a),
         Command::Replay(a) => crate::commands::replay::run(a),
+        Command::Run(a) => crate::commands::run::run(a),
     }
 }
 

@@ -20,7 +20,9 @@ use crate::terrain::dataset::Dataset;
 use crate::terrain::gather::gather;
 use crate::terrain::mesh::skirted_tile_indices;
 use crate::terrain::pool::{RefinedTilePool, Request, TileKey};
-use crate::terrain::select::{select_tiles, DrawItem, SelectParams, Selection, MAX_REFINEMENT};
+use crate::terrain::select::{
+    select_tiles, select_tiles_multi, DrawItem, SelectParams, Selection, View, MAX_REFINEMENT,
+};
 use crate::vk::descriptors::FrameDescriptorPools;
 use crate::vk::frame_context::FrameContexts;
 use crate::vk::image::{transition, Image2d, ImageDesc};
@@ -84,7 +86,7 @@ impl Default for RendererDesc {
             tile_size: DEFAULT_TILE_SIZE,
             patch_tiles: 8,
             margin_tiles: 2,
-            pool_capacity: [256, 128, 48, 16, 0, 0],
+            pool_capacity: [256, 128, 48, 32, 0, 0],
             select: SelectParams::default(),
             debug_tiles: false,
             skirt_factor: 2.0,
@@ -122,6 +124,9 @@ pub struct FrameStats {
     pub pool_hits: u32,
     pub pool_misses: u32,
     pub prefetched: u32,
+    /// A hash of the selection (nodes and refinements): equal for channels sharing one.
+    #[serde(skip)]
+    pub selection_digest: u64,
     pub cpu_select_us: f64,
     pub cpu_upload_us: f64,
     pub cpu_record_us: f64,
@@ -201,6 +206,25 @@ struct PoolTexture {
     lru: RefinedTilePool,
 }
 
+/// FNV-1a over every selected node: channels drawn from one shared selection report the same.
+fn selection_digest(sel: &Selection) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for i in &sel.items {
+        for v in [
+            i.level,
+            i.tx,
+            i.ty,
+            i.refinement,
+            i.node_level,
+            i.node_tx,
+            i.node_ty,
+        ] {
+            h = (h ^ v as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    h
+}
+
 /// A swapchain image to present a frame in (see [`TerrainRenderer::render_frame`]).
 #[derive(Debug, Clone, Copy)]
 pub struct PresentTarget {
@@ -272,6 +296,9 @@ pub struct TerrainRenderer {
     instances: [Vec<TileInstance>; RESOLUTIONS],
     /// What is drawn this frame: selected nodes (late tiles coarsened) with their pool slot.
     draw_list: Vec<(DrawItem, u32)>,
+    /// Channels sharing one selection (issue 7): when set, every frame selects tiles for all of
+    /// them (per tile the largest ρ/τ among the channels that see it), whichever one is drawn.
+    channels: Vec<(Camera, (u32, u32), f64)>,
     destroyed: bool,
 }
 
@@ -350,6 +377,7 @@ impl TerrainRenderer {
             prefetch_selection: Selection::default(),
             instances: Default::default(),
             draw_list: Vec::new(),
+            channels: Vec::new(),
             destroyed: false,
         };
         let dst = this.tile_index_buffer.raw;
@@ -445,6 +473,13 @@ impl TerrainRenderer {
 
     pub fn desc(&self) -> &RendererDesc {
         &self.desc
+    }
+
+    /// Makes the following frames select tiles once for all these channels (camera, viewport,
+    /// τ), so adjacent channels draw every shared tile at the same resolution and seams match.
+    /// Empty = select for the camera being drawn only.
+    pub fn set_channels(&mut self, channels: Vec<(Camera, (u32, u32), f64)>) {
+        self.channels = channels;
     }
 
     /// Changes the LOD decision (mode, τ, curvature...) for the following frames.
@@ -855,16 +890,37 @@ impl TerrainRenderer {
                 camera.position.y / hf.spacing_y,
             ];
             let placements = place_levels(&t.clipmap, viewer);
-            select_tiles(
-                &t.bake,
-                &t.clipmap,
-                &placements,
-                camera,
-                viewport,
-                &self.desc.select,
-                &mut self.selection,
-            );
+            if self.channels.is_empty() {
+                select_tiles(
+                    &t.bake,
+                    &t.clipmap,
+                    &placements,
+                    camera,
+                    viewport,
+                    &self.desc.select,
+                    &mut self.selection,
+                );
+            } else {
+                let views: Vec<View> = self
+                    .channels
+                    .iter()
+                    .map(|(c, vp, tau)| View {
+                        camera: c,
+                        viewport: *vp,
+                        tau_px: *tau,
+                    })
+                    .collect();
+                select_tiles_multi(
+                    &t.bake,
+                    &t.clipmap,
+                    &placements,
+                    &views,
+                    &self.desc.select,
+                    &mut self.selection,
+                );
+            }
         }
+        stats.selection_digest = selection_digest(&self.selection);
         stats.cpu_select_us = t0.elapsed().as_secs_f64() * 1e6;
         stats.finest_level = self.selection.finest_level;
         stats.tiles_unbounded = self.selection.unbounded;

@@ -7,10 +7,13 @@
 //! piecewise-linear surface (full-resolution samples, the SW–NE diagonal of
 //! [`quad_surface`], each vertex lowered by the curvature drop d²/2R exactly as the renderer
 //! does, [`EARTH_RADIUS_M`]) — and the drawn point are both projected with the frame's camera;
-//! the distance between the two in pixels is that pixel's error. A pixel that is sky in the
-//! frame but terrain in a reference frame (the same camera drawn with `LodMode::Full`) is a
-//! *hole*: its error is the distance, along its pixel column, to the nearest terrain pixel of
-//! the frame (how far the drawn silhouette is from the true one).
+//! the distance between the two in pixels is that pixel's error. Silhouettes are covered by
+//! it: where the drawn ridge is lower than the true one, the drawn crest pixels measure how far
+//! the true crest is above them. A pixel that is sky in the frame but terrain in a reference
+//! frame (the same camera drawn with `LodMode::Full`) is a *hole*; holes are counted, with the
+//! distance along their column to the frame's nearest terrain pixel (an upper bound, in whole
+//! pixels, of the silhouette's displacement there), but kept out of the error distribution: a
+//! silhouette moved by 0.2 px flips whole pixels, and a crack shows up in the count.
 //!
 //! This runs on the CPU from the depth the renderer reads back (all cores, ~50 ms for 1280×720);
 //! a GPU compute pass over the depth attachment would avoid the read-back and is future work.
@@ -137,7 +140,7 @@ impl ErrorHistogram {
 /// What [`measure`] found in one frame.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ImageError {
-    /// Errors of the measured pixels: terrain pixels of the frame, and holes.
+    /// Errors of the measured pixels (the frame's terrain pixels).
     pub hist: ErrorHistogram,
     /// τ the `over_tau` count was made against.
     pub tau_px: f64,
@@ -153,6 +156,11 @@ pub struct ImageError {
     pub off_dataset_px: u64,
     /// Terrain pixels whose surface point is behind the near plane (not measured).
     pub unprojectable_px: u64,
+    /// Largest column distance (px) from a hole to the frame's nearest terrain pixel: an upper
+    /// bound of how far the drawn silhouette is from the true one there.
+    pub hole_max_px: f64,
+    /// Pixel (x, y) of the largest error.
+    pub max_at: Option<(u32, u32)>,
 }
 
 impl ImageError {
@@ -179,6 +187,10 @@ impl ImageError {
 
     /// Accumulates another frame (or part of one) measured against the same τ.
     pub fn merge(&mut self, o: &ImageError) {
+        if o.hist.max() > self.hist.max() || self.max_at.is_none() {
+            self.max_at = o.max_at.or(self.max_at);
+        }
+        self.hole_max_px = self.hole_max_px.max(o.hole_max_px);
         self.hist.merge(&o.hist);
         self.over_tau += o.over_tau;
         self.terrain_px += o.terrain_px;
@@ -196,8 +208,8 @@ pub struct MeasureParams {
     pub tau_px: f64,
     /// The frame was drawn with the curvature drop (`SelectParams::curvature`).
     pub curvature: bool,
-    /// A hole's error is searched this far along its column (a hole with no terrain pixel
-    /// within it gets this value).
+    /// A hole's distance to the frame's terrain is searched this far along its column (a hole
+    /// with no terrain pixel within it gets this value).
     pub hole_search_px: u32,
 }
 
@@ -328,8 +340,8 @@ impl Projector {
 
 /// Measures one frame (see the module documentation). `depth` is the frame's read-back depth
 /// (`width × height`, rows top to bottom), `reference` the same camera's depth drawn with
-/// `LodMode::Full` (for holes), `heat` receives each pixel's error (NaN for sky pixels that are
-/// not holes). Runs on all cores.
+/// `LodMode::Full` (for holes), `heat` receives each pixel's error (NaN for sky and unmeasured
+/// pixels, −1 for holes). Runs on all cores.
 pub fn measure(
     ds: &Dataset,
     camera: &Camera,
@@ -442,9 +454,17 @@ fn measure_rows(
                 }
             } else if ref_terrain == Some(true) {
                 out.holes_px += 1;
-                e = hole_distance(depth, w, h, px, py, params.hole_search_px);
+                let k = hole_distance(depth, w, h, px, py, params.hole_search_px);
+                out.hole_max_px = out.hole_max_px.max(k);
+                if !heat.is_empty() {
+                    heat[(py - row0) * w as usize + px as usize] = -1.0;
+                }
+                continue;
             }
             if !e.is_nan() {
+                if e > out.hist.max() || out.max_at.is_none() {
+                    out.max_at = Some((px, py as u32));
+                }
                 out.hist.add(e);
                 out.over_tau += (e > params.tau_px) as u64;
             }
@@ -471,13 +491,15 @@ fn hole_distance(depth: &[f32], w: u32, h: u32, px: u32, py: usize, limit: u32) 
     limit as f64
 }
 
-/// A heat map of per-pixel errors: sky black; errors from 0 to `scale_px` along
-/// blue → green → yellow → red, above it magenta. RGBA8, rows top to bottom.
+/// A heat map of per-pixel errors ([`measure`]'s `heat`): sky black, holes cyan; errors from 0
+/// to `scale_px` along blue → green → yellow → red, above it magenta. RGBA8, rows top to bottom.
 pub fn heatmap_rgba(errors: &[f32], scale_px: f64) -> Vec<u8> {
     let mut out = Vec::with_capacity(errors.len() * 4);
     for &e in errors {
         let rgb = if e.is_nan() {
             [0, 0, 0]
+        } else if e < 0.0 {
+            [0, 255, 255]
         } else if e as f64 > scale_px {
             [255, 0, 255]
         } else {
@@ -783,14 +805,16 @@ mod tests {
         let reference = vec![0.5f32; (w * h) as usize];
         let e = measure(&ds, &cam, (w, h), &depth, Some(&reference), &params, None);
         assert_eq!(e.holes_px, (w * h) as u64 - terrain);
-        assert!(e.max_px() <= 8.0);
+        assert!(e.hole_max_px >= 1.0 && e.hole_max_px <= 8.0, "{}", e.hole_max_px);
+        assert_eq!(e.hist.count(), terrain);
     }
 
     #[test]
     fn heatmap_colours() {
-        let img = heatmap_rgba(&[f32::NAN, 0.0, 1.0, 3.0], 2.0);
+        let img = heatmap_rgba(&[f32::NAN, 0.0, 1.0, 3.0, -1.0], 2.0);
         assert_eq!(&img[0..4], &[0, 0, 0, 255]);
         assert_eq!(&img[4..8], &[20, 30, 120, 255]);
         assert_eq!(&img[12..16], &[255, 0, 255, 255]);
+        assert_eq!(&img[16..20], &[0, 255, 255, 255]);
     }
 }

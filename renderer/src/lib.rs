@@ -4,6 +4,7 @@
 //! `vk` is the thin Vulkan plumbing; `render` draws one frame in the order of DESIGN.md's data flow.
 
 pub mod camera;
+pub mod channel;
 pub mod cli;
 pub mod commands;
 pub mod flight;
@@ -13,3 +14,4 @@ pub mod image_error;
 pub mod output;
 pub mod terrain;
 pub mod vk;
+pub mod window;

@@ -85,7 +85,9 @@ fn circle(a: &Args, frame: u64) -> Pose {
         attitude_deg: [
             (ang.to_degrees() + 90.0).rem_euclid(360.0),
             0.0,
-            (a.speed * a.speed / (9.80665 * a.radius)).atan().to_degrees(),
+            (a.speed * a.speed / (9.80665 * a.radius))
+                .atan()
+                .to_degrees(),
         ],
         sim_time_s: t,
         frame,

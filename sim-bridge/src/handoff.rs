@@ -58,10 +58,7 @@ impl<T: Send> Publisher<T> {
     pub fn publish(&mut self, value: T) {
         // SAFETY: the back slot is owned by this publisher (see `Shared`).
         unsafe { *self.shared.slots[usize::from(self.back)].get() = value };
-        let old = self
-            .shared
-            .middle
-            .swap(self.back | FRESH, Ordering::AcqRel);
+        let old = self.shared.middle.swap(self.back | FRESH, Ordering::AcqRel);
         self.back = old & INDEX;
     }
 }

@@ -124,7 +124,10 @@ impl Ingest {
 
     fn drop_with(&mut self, reason: DropReason, detail: &dyn std::fmt::Display) {
         self.counters.dropped(reason);
-        let i = DropReason::ALL.iter().position(|r| *r == reason).unwrap_or(0);
+        let i = DropReason::ALL
+            .iter()
+            .position(|r| *r == reason)
+            .unwrap_or(0);
         if self.warned[i] {
             tracing::debug!("{}: dropped ({reason}): {detail}", self.name);
         } else {
@@ -167,7 +170,10 @@ impl Ingest {
                     match v {
                         SeqVerdict::Gap { missed } => {
                             self.counters.gap(missed.into());
-                            tracing::debug!("{}: sequence gap, {missed} missed before {seq}", self.name);
+                            tracing::debug!(
+                                "{}: sequence gap, {missed} missed before {seq}",
+                                self.name
+                            );
                         }
                         SeqVerdict::Resync => {
                             self.counters.resync();
@@ -271,10 +277,7 @@ impl PoseReader {
         self.poses.update();
         let sample = *self.poses.get();
         let arrival = sample.map(|s| s.latest.arrival_s);
-        match self
-            .monitor
-            .update(arrival, display_s, self.params.cap_s)
-        {
+        match self.monitor.update(arrival, display_s, self.params.cap_s) {
             Some(StreamEvent::Started) => tracing::info!("{}: pose stream started", self.name),
             Some(StreamEvent::Lost { silent_s }) => tracing::warn!(
                 "{}: pose stream lost: no pose for {:.0} ms (cap {:.0} ms); holding the last pose",
@@ -363,7 +366,9 @@ mod tests {
             (1, Verdict::Dropped(DropReason::OutOfOrder)),
             (6, Verdict::Accepted(Some(SeqVerdict::Gap { missed: 3 }))),
         ] {
-            let got = ing.datagram(&native::encode(&pose(seq.into()), seq), t(seq)).verdict;
+            let got = ing
+                .datagram(&native::encode(&pose(seq.into()), seq), t(seq))
+                .verdict;
             assert_eq!(got, want, "seq {seq}");
         }
         let mut bad = native::encode(&pose(7), 7);
@@ -463,7 +468,10 @@ mod tests {
         let o = ing.datagram(&msg(100, false), 0.0);
         assert_eq!(o.verdict, Verdict::NoPose);
         assert!(o.cigi.is_some());
-        assert_eq!(rd.views().get(3).unwrap().roll_pitch_yaw_deg[2], Some(100.0));
+        assert_eq!(
+            rd.views().get(3).unwrap().roll_pitch_yaw_deg[2],
+            Some(100.0)
+        );
         ing.datagram(&msg(101, true), 0.01);
         ing.datagram(&msg(102, true), 0.02);
         assert!(rd.latest().unwrap().previous.is_some());

@@ -32,8 +32,8 @@ pub use geodesy::{
     ecef_to_geodetic, geodetic_to_ecef, Geodetic, LocalTangentPlane, WGS84_A, WGS84_B, WGS84_E2,
     WGS84_EP2, WGS84_F,
 };
-pub use ingest::{input_channel, InputParams, Ingest, PoseReader, PoseSample, Verdict};
+pub use ingest::{input_channel, Ingest, InputParams, PoseReader, PoseSample, Verdict};
 pub use pose::{Pose, PoseError, PosePosition};
 pub use stats::{DropReason, StatsSnapshot};
 pub use timing::{ExtrapolationParams, FramePose, Motion, StreamState};
-pub use udp::{UdpConfig, UdpReceiver, DEFAULT_PORT};
+pub use udp::{RposRequest, UdpConfig, UdpReceiver, DEFAULT_PORT};

@@ -142,7 +142,8 @@ impl Recorder {
         let bytes = &bytes[..bytes.len().min(MAX_PACKET)];
         self.buf.clear();
         self.buf.extend_from_slice(&t.to_le_bytes());
-        self.buf.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
+        self.buf
+            .extend_from_slice(&(bytes.len() as u32).to_le_bytes());
         self.buf.extend_from_slice(bytes);
         self.file
             .write_all(&self.buf)
@@ -187,7 +188,10 @@ pub fn parse_recording(b: &[u8], path: &Path) -> Result<Vec<RecordedPacket>, Rec
             return Err(RecordingError::Truncated {
                 path: path_buf(),
                 offset: 0,
-                what: format!("file header needs {HEADER_SIZE} bytes, the file has {}", b.len()),
+                what: format!(
+                    "file header needs {HEADER_SIZE} bytes, the file has {}",
+                    b.len()
+                ),
             });
         }
         return Err(RecordingError::BadMagic {
@@ -199,7 +203,10 @@ pub fn parse_recording(b: &[u8], path: &Path) -> Result<Vec<RecordedPacket>, Rec
         return Err(RecordingError::Truncated {
             path: path_buf(),
             offset: 0,
-            what: format!("file header needs {HEADER_SIZE} bytes, the file has {}", b.len()),
+            what: format!(
+                "file header needs {HEADER_SIZE} bytes, the file has {}",
+                b.len()
+            ),
         });
     }
     let version = u16::from_le_bytes([b[8], b[9]]);
@@ -418,10 +425,16 @@ mod tests {
         assert!(e.to_string().contains("t.aerie-rec"), "{e}");
         // Cut inside a record header.
         let e = parse_recording(&full[..50], &path).unwrap_err();
-        assert!(matches!(e, RecordingError::Truncated { offset: 45, .. }), "{e}");
+        assert!(
+            matches!(e, RecordingError::Truncated { offset: 45, .. }),
+            "{e}"
+        );
         // Cut inside the file header.
         let e = parse_recording(&full[..12], &path).unwrap_err();
-        assert!(matches!(e, RecordingError::Truncated { offset: 0, .. }), "{e}");
+        assert!(
+            matches!(e, RecordingError::Truncated { offset: 0, .. }),
+            "{e}"
+        );
         // Every prefix is either a valid recording or an error; never a panic.
         for n in 0..full.len() {
             let _ = parse_recording(&full[..n], &path);
@@ -448,7 +461,10 @@ mod tests {
         b.extend_from_slice(&4u64.to_le_bytes());
         b.extend_from_slice(&0u32.to_le_bytes());
         let e = parse_recording(&b, p).unwrap_err();
-        assert!(matches!(e, RecordingError::BadRecord { offset: 29, .. }), "{e}");
+        assert!(
+            matches!(e, RecordingError::BadRecord { offset: 29, .. }),
+            "{e}"
+        );
         let mut b = header().to_vec();
         b.extend_from_slice(&0u64.to_le_bytes());
         b.extend_from_slice(&70_000u32.to_le_bytes());

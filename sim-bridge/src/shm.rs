@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 
 use memmap2::{MmapOptions, MmapRaw};
 
-use crate::ingest::{input_channel, InputParams, Ingest, PoseReader};
+use crate::ingest::{input_channel, Ingest, InputParams, PoseReader};
 use crate::pose::{Pose, PosePosition};
 use crate::stats::{Counters, StatsSnapshot};
 use crate::timing::{monotonic_s, ExtrapolationParams};
@@ -554,10 +554,7 @@ mod tests {
                 .duration_since(std::time::UNIX_EPOCH)
                 .map(|d| d.subsec_nanos())
                 .unwrap_or(0);
-            Self(dir.join(format!(
-                "aerie-test-{tag}-{}-{nanos}",
-                std::process::id()
-            )))
+            Self(dir.join(format!("aerie-test-{tag}-{}-{nanos}", std::process::id())))
         }
     }
     impl Drop for TempShm {

@@ -278,9 +278,14 @@ fn pair_velocity(prev: &PosePosition, latest: &PosePosition, span: f64) -> Optio
             let d = ltp.geodetic_to_enu(Geodetic::new(la0, lo0, al0));
             Some((-d / span).to_array())
         }
-        (PosePosition::LocalEnu { x: x0, y: y0, z: z0 }, PosePosition::LocalEnu { x, y, z }) => {
-            Some([(x - x0) / span, (y - y0) / span, (z - z0) / span])
-        }
+        (
+            PosePosition::LocalEnu {
+                x: x0,
+                y: y0,
+                z: z0,
+            },
+            PosePosition::LocalEnu { x, y, z },
+        ) => Some([(x - x0) / span, (y - y0) / span, (z - z0) / span]),
         _ => None,
     }
 }
@@ -338,11 +343,12 @@ pub fn extrapolate(
 
     let (velocity, position_motion) = match (pose.velocity_enu, pair) {
         (Some(v), _) => (Some(v), Motion::Sent),
-        (None, Some((prev, span))) => match pair_velocity(&prev.pose.position, &pose.position, span)
-        {
-            Some(v) => (Some(v), Motion::LastTwo),
-            None => (None, Motion::Held),
-        },
+        (None, Some((prev, span))) => {
+            match pair_velocity(&prev.pose.position, &pose.position, span) {
+                Some(v) => (Some(v), Motion::LastTwo),
+                None => (None, Motion::Held),
+            }
+        }
         (None, None) => (None, Motion::Held),
     };
     let (rates, attitude_motion) = match (pose.angular_rates_deg_s, pair) {
@@ -441,7 +447,12 @@ impl StreamMonitor {
     }
 
     /// Updates the state from the newest arrival (if any) seen at `now_s`.
-    pub fn update(&mut self, last_arrival_s: Option<f64>, now_s: f64, cap_s: f64) -> Option<StreamEvent> {
+    pub fn update(
+        &mut self,
+        last_arrival_s: Option<f64>,
+        now_s: f64,
+        cap_s: f64,
+    ) -> Option<StreamEvent> {
         let a = last_arrival_s?;
         let fresh = now_s - a <= cap_s;
         match (self.state, fresh) {
@@ -569,7 +580,12 @@ mod tests {
         let mut p = local(100.0, 200.0, 1000.0, [350.0, 5.0, -20.0], 7.0);
         p.velocity_enu = Some([50.0, -10.0, 2.0]);
         p.angular_rates_deg_s = Some([30.0, -2.0, 10.0]);
-        let f = extrapolate(&stamped(p, 10.0), None, 10.04, &ExtrapolationParams::default());
+        let f = extrapolate(
+            &stamped(p, 10.0),
+            None,
+            10.04,
+            &ExtrapolationParams::default(),
+        );
         // 40 ms: x 100 + 50·0.04 = 102, y 200 − 0.4, z 1000 + 0.08;
         // heading 350 + 1.2, pitch 5 − 0.08, roll −20 + 0.4.
         let [x, y, z] = xyz(&f.pose.position);
@@ -577,7 +593,10 @@ mod tests {
         let [h, pi, r] = f.pose.attitude_deg;
         assert!((h - 351.2).abs() < 1e-9 && (pi - 4.92).abs() < 1e-9 && (r + 19.6).abs() < 1e-9);
         assert!((f.ahead_s - 0.04).abs() < 1e-12 && (f.age_s - 0.04).abs() < 1e-12);
-        assert_eq!((f.position_motion, f.attitude_motion), (Motion::Sent, Motion::Sent));
+        assert_eq!(
+            (f.position_motion, f.attitude_motion),
+            (Motion::Sent, Motion::Sent)
+        );
         assert!(f.extrapolated() && !f.stale);
         assert!((f.pose.sim_time_s - 7.04).abs() < 1e-12);
     }
@@ -587,7 +606,10 @@ mod tests {
         // Sim times 1/60 s apart; heading crosses north (359 → 1: +2° per frame = 120°/s),
         // roll crosses 180 (179 → −179: +2° per frame).
         let prev = stamped(local(0.0, 0.0, 500.0, [359.0, 1.0, 179.0], 1.0), 5.0);
-        let latest = stamped(local(5.0, -1.0, 500.5, [1.0, 2.0, -179.0], 1.0 + 1.0 / 60.0), 5.02);
+        let latest = stamped(
+            local(5.0, -1.0, 500.5, [1.0, 2.0, -179.0], 1.0 + 1.0 / 60.0),
+            5.02,
+        );
         let f = extrapolate(&latest, Some(&prev), 5.07, &ExtrapolationParams::default());
         // dt 50 ms, velocity per sim time: (300, −60, 30) m/s → +15, −3, +1.5 m.
         let [x, y, z] = xyz(&f.pose.position);
@@ -597,16 +619,43 @@ mod tests {
         assert!((h - 7.0).abs() < 1e-9 && (pi - 5.0).abs() < 1e-9 && (r + 173.0).abs() < 1e-9);
         assert_eq!(f.position_motion, Motion::LastTwo);
         // Sim times equal (protocol without sim time): the arrival times are used instead.
-        let prev0 = Stamped { pose: Pose { sim_time_s: 0.0, ..prev.pose }, ..prev };
-        let latest0 = Stamped { pose: Pose { sim_time_s: 0.0, ..latest.pose }, ..latest };
-        let f = extrapolate(&latest0, Some(&prev0), 5.07, &ExtrapolationParams::default());
+        let prev0 = Stamped {
+            pose: Pose {
+                sim_time_s: 0.0,
+                ..prev.pose
+            },
+            ..prev
+        };
+        let latest0 = Stamped {
+            pose: Pose {
+                sim_time_s: 0.0,
+                ..latest.pose
+            },
+            ..latest
+        };
+        let f = extrapolate(
+            &latest0,
+            Some(&prev0),
+            5.07,
+            &ExtrapolationParams::default(),
+        );
         // Arrival span 20 ms: velocity (250, −50, 25) → +12.5, −2.5, +1.25 over 50 ms.
         let [x, y, _] = xyz(&f.pose.position);
         assert!((x - 17.5).abs() < 1e-9 && (y + 3.5).abs() < 1e-9, "{x} {y}");
         // Too far apart (> 0.5 s) or too close: held.
-        let old = Stamped { arrival_s: 4.0, pose: Pose { sim_time_s: 0.0, ..prev.pose }, ..prev };
+        let old = Stamped {
+            arrival_s: 4.0,
+            pose: Pose {
+                sim_time_s: 0.0,
+                ..prev.pose
+            },
+            ..prev
+        };
         let f = extrapolate(&latest0, Some(&old), 5.07, &ExtrapolationParams::default());
-        assert_eq!((f.position_motion, f.attitude_motion), (Motion::Held, Motion::Held));
+        assert_eq!(
+            (f.position_motion, f.attitude_motion),
+            (Motion::Held, Motion::Held)
+        );
         assert_eq!(f.pose, latest0.pose);
         assert!(!f.extrapolated());
     }
@@ -615,7 +664,12 @@ mod tests {
     fn geodetic_velocity_moves_along_the_ellipsoid() {
         let mut p = pose_at(45.0, 7.0, 1000.0, [90.0, 0.0, 0.0], 0.0);
         p.velocity_enu = Some([200.0, 100.0, -5.0]);
-        let f = extrapolate(&stamped(p, 0.0), None, 0.05, &ExtrapolationParams::default());
+        let f = extrapolate(
+            &stamped(p, 0.0),
+            None,
+            0.05,
+            &ExtrapolationParams::default(),
+        );
         let PosePosition::Geodetic {
             lat_deg,
             lon_deg,
@@ -649,7 +703,10 @@ mod tests {
         let PosePosition::Geodetic { lon_deg, .. } = q else {
             panic!()
         };
-        assert!((0.0..360.0).contains(&lon_deg) && lon_deg < 1.0, "{lon_deg}");
+        assert!(
+            (0.0..360.0).contains(&lon_deg) && lon_deg < 1.0,
+            "{lon_deg}"
+        );
     }
 
     #[test]

@@ -11,7 +11,7 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use crate::codec::ProtocolChoice;
-use crate::ingest::{input_channel, InputParams, Ingest, PoseReader, Verdict};
+use crate::ingest::{input_channel, Ingest, InputParams, PoseReader, Verdict};
 use crate::record::Recorder;
 use crate::stats::{Counters, StatsSnapshot};
 use crate::timing::{monotonic_s, ExtrapolationParams, SequenceParams};
@@ -36,6 +36,18 @@ pub enum CigiReply {
     To(SocketAddr),
 }
 
+/// Ask an X-Plane instance to stream `RPOS` to this port.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RposRequest {
+    /// X-Plane's UDP address (its receive port, 49000 by default).
+    pub xplane: SocketAddr,
+    /// Positions per second to ask for.
+    pub rate_hz: u32,
+}
+
+/// How long without an `RPOS` before the request is sent again (X-Plane restarted).
+const RPOS_RETRY: Duration = Duration::from_secs(2);
+
 /// One UDP input port.
 #[derive(Clone, Debug)]
 pub struct UdpConfig {
@@ -54,6 +66,9 @@ pub struct UdpConfig {
     pub cigi_reply: CigiReply,
     /// Record every received datagram to this file.
     pub record: Option<PathBuf>,
+    /// Request `RPOS` from X-Plane (from this port, so X-Plane answers here), at start and
+    /// again whenever no `RPOS` arrived for 2 s.
+    pub xplane_rpos: Option<RposRequest>,
     /// Sequence resync rules.
     pub sequence: SequenceParams,
     /// Extrapolation limits for the reader.
@@ -70,6 +85,7 @@ impl Default for UdpConfig {
             allow: Vec::new(),
             cigi_reply: CigiReply::ToSender,
             record: None,
+            xplane_rpos: None,
             sequence: SequenceParams::default(),
             extrapolation: ExtrapolationParams::default(),
         }
@@ -139,11 +155,14 @@ impl UdpReceiver {
         let stop = Arc::new(AtomicBool::new(false));
         let thread = {
             let stop = stop.clone();
-            let allow: Vec<IpAddr> = cfg.allow.iter().copied().map(canonical).collect();
-            let reply = cfg.cigi_reply.clone();
+            let opts = LoopOptions {
+                allow: cfg.allow.iter().copied().map(canonical).collect(),
+                reply: cfg.cigi_reply.clone(),
+                rpos: cfg.xplane_rpos,
+            };
             std::thread::Builder::new()
                 .name(format!("aerie-udp-{}", local.port()))
-                .spawn(move || receive_loop(socket, ingest, stop, allow, reply, recorder))?
+                .spawn(move || receive_loop(socket, ingest, stop, opts, recorder))?
         };
         Ok((
             UdpReceiver {
@@ -189,25 +208,41 @@ impl Drop for UdpReceiver {
     }
 }
 
+struct LoopOptions {
+    allow: Vec<IpAddr>,
+    reply: CigiReply,
+    rpos: Option<RposRequest>,
+}
+
 fn receive_loop(
     socket: UdpSocket,
     mut ingest: Ingest,
     stop: Arc<AtomicBool>,
-    allow: Vec<IpAddr>,
-    reply: CigiReply,
+    opts: LoopOptions,
     mut recorder: Option<Recorder>,
 ) -> Result<(), String> {
+    let LoopOptions { allow, reply, rpos } = opts;
     let mut buf = vec![0u8; 65_536];
     let mut ig_frame: u32 = 0;
     let mut record_error = None;
     let counters = ingest.counters().clone();
+    let mut last_rpos: Option<std::time::Instant> = None;
     while !stop.load(Ordering::Relaxed) {
+        if let Some(req) = rpos {
+            if last_rpos.map_or(true, |t| t.elapsed() > RPOS_RETRY) {
+                let bytes = crate::codec::xplane::rpos_request(req.rate_hz);
+                if let Err(e) = socket.send_to(&bytes, req.xplane) {
+                    tracing::debug!("RPOS request to {}: {e}", req.xplane);
+                }
+                last_rpos = Some(std::time::Instant::now());
+            }
+        }
         let (n, from) = match socket.recv_from(&mut buf) {
             Ok(x) => x,
             Err(e) => match e.kind() {
-                io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut | io::ErrorKind::Interrupted => {
-                    continue
-                }
+                io::ErrorKind::WouldBlock
+                | io::ErrorKind::TimedOut
+                | io::ErrorKind::Interrupted => continue,
                 // An ICMP "port unreachable" for an earlier answer: not about this socket.
                 io::ErrorKind::ConnectionRefused | io::ErrorKind::ConnectionReset => continue,
                 _ => {
@@ -231,6 +266,12 @@ fn receive_loop(
             continue;
         }
         let out = ingest.datagram(bytes, arrival);
+        if rpos.is_some()
+            && matches!(out.verdict, Verdict::Accepted(_))
+            && bytes.starts_with(crate::codec::xplane::HEADER)
+        {
+            last_rpos = Some(std::time::Instant::now());
+        }
         if let (Verdict::Accepted(_) | Verdict::NoPose, Some(m)) = (out.verdict, &out.cigi) {
             let to = match reply {
                 CigiReply::Off => continue,

@@ -114,7 +114,16 @@ fn python_example_writer_is_read_back() {
         .arg(manifest_dir().join("examples/shm_writer.py"))
         .arg("--name")
         .arg(&file)
-        .args(["--rate", "200", "--seconds", "0.1", "--lat", "45", "--lon", "7"])
+        .args([
+            "--rate",
+            "200",
+            "--seconds",
+            "0.1",
+            "--lat",
+            "45",
+            "--lon",
+            "7",
+        ])
         .args(["--alt", "1500", "--radius", "2000", "--speed", "100"])
         .output()
         .unwrap();

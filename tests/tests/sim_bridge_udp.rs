@@ -57,7 +57,10 @@ fn pose(i: u64) -> Pose {
 fn wait_for(what: &str, mut cond: impl FnMut() -> bool) {
     let t = Instant::now();
     while !cond() {
-        assert!(t.elapsed() < Duration::from_secs(3), "timed out waiting for {what}");
+        assert!(
+            t.elapsed() < Duration::from_secs(3),
+            "timed out waiting for {what}"
+        );
         std::thread::sleep(Duration::from_millis(2));
     }
 }
@@ -207,7 +210,8 @@ fn cigi_host_gets_start_of_frame_and_views_reach_the_reader() {
     let v = *reader.views().get(1).unwrap();
     assert_eq!(v.roll_pitch_yaw_deg[2], Some(-60.0));
     assert_eq!(v.half_angles_deg(), Some([-30.0, 30.0, 20.0, -20.0]));
-    assert_eq!(rx.stats().replies, 2);
+    // The counter is bumped just after the send the host already saw.
+    wait_for("two answers counted", || rx.stats().replies == 2);
 
     // Replies can be switched off.
     let (rx, _reader) = UdpReceiver::spawn(UdpConfig {
@@ -218,7 +222,8 @@ fn cigi_host_gets_start_of_frame_and_views_reach_the_reader() {
     host.send_to(&cigi_message(1, ByteOrder::Big, 46.0), rx.local_addr())
         .unwrap();
     wait_received(&rx, 1);
-    host.set_read_timeout(Some(Duration::from_millis(100))).unwrap();
+    host.set_read_timeout(Some(Duration::from_millis(100)))
+        .unwrap();
     assert!(host.recv_from(&mut buf).is_err(), "no answer expected");
     assert_eq!(rx.stats().replies, 0);
 }
@@ -282,21 +287,25 @@ fn flood_keeps_the_frame_loop_on_the_newest_pose() {
     let mut frames = 0;
     while !flood.is_finished() {
         if let Some(f) = reader.pose_now() {
-            assert!(f.sample >= last, "went back from sample {last} to {}", f.sample);
+            assert!(
+                f.sample >= last,
+                "went back from sample {last} to {}",
+                f.sample
+            );
             last = f.sample;
         }
         frames += 1;
         std::thread::sleep(Duration::from_millis(1));
     }
     let sent = flood.join().unwrap();
-    // After the flood, one more pose arrives and is the one the frame loop gets.
+    // After the flood, one more pose arrives and is the one the frame loop gets. (It is
+    // repeated until seen: while the flood's backlog fills the socket buffer the kernel drops
+    // new datagrams; the repeats are then dropped as duplicates.)
     let tx = sender();
-    tx.send_to(
-        &native::encode(&pose_framed(sent + 1000), (sent + 1000) as u32),
-        to,
-    )
-    .unwrap();
+    let last = native::encode(&pose_framed(sent + 1000), (sent + 1000) as u32);
     wait_for("the post-flood pose", || {
+        tx.send_to(&last, to).unwrap();
+        std::thread::sleep(Duration::from_millis(5));
         reader.latest().map(|s| s.latest.pose.frame) == Some(sent + 1000)
     });
     assert_eq!(reader.pose_now().unwrap().pose.frame, sent + 1000);
@@ -342,13 +351,23 @@ fn record_datagrams(path: &Path, datagrams: &[Vec<u8>], spacing: Duration) -> Ve
 fn record_then_fast_replay_reproduces_the_bytes() {
     let dir = tempfile::tempdir().unwrap();
     let datagrams = assorted_datagrams();
-    let first = record_datagrams(&dir.path().join("a.aerie-rec"), &datagrams, Duration::from_millis(1));
+    let first = record_datagrams(
+        &dir.path().join("a.aerie-rec"),
+        &datagrams,
+        Duration::from_millis(1),
+    );
     let bytes: Vec<Vec<u8>> = first.iter().map(|p| p.bytes.clone()).collect();
-    assert_eq!(bytes, datagrams, "the recording holds exactly what was sent");
+    assert_eq!(
+        bytes, datagrams,
+        "the recording holds exactly what was sent"
+    );
     assert!(first.windows(2).all(|w| w[0].t_ns <= w[1].t_ns));
     // Sent ≥ 1 ms apart: the recorded span is at least (n − 1) ms.
     let span_ms = (first.last().unwrap().t_ns - first[0].t_ns) as f64 / 1e6;
-    assert!(span_ms >= (datagrams.len() - 1) as f64 * 0.9, "span {span_ms} ms");
+    assert!(
+        span_ms >= (datagrams.len() - 1) as f64 * 0.9,
+        "span {span_ms} ms"
+    );
 
     // Replay it (fast) into a second recording receiver: same bytes, same order.
     let path_b = dir.path().join("b.aerie-rec");
@@ -358,7 +377,14 @@ fn record_then_fast_replay_reproduces_the_bytes() {
         ..loopback_config()
     })
     .unwrap();
-    let report = replay_packets(&first, &sender(), rx.local_addr(), ReplayTiming::Fast, |_| {}).unwrap();
+    let report = replay_packets(
+        &first,
+        &sender(),
+        rx.local_addr(),
+        ReplayTiming::Fast,
+        |_| {},
+    )
+    .unwrap();
     assert_eq!(report.packets, datagrams.len());
     wait_received(&rx, datagrams.len() as u64);
     let s = reader.stats();
@@ -434,7 +460,9 @@ fn multicast_group_is_joined_when_the_host_supports_it() {
             return;
         }
     };
-    let tx = sender();
+    // Not bound to 127.0.0.1: the group is routed like any other destination (the default
+    // route) and a loopback source address would not leave the host's stack.
+    let tx = UdpSocket::bind("0.0.0.0:0").unwrap();
     tx.set_multicast_loop_v4(true).unwrap();
     let to = SocketAddr::from((group, rx.local_addr().port()));
     let t = Instant::now();
@@ -449,6 +477,35 @@ fn multicast_group_is_joined_when_the_host_supports_it() {
         Some(s) => assert_eq!(s.latest.pose.frame, 1),
         None => eprintln!("skipped: multicast loopback delivers nothing on this host"),
     }
+}
+
+#[test]
+fn xplane_is_asked_for_rpos_and_answers_to_our_port() {
+    // A stand-in for X-Plane: waits for the RPOS request, then streams RPOS to its sender.
+    let xplane = UdpSocket::bind("127.0.0.1:0").unwrap();
+    xplane
+        .set_read_timeout(Some(Duration::from_secs(3)))
+        .unwrap();
+    let (rx, mut reader) = UdpReceiver::spawn(UdpConfig {
+        xplane_rpos: Some(aerie_sim_bridge::RposRequest {
+            xplane: xplane.local_addr().unwrap(),
+            rate_hz: 30,
+        }),
+        ..loopback_config()
+    })
+    .unwrap();
+    let mut buf = [0u8; 64];
+    let (n, from) = xplane.recv_from(&mut buf).expect("an RPOS request");
+    assert_eq!(&buf[..n], b"RPOS\x0030\x00");
+    assert_eq!(from, rx.local_addr(), "requested from the listening port");
+    let rpos = xplane::encode(&xplane::Rpos::from_pose(&pose(3), 50.0));
+    xplane.send_to(&rpos, from).unwrap();
+    wait_received(&rx, 1);
+    assert_eq!(reader.stats().accepted, 1);
+    assert_eq!(
+        reader.latest().unwrap().latest.pose.position,
+        pose(3).position
+    );
 }
 
 fn free_port() -> u16 {
@@ -488,6 +545,8 @@ fn listen_and_replay_commands() {
         seconds: Some(1.2),
         json: Some(json.clone()),
         no_cigi_reply: false,
+        xplane: None,
+        xplane_rate: 60,
         cap_ms: 100.0,
     };
     let listener = std::thread::spawn(move || listen::run(args));

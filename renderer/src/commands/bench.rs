@@ -334,7 +334,9 @@ pub(crate) struct ImageRow {
     pub fraction_over_tau: f64,
     pub measured_px: u64,
     pub holes_px: u64,
+    pub hole_max_px: f64,
     pub extra_px: u64,
+    pub max_at: Option<(u32, u32)>,
 }
 
 impl ImageRow {
@@ -346,7 +348,9 @@ impl ImageRow {
             fraction_over_tau: e.fraction_over_tau(),
             measured_px: e.hist.count(),
             holes_px: e.holes_px,
+            hole_max_px: e.hole_max_px,
             extra_px: e.extra_px,
+            max_at: e.max_at,
         }
     }
 }

@@ -12,8 +12,8 @@ use std::time::{Duration, Instant};
 use aerie_sim_bridge::codec::ProtocolChoice;
 use aerie_sim_bridge::shm::{shm_path, ShmConfig, ShmSource};
 use aerie_sim_bridge::timing::{monotonic_s, ExtrapolationParams, StreamState};
-use aerie_sim_bridge::udp::{CigiReply, UdpConfig, UdpReceiver};
-use aerie_sim_bridge::{DropReason, PoseReader, PosePosition, StatsSnapshot};
+use aerie_sim_bridge::udp::{CigiReply, RposRequest, UdpConfig, UdpReceiver};
+use aerie_sim_bridge::{DropReason, PosePosition, PoseReader, StatsSnapshot};
 use clap::Args;
 
 use super::check_out_folder;
@@ -54,6 +54,12 @@ pub struct ListenArgs {
     /// Do not answer CIGI hosts with Start of Frame.
     #[arg(long)]
     pub no_cigi_reply: bool,
+    /// Ask the X-Plane at this address (its UDP port, usually 49000) to stream RPOS here.
+    #[arg(long)]
+    pub xplane: Option<SocketAddr>,
+    /// RPOS rate to ask X-Plane for, positions per second.
+    #[arg(long, default_value_t = 60)]
+    pub xplane_rate: u32,
     /// Extrapolation cap and lost-stream threshold, milliseconds.
     #[arg(long, default_value_t = 100.0)]
     pub cap_ms: f64,
@@ -120,7 +126,9 @@ fn progress_line(elapsed: f64, s: &StatsSnapshot, reader: &mut PoseReader) -> St
 pub fn run(a: ListenArgs) -> Result<(), Failure> {
     if let Some(s) = a.seconds {
         if !(s.is_finite() && s > 0.0) {
-            return Err(bad_input(format!("--seconds: {s} must be a positive number")));
+            return Err(bad_input(format!(
+                "--seconds: {s} must be a positive number"
+            )));
         }
     }
     if !(a.cap_ms.is_finite() && a.cap_ms > 0.0) {
@@ -138,11 +146,12 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
     if a.shm.is_some()
         && (a.record.is_some()
             || a.multicast.is_some()
+            || a.xplane.is_some()
             || !a.allow.is_empty()
             || a.protocol != ProtocolChoice::Auto)
     {
         return Err(bad_input(
-            "--shm reads shared memory: --record, --multicast, --allow and --protocol apply to UDP only",
+            "--shm reads shared memory: --record, --multicast, --allow, --xplane and --protocol apply to UDP only",
         ));
     }
     let extrapolation = ExtrapolationParams {
@@ -158,7 +167,11 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
                 ..ShmConfig::default()
             })
             .map_err(runtime)?;
-            (Source::Shm(src), reader, format!("shared memory {}", path.display()))
+            (
+                Source::Shm(src),
+                reader,
+                format!("shared memory {}", path.display()),
+            )
         }
         None => {
             let (rx, reader) = UdpReceiver::spawn(UdpConfig {
@@ -172,6 +185,10 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
                     CigiReply::ToSender
                 },
                 record: a.record.clone(),
+                xplane_rpos: a.xplane.map(|xplane| RposRequest {
+                    xplane,
+                    rate_hz: a.xplane_rate,
+                }),
                 extrapolation,
                 ..UdpConfig::default()
             })

@@ -2,9 +2,11 @@
 //! Each returns the CLI's [`Failure`](crate::cli::Failure): exit 2 for bad input, 1 at run time.
 
 pub mod bake;
+pub mod bench;
 pub mod gen_dem;
 pub mod listen;
 pub mod replay;
+pub mod run;
 
 /// A progress bar on stderr with the common style (hidden when stderr is not a terminal).
 pub(crate) fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {

@@ -29,12 +29,18 @@ pub fn run(a: ReplayArgs) -> Result<(), Failure> {
         println!("{}: no datagrams to replay", a.file.display());
         return Ok(());
     }
-    let local = if a.to.is_ipv4() { "0.0.0.0:0" } else { "[::]:0" };
+    let local = if a.to.is_ipv4() {
+        "0.0.0.0:0"
+    } else {
+        "[::]:0"
+    };
     let socket = UdpSocket::bind(local).map_err(|e| runtime(format!("bind {local}: {e}")))?;
     let bar = indicatif::ProgressBar::new(packets.len() as u64);
     bar.set_style(
-        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} datagrams, eta {eta}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        indicatif::ProgressStyle::with_template(
+            "{msg} [{bar:30}] {pos}/{len} datagrams, eta {eta}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar.set_message("replaying");
     let timing = if a.fast {
@@ -50,7 +56,10 @@ pub fn run(a: ReplayArgs) -> Result<(), Failure> {
     .map_err(|e| runtime(format!("send to {}: {e}", a.to)))?;
     bar.finish_and_clear();
     let lateness = match timing {
-        ReplayTiming::Original => format!(", latest send {:.2} ms behind its time", report.max_late_s * 1e3),
+        ReplayTiming::Original => format!(
+            ", latest send {:.2} ms behind its time",
+            report.max_late_s * 1e3
+        ),
         ReplayTiming::Fast => " (--fast)".into(),
     };
     println!(

@@ -116,26 +116,29 @@ fn value_noise(x: f64, y: f64, seed: u64) -> f64 {
     ab + (cd - ab) * sy
 }
 
-/// [`value_noise`] along one row (fixed y, 0 ≤ x ≤ `x_max`): the lattice values of the row's
-/// two lattice lines are hashed once up front, so a sample costs two lerps and no hashing or
-/// branching. Same arithmetic as `value_noise`, same results.
+/// [`value_noise`] along part of one row (fixed y, `x_min ≤ x ≤ x_max`): the lattice values of
+/// the row's two lattice lines are hashed once up front, so a sample costs two lerps and no
+/// hashing or branching. Same arithmetic as `value_noise`, same results.
 struct RowNoise {
     f: f64,
     sy: f64,
+    ix0: i64,
     l0: Vec<f64>,
     l1: Vec<f64>,
 }
 
 impl RowNoise {
-    fn new(f: f64, y: f64, seed: u64, x_max: f64) -> Self {
+    fn new(f: f64, y: f64, seed: u64, x_min: f64, x_max: f64) -> Self {
         let yf = y * f;
         let iy = yf as i64;
-        let n = (x_max * f) as usize + 2;
+        let ix0 = (x_min * f) as i64;
+        let ix1 = (x_max * f) as i64 + 1;
         RowNoise {
             f,
             sy: smooth(yf - iy as f64),
-            l0: (0..n).map(|ix| lattice(ix as i64, iy, seed)).collect(),
-            l1: (0..n).map(|ix| lattice(ix as i64, iy + 1, seed)).collect(),
+            ix0,
+            l0: (ix0..=ix1).map(|ix| lattice(ix, iy, seed)).collect(),
+            l1: (ix0..=ix1).map(|ix| lattice(ix, iy + 1, seed)).collect(),
         }
     }
 
@@ -144,7 +147,8 @@ impl RowNoise {
         let xf = x * self.f;
         let ix = xf as i64;
         let sx = smooth(xf - ix as f64);
-        let (l0, l1) = (&self.l0[ix as usize..], &self.l1[ix as usize..]);
+        let k = (ix - self.ix0) as usize;
+        let (l0, l1) = (&self.l0[k..], &self.l1[k..]);
         let (a, b, c, d) = (l0[0], l0[1], l1[0], l1[1]);
         let ab = a + (b - a) * sx;
         let cd = c + (d - c) * sx;
@@ -184,12 +188,12 @@ struct RowFbm {
 }
 
 impl RowFbm {
-    fn new(y: f64, wavelength: f64, octaves: u32, seed: u64, x_max: f64) -> Self {
+    fn new(y: f64, wavelength: f64, octaves: u32, seed: u64, xs: (f64, f64)) -> Self {
         RowFbm {
             octaves: (0..octaves)
                 .map(|o| {
                     let (f, s) = octave(wavelength, o, seed, FBM_STRIDE);
-                    RowNoise::new(f, y, s, x_max)
+                    RowNoise::new(f, y, s, xs.0, xs.1)
                 })
                 .collect(),
         }
@@ -345,30 +349,34 @@ enum RowKind {
 }
 
 impl RowKind {
-    fn new(kind: DemKind, p: &GenParams, y: f64, seed: u64) -> Self {
-        let x_max = (p.size - 1) as f64 * p.spacing;
+    /// Tables for columns `cols` (non-empty) of the row at `y`.
+    fn new(kind: DemKind, p: &GenParams, y: f64, seed: u64, cols: &std::ops::Range<usize>) -> Self {
+        let xs = (
+            cols.start as f64 * p.spacing,
+            (cols.end - 1) as f64 * p.spacing,
+        );
         match kind {
             DemKind::Ridged => RowKind::Ridged {
                 octaves: (0..octaves_for(RIDGE_WAVELENGTH, p.spacing))
                     .map(|o| {
                         let (f, s) = octave(RIDGE_WAVELENGTH, o, seed, RIDGE_STRIDE);
-                        RowNoise::new(f, y, s, x_max)
+                        RowNoise::new(f, y, s, xs.0, xs.1)
                     })
                     .collect(),
-                base: RowNoise::new(1.0 / RIDGE_BASE_WAVELENGTH, y, seed ^ 0x55, x_max),
+                base: RowNoise::new(1.0 / RIDGE_BASE_WAVELENGTH, y, seed ^ 0x55, xs.0, xs.1),
             },
             DemKind::Cliffs => RowKind::Cliffs {
-                terrain: RowFbm::new(y, CLIFF_WAVELENGTH, 4, seed ^ 0xc1, x_max),
+                terrain: RowFbm::new(y, CLIFF_WAVELENGTH, 4, seed ^ 0xc1, xs),
                 detail: RowFbm::new(
                     y,
                     CLIFF_DETAIL,
                     octaves_for(CLIFF_DETAIL, p.spacing),
                     seed ^ 0xd7,
-                    x_max,
+                    xs,
                 ),
             },
             DemKind::Spikes => RowKind::Spikes {
-                hills: RowFbm::new(y, HILL_WAVELENGTH, 3, seed ^ 0x5b, x_max),
+                hills: RowFbm::new(y, HILL_WAVELENGTH, 3, seed ^ 0x5b, xs),
             },
             DemKind::Flat | DemKind::Mixed => RowKind::Flat,
         }
@@ -416,7 +424,7 @@ fn fill_row(p: &GenParams, row: usize, out: &mut [f32]) {
             continue;
         }
         let kind = kind_at(p, cols.start, row);
-        let rk = RowKind::new(kind, p, y, seed);
+        let rk = RowKind::new(kind, p, y, seed, &cols);
         let start = cols.start;
         rk.fill(p, row, cols.clone(), &mut out[start..cols.end], seed);
     }

@@ -10,6 +10,7 @@ pub mod image;
 pub mod instance;
 pub mod pipeline;
 pub mod staging;
+pub mod swapchain;
 pub mod target;
 pub mod timestamps;
 

@@ -164,7 +164,8 @@ impl EntityControl {
     /// Encodes the packet in `order`.
     pub fn encode(&self, order: ByteOrder) -> [u8; ENTITY_CONTROL_SIZE as usize] {
         let mut w = Wr::new(order, ENTITY_CONTROL_SIZE.into());
-        let b4 = (self.entity_state & 0x03) | (u8::from(self.attached) << 2) | (self.flags_hi & 0xF8);
+        let b4 =
+            (self.entity_state & 0x03) | (u8::from(self.attached) << 2) | (self.flags_hi & 0xF8);
         w.u8(ENTITY_CONTROL_ID)
             .u8(ENTITY_CONTROL_SIZE)
             .u16(self.entity_id)
@@ -289,7 +290,12 @@ impl ViewControl {
             "view_control.pitch",
             "view_control.yaw",
         ];
-        for (i, v) in self.offset_m.iter().chain(&self.roll_pitch_yaw_deg).enumerate() {
+        for (i, v) in self
+            .offset_m
+            .iter()
+            .chain(&self.roll_pitch_yaw_deg)
+            .enumerate()
+        {
             if self.enable & (1 << i) != 0 {
                 finite32(NAMES[i], *v)?;
             }
@@ -962,7 +968,10 @@ mod tests {
     #[test]
     fn golden_entity_control_both_orders() {
         assert_eq!(expected_entity().encode(ByteOrder::Big), ENTITY_BE);
-        assert_eq!(expected_entity().encode(ByteOrder::Little).to_vec(), le_entity());
+        assert_eq!(
+            expected_entity().encode(ByteOrder::Little).to_vec(),
+            le_entity()
+        );
         for (ig, ent) in [
             (IG_CONTROL_BE.to_vec(), ENTITY_BE.to_vec()),
             (IG_CONTROL_LE.to_vec(), le_entity()),
@@ -1054,7 +1063,10 @@ mod tests {
         assert_eq!(m.answer(42, 0x0102_0304).to_vec(), le);
         let (sof, order) = StartOfFrame::decode(&le).unwrap();
         assert_eq!(order, ByteOrder::Little);
-        assert_eq!((sof.ig_frame, sof.last_host_frame, sof.ig_mode), (42, 12345, 1));
+        assert_eq!(
+            (sof.ig_frame, sof.last_host_frame, sof.ig_mode),
+            (42, 12345, 1)
+        );
         assert_eq!(StartOfFrame::decode(&be).unwrap().0, sof);
     }
 
@@ -1082,15 +1094,30 @@ mod tests {
     fn broken_messages_are_rejected_with_a_reason() {
         let reason = |b: &[u8]| decode(b).unwrap_err().reason();
         // Size byte 0 would loop forever; size past the end; cut header.
-        assert_eq!(reason(&message(&[&IG_CONTROL_BE, &[50, 0]])), DropReason::Malformed);
-        assert_eq!(reason(&message(&[&IG_CONTROL_BE, &[50, 16, 0]])), DropReason::Malformed);
-        assert_eq!(reason(&message(&[&IG_CONTROL_BE, &[50]])), DropReason::Malformed);
-        assert_eq!(reason(&message(&[&IG_CONTROL_BE, &ENTITY_BE[..40]])), DropReason::Malformed);
+        assert_eq!(
+            reason(&message(&[&IG_CONTROL_BE, &[50, 0]])),
+            DropReason::Malformed
+        );
+        assert_eq!(
+            reason(&message(&[&IG_CONTROL_BE, &[50, 16, 0]])),
+            DropReason::Malformed
+        );
+        assert_eq!(
+            reason(&message(&[&IG_CONTROL_BE, &[50]])),
+            DropReason::Malformed
+        );
+        assert_eq!(
+            reason(&message(&[&IG_CONTROL_BE, &ENTITY_BE[..40]])),
+            DropReason::Malformed
+        );
         // Known packet with the wrong size.
         let mut e = ENTITY_BE.to_vec();
         e[1] = 40;
         e.truncate(40);
-        assert_eq!(reason(&message(&[&IG_CONTROL_BE, &e])), DropReason::Malformed);
+        assert_eq!(
+            reason(&message(&[&IG_CONTROL_BE, &e])),
+            DropReason::Malformed
+        );
         // Not starting with IG Control, wrong version, short, bad magic.
         assert_eq!(reason(&ENTITY_BE), DropReason::Malformed);
         let mut v2 = IG_CONTROL_BE;
@@ -1103,17 +1130,29 @@ mod tests {
         // Ownship out of range / not finite / attached.
         let mut lat = ENTITY_BE;
         lat[24..32].copy_from_slice(&95.0f64.to_be_bytes());
-        assert_eq!(reason(&message(&[&IG_CONTROL_BE, &lat])), DropReason::Invalid);
+        assert_eq!(
+            reason(&message(&[&IG_CONTROL_BE, &lat])),
+            DropReason::Invalid
+        );
         let mut roll = ENTITY_BE;
         roll[12..16].copy_from_slice(&f32::NAN.to_be_bytes());
-        assert_eq!(reason(&message(&[&IG_CONTROL_BE, &roll])), DropReason::Invalid);
+        assert_eq!(
+            reason(&message(&[&IG_CONTROL_BE, &roll])),
+            DropReason::Invalid
+        );
         let mut attached = ENTITY_BE;
         attached[4] |= 0x04;
-        assert_eq!(reason(&message(&[&IG_CONTROL_BE, &attached])), DropReason::Unsupported);
+        assert_eq!(
+            reason(&message(&[&IG_CONTROL_BE, &attached])),
+            DropReason::Unsupported
+        );
         // A NaN in an enabled view field; the same NaN with the field disabled is fine.
         let mut vc = VIEW_CONTROL_BE;
         vc[24..28].copy_from_slice(&f32::NAN.to_be_bytes());
-        assert_eq!(reason(&message(&[&IG_CONTROL_BE, &vc])), DropReason::Invalid);
+        assert_eq!(
+            reason(&message(&[&IG_CONTROL_BE, &vc])),
+            DropReason::Invalid
+        );
         vc[5] = 0x2F;
         decode(&message(&[&IG_CONTROL_BE, &vc])).unwrap();
     }

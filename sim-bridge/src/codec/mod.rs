@@ -214,7 +214,9 @@ pub fn detect(bytes: &[u8]) -> Option<Protocol> {
         Some(Protocol::Aerie)
     } else if bytes.starts_with(xplane::HEADER) {
         Some(Protocol::XPlane)
-    } else if bytes.len() >= 2 && bytes[0] == cigi::IG_CONTROL_ID && bytes[1] == cigi::IG_CONTROL_SIZE
+    } else if bytes.len() >= 2
+        && bytes[0] == cigi::IG_CONTROL_ID
+        && bytes[1] == cigi::IG_CONTROL_SIZE
     {
         Some(Protocol::Cigi)
     } else if bytes.starts_with(&fgfs::VERSION.to_be_bytes()) || bytes.len() == fgfs::SIZE {
@@ -308,7 +310,10 @@ mod tests {
     #[test]
     fn protocol_names_parse() {
         for p in Protocol::ALL {
-            assert_eq!(p.name().parse::<ProtocolChoice>(), Ok(ProtocolChoice::Only(p)));
+            assert_eq!(
+                p.name().parse::<ProtocolChoice>(),
+                Ok(ProtocolChoice::Only(p))
+            );
         }
         assert_eq!("AUTO".parse::<ProtocolChoice>(), Ok(ProtocolChoice::Auto));
         assert!("dis".parse::<ProtocolChoice>().unwrap_err().contains("dis"));

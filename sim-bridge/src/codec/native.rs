@@ -136,7 +136,10 @@ pub fn decode(b: &[u8]) -> Result<NativePose, DecodeError> {
         ));
     }
     if r.u16(14).ok_or_else(t)? != 0 {
-        return Err(DecodeError::malformed(P, "reserved field (offset 14) is not 0"));
+        return Err(DecodeError::malformed(
+            P,
+            "reserved field (offset 14) is not 0",
+        ));
     }
     let v3 = |off: usize| -> Result<[f64; 3], DecodeError> {
         Ok([

@@ -137,7 +137,9 @@ impl Rpos {
         let [heading, pitch, roll] = pose.attitude_deg;
         let [ve, vn, vu] = pose.velocity_enu.unwrap_or([0.0; 3]);
         let [p, q, r] = euler_to_body_rates(
-            pose.angular_rates_deg_s.unwrap_or([0.0; 3]).map(f64::to_radians),
+            pose.angular_rates_deg_s
+                .unwrap_or([0.0; 3])
+                .map(f64::to_radians),
             pitch.to_radians(),
             roll.to_radians(),
         );
@@ -157,6 +159,16 @@ impl Rpos {
             r_rad_s: r as f32,
         }
     }
+}
+
+/// The request that makes X-Plane stream `RPOS` to the requesting socket: `"RPOS"`, a NUL,
+/// the rate in positions per second as ASCII digits, a NUL (X-Plane's UDP reference; rate 0
+/// stops the stream). X-Plane listens for it on its UDP port (49000 by default).
+pub fn rpos_request(rate_hz: u32) -> Vec<u8> {
+    let mut b = b"RPOS\0".to_vec();
+    b.extend_from_slice(rate_hz.to_string().as_bytes());
+    b.push(0);
+    b
 }
 
 /// Encodes an `RPOS` datagram (header byte 4 is written as 0).
@@ -303,6 +315,12 @@ mod tests {
     }
 
     #[test]
+    fn request_bytes() {
+        assert_eq!(rpos_request(60), b"RPOS\x0060\x00");
+        assert_eq!(rpos_request(0), b"RPOS\x000\x00");
+    }
+
+    #[test]
     fn rates_round_trip_through_body_axes() {
         let rates = [3.0f64, -1.5, 12.0].map(f64::to_radians);
         let (pitch, roll) = (20f64.to_radians(), -35f64.to_radians());
@@ -311,7 +329,10 @@ mod tests {
         for i in 0..3 {
             assert!((back[i] - rates[i]).abs() < 1e-12);
         }
-        assert_eq!(body_to_euler_rates(1.0, 1.0, 1.0, 90f64.to_radians(), 0.0), None);
+        assert_eq!(
+            body_to_euler_rates(1.0, 1.0, 1.0, 90f64.to_radians(), 0.0),
+            None
+        );
     }
 
     #[test]
