@@ -176,7 +176,10 @@ pub struct ViewOffset {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ChannelFrustum {
     /// Centred on the view axis; the vertical angle follows the aspect when `vfov_deg` is `None`.
-    Symmetric { hfov_deg: f64, vfov_deg: Option<f64> },
+    Symmetric {
+        hfov_deg: f64,
+        vfov_deg: Option<f64>,
+    },
     /// Edge angles from the view axis (CIGI View Definition style), right and up positive.
     Asymmetric {
         left_deg: f64,
@@ -496,46 +499,45 @@ fn validate_one(
         Some(s) => Some(parse_resolution(s).map_err(|m| at(&["resolution"], m))?),
     };
 
-    let display = match (r.fullscreen, r.window) {
-        (Some(_), Some(_)) => {
-            return Err(at(
+    let display =
+        match (r.fullscreen, r.window) {
+            (Some(_), Some(_)) => return Err(at(
                 &["window"],
                 "a fullscreen channel takes no window rectangle: remove `window` or `fullscreen`"
                     .to_owned(),
-            ))
-        }
-        (Some(mode), None) => ChannelDisplay::Fullscreen(mode),
-        (None, Some(w)) => {
-            let side = |key: &'static str, v: Option<i64>| -> Result<u32, ChannelInvalid> {
-                match v {
-                    None => Err(at(
-                        &["window", key],
-                        "missing: a window rectangle needs width and height".to_owned(),
-                    )),
-                    Some(v) if (1..=i64::from(MAX_DIMENSION)).contains(&v) => Ok(v as u32),
-                    Some(v) => Err(at(
-                        &["window", key],
-                        format!("must be 1..={MAX_DIMENSION} pixels, got {v}"),
-                    )),
+            )),
+            (Some(mode), None) => ChannelDisplay::Fullscreen(mode),
+            (None, Some(w)) => {
+                let side = |key: &'static str, v: Option<i64>| -> Result<u32, ChannelInvalid> {
+                    match v {
+                        None => Err(at(
+                            &["window", key],
+                            "missing: a window rectangle needs width and height".to_owned(),
+                        )),
+                        Some(v) if (1..=i64::from(MAX_DIMENSION)).contains(&v) => Ok(v as u32),
+                        Some(v) => Err(at(
+                            &["window", key],
+                            format!("must be 1..={MAX_DIMENSION} pixels, got {v}"),
+                        )),
+                    }
+                };
+                ChannelDisplay::Window {
+                    x: w.x,
+                    y: w.y,
+                    width: side("width", w.width)?,
+                    height: side("height", w.height)?,
                 }
-            };
-            ChannelDisplay::Window {
-                x: w.x,
-                y: w.y,
-                width: side("width", w.width)?,
-                height: side("height", w.height)?,
             }
-        }
-        (None, None) => {
-            let (width, height) = resolution.unwrap_or((render.width, render.height));
-            ChannelDisplay::Window {
-                x: None,
-                y: None,
-                width,
-                height,
+            (None, None) => {
+                let (width, height) = resolution.unwrap_or((render.width, render.height));
+                ChannelDisplay::Window {
+                    x: None,
+                    y: None,
+                    width,
+                    height,
+                }
             }
-        }
-    };
+        };
 
     let tau_px = r.tau_px.unwrap_or(render.tau_px);
     if !(tau_px.is_finite() && tau_px > 0.0) {

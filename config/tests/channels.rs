@@ -24,7 +24,10 @@ fn assert_error(text: &str, key: &str, line: usize, reason: &str) -> String {
     assert!(!msg.contains('\n'), "not one line: {msg:?}");
     assert!(msg.starts_with(&format!("{FILE}:")), "no file name: {msg}");
     assert_eq!(e.key(), Some(key), "{msg}");
-    assert!(msg.contains(&format!(": {key}: ")), "key not in message: {msg}");
+    assert!(
+        msg.contains(&format!(": {key}: ")),
+        "key not in message: {msg}"
+    );
     assert!(msg.contains(reason), "reason {reason:?} not in: {msg}");
     assert_eq!(e.location().map(|l| l.line), Some(line), "{msg}");
     msg
@@ -174,7 +177,12 @@ fn duplicate_names_are_refused_naming_both() {
 
 #[test]
 fn names_are_required_and_not_empty() {
-    assert_error("[[channel]]\nmonitor = 0\n", "channel[0].name", 1, "missing");
+    assert_error(
+        "[[channel]]\nmonitor = 0\n",
+        "channel[0].name",
+        1,
+        "missing",
+    );
     assert_error(
         "[[channel]]\nname = \"  \"\n",
         "channel[0].name",
@@ -247,7 +255,12 @@ fn half_angles_of_90_degrees_or_more_are_refused() {
             "must be within (-90, 90) degrees",
         );
     }
-    for (key, v) in [("hfov", 180.0), ("hfov", 0.0), ("hfov", -10.0), ("vfov", 200.0)] {
+    for (key, v) in [
+        ("hfov", 180.0),
+        ("hfov", 0.0),
+        ("hfov", -10.0),
+        ("vfov", 200.0),
+    ] {
         let text = if key == "hfov" {
             format!("[[channel]]\nname = \"x\"\nfrustum = {{ hfov = {v:?} }}\n")
         } else {
@@ -260,7 +273,8 @@ fn half_angles_of_90_degrees_or_more_are_refused() {
             "greater than 0 and less than 180 degrees",
         );
     }
-    let nan = "[[channel]]\nname = \"x\"\nfrustum = { left = nan, right = 1.0, down = -1.0, up = 1.0 }\n";
+    let nan =
+        "[[channel]]\nname = \"x\"\nfrustum = { left = nan, right = 1.0, down = -1.0, up = 1.0 }\n";
     assert_error(nan, "channel[0].frustum.left", 3, "within (-90, 90)");
 }
 
@@ -416,7 +430,13 @@ fn first_bad_channel_stops_everything() {
     // The second channel is bad: no channel is returned at all (no half-configured start).
     let e = err("[[channel]]\nname = \"ok\"\n[[channel]]\nname = \"bad\"\ntau_px = -1\n");
     assert_eq!(e.key(), Some("channel[1].tau_px"));
-    assert_eq!(e.location(), Some(Location { line: 5, column: 10 }));
+    assert_eq!(
+        e.location(),
+        Some(Location {
+            line: 5,
+            column: 10
+        })
+    );
 }
 
 #[test]

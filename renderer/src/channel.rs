@@ -233,7 +233,11 @@ mod tests {
         check((40.0, 45.0, 0.0), (0.0, 45.0, 20.0));
         let m = Attitude::from_degrees(30.0, 90.0, 0.0).body_to_world();
         let back = attitude_from_body_to_world(m).body_to_world();
-        for (a, b) in [(m.x_axis, back.x_axis), (m.y_axis, back.y_axis), (m.z_axis, back.z_axis)] {
+        for (a, b) in [
+            (m.x_axis, back.x_axis),
+            (m.y_axis, back.y_axis),
+            (m.z_axis, back.z_axis),
+        ] {
             assert_close(a, b, 1e-12, "gimbal");
         }
     }
@@ -252,7 +256,12 @@ mod tests {
         // Pitched 90° up, "forward" is up.
         let up = Attitude::from_degrees(0.0, 90.0, 0.0);
         let cam = channel_camera((DVec3::ZERO, up), &ch, 1.5);
-        assert_close(cam.position, DVec3::new(-0.5, -1.0, 2.0), 1e-12, "pitched up");
+        assert_close(
+            cam.position,
+            DVec3::new(-0.5, -1.0, 2.0),
+            1e-12,
+            "pitched up",
+        );
     }
 
     #[test]
@@ -276,7 +285,11 @@ mod tests {
             cam.position + dir * 1000.0
         };
         let px = |p: DVec3| cam.project_px(p, W, H).expect("in front").0;
-        assert!((px(at(l, 0.0)).x - 0.0).abs() < 1e-6, "{:?}", px(at(l, 0.0)));
+        assert!(
+            (px(at(l, 0.0)).x - 0.0).abs() < 1e-6,
+            "{:?}",
+            px(at(l, 0.0))
+        );
         assert!((px(at(r, 0.0)).x - W as f64).abs() < 1e-6);
         assert!((px(at(0.0, u)).y - 0.0).abs() < 1e-6);
         assert!((px(at(0.0, d)).y - H as f64).abs() < 1e-6);

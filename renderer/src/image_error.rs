@@ -38,12 +38,24 @@ const LOG_BINS: usize = 1112;
 
 /// Distribution of per-pixel errors: exact count, sum and maximum; quantiles to within a bin
 /// (1/256 px below 16 px, 1 % above).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Clone, PartialEq)]
 pub struct ErrorHistogram {
     bins: Vec<u64>,
     count: u64,
     sum: f64,
     max: f64,
+}
+
+impl std::fmt::Debug for ErrorHistogram {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ErrorHistogram")
+            .field("count", &self.count)
+            .field("mean", &self.mean())
+            .field("p50", &self.quantile(0.5))
+            .field("p99", &self.quantile(0.99))
+            .field("max", &self.max)
+            .finish()
+    }
 }
 
 impl Default for ErrorHistogram {

@@ -416,19 +416,20 @@ impl App<'_> {
     fn open_all(&mut self, event_loop: &ActiveEventLoop) -> Result<(), WindowError> {
         let monitors: Vec<MonitorHandle> = event_loop.available_monitors().collect();
         let infos: Vec<MonitorInfo> = monitors.iter().map(monitor_info).collect();
-        let primary = event_loop.primary_monitor().or_else(|| monitors.first().cloned());
+        let primary = event_loop
+            .primary_monitor()
+            .or_else(|| monitors.first().cloned());
         for (i, ch) in self.channels.iter().enumerate() {
             let (instance, device) = self.renderer.vulkan();
             let monitor = match &ch.monitor {
                 None => None,
                 Some(sel) => {
-                    let k = select_monitor(sel, &infos).map_err(|message| {
-                        WindowError::Channel {
+                    let k =
+                        select_monitor(sel, &infos).map_err(|message| WindowError::Channel {
                             channel: i,
                             key: "monitor",
                             message,
-                        }
-                    })?;
+                        })?;
                     Some(k)
                 }
             };
@@ -444,12 +445,7 @@ impl App<'_> {
             let sc = opened.swapchain.as_ref();
             self.reports.push(ChannelReport {
                 name: ch.name.clone(),
-                monitor: monitor.map(|k| {
-                    infos[k]
-                        .name
-                        .clone()
-                        .unwrap_or_else(|| format!("#{k}"))
-                }),
+                monitor: monitor.map(|k| infos[k].name.clone().unwrap_or_else(|| format!("#{k}"))),
                 fullscreen: match ch.display {
                     ChannelDisplay::Fullscreen(FullscreenMode::Borderless) => {
                         Some("borderless".into())
@@ -486,7 +482,9 @@ impl App<'_> {
                 } => {
                     if let Some(w) = self.windows.iter().find(|w| w.channel == channel) {
                         // Applied now or later; either way a Resized event follows.
-                        let _ = w.window.request_inner_size(PhysicalSize::new(width, height));
+                        let _ = w
+                            .window
+                            .request_inner_size(PhysicalSize::new(width, height));
                     }
                 }
             }
@@ -657,9 +655,8 @@ fn open_window(
             }
         }
         ChannelDisplay::Fullscreen(FullscreenMode::Borderless) => {
-            attrs = attrs.with_fullscreen(Some(Fullscreen::Borderless(
-                monitor.or(primary).cloned(),
-            )));
+            attrs =
+                attrs.with_fullscreen(Some(Fullscreen::Borderless(monitor.or(primary).cloned())));
         }
         ChannelDisplay::Fullscreen(FullscreenMode::Exclusive) => {
             let m = monitor.or(primary).ok_or_else(|| {
@@ -687,7 +684,10 @@ fn open_window(
         }
     }
     let window = event_loop.create_window(attrs).map_err(|e| {
-        WindowError::System(format!("channel {:?}: cannot create its window: {e}", ch.name))
+        WindowError::System(format!(
+            "channel {:?}: cannot create its window: {e}",
+            ch.name
+        ))
     })?;
     if ch.is_fullscreen() {
         window.set_cursor_visible(false);
@@ -880,7 +880,10 @@ mod tests {
             "unknown monitor \"DVI-9\"; monitors found: 0: \"DP-1\" 1920x1080 at (0, 0); 1: \"HDMI-A-1\" 2560x1440 at (1920, 0); 2: (unnamed) 800x600 at (0, 1080)"
         );
         let e = select_monitor(&MonitorSelector::Index(3), &m).unwrap_err();
-        assert!(e.starts_with("unknown monitor 3; monitors found: 0: "), "{e}");
+        assert!(
+            e.starts_with("unknown monitor 3; monitors found: 0: "),
+            "{e}"
+        );
         let e = select_monitor(&MonitorSelector::Index(0), &[]).unwrap_err();
         assert_eq!(e, "unknown monitor 0; no monitors found");
     }

@@ -50,7 +50,7 @@ fn recovers_a_known_vertical_offset_from_gpu_depth() {
     d.select.curvature = false;
     let f = &render_frames(&d, &drawn, &[cam])[0];
     let params = MeasureParams {
-        tau_px: 1.0,
+        tau_px: 0.25,
         curvature: false,
         hole_search_px: 16,
     };
@@ -86,7 +86,8 @@ fn recovers_a_known_vertical_offset_from_gpu_depth() {
     }
     assert!(checked > (W * H / 4) as usize, "{checked}");
     assert!(worst < 0.01, "worst relative difference {worst}");
-    assert!(e.max_px() > 1.0 && e.fraction_over_tau() > 0.0, "{e:?}");
+    // 1 m at 400 m below a 90° view of 320 px: up to ~0.4 px.
+    assert!(e.max_px() > 0.3 && e.fraction_over_tau() > 0.0, "{e:?}");
     assert_eq!(e.holes_px, 0);
 }
 

@@ -242,7 +242,8 @@ fn shader_px(
 #[test]
 fn origin_offsets_move_features_less_than_an_eighth_of_a_pixel() {
     let size = (1920u32, 1080u32);
-    let local_eye = DVec3::new(1234.5, 987.25, 1500.0);
+    // Not dyadic: the f64 eye of each offset rounds differently.
+    let local_eye = DVec3::new(1234.567, 987.123, 1500.3);
     let att = [211.0, -4.0, 9.0];
     // Features: (distance m, a, b) in the view's tan space, heights from a smooth function.
     let mut features = Vec::new();
@@ -253,6 +254,7 @@ fn origin_offsets_move_features_less_than_an_eighth_of_a_pixel() {
     }
     let mut worst_ref: f64 = 0.0;
     let mut worst_move: f64 = 0.0;
+    let mut naive_worst: f64 = 0.0;
     let mut checked = 0;
     // px of every feature at offset 0.
     let mut base: Vec<Option<DVec2>> = Vec::new();
@@ -304,6 +306,19 @@ fn origin_offsets_move_features_less_than_an_eighth_of_a_pixel() {
             );
             let err = (got - want).length();
             worst_ref = worst_ref.max(err);
+            // What a world-space f32 path would do (f32 world position and eye): the test can tell.
+            let naive_rel = world.as_vec3() - cam.position.as_vec3();
+            let clip = m * naive_rel.extend(1.0);
+            if clip.w > 0.0 {
+                let ndc = clip.truncate() / clip.w;
+                let naive = DVec2::new(
+                    ((ndc.x + 1.0) * 0.5 * size.0 as f32) as f64,
+                    ((ndc.y + 1.0) * 0.5 * size.1 as f32) as f64,
+                );
+                if offset == 1.0e7 {
+                    naive_worst = naive_worst.max((naive - want).length());
+                }
+            }
             assert!(
                 err < 0.125,
                 "offset {offset}: feature {j} at {dist} m is {err} px from the f64 reference"
@@ -322,7 +337,10 @@ fn origin_offsets_move_features_less_than_an_eighth_of_a_pixel() {
         }
     }
     assert!(checked >= 3 * 20, "{checked} features compared");
-    eprintln!("origin offsets: worst {worst_ref:.2e} px from f64, worst move {worst_move:.2e} px");
+    assert!(naive_worst > 1.0, "a world-space f32 path at 1e7 m is off by only {naive_worst} px");
+    eprintln!(
+        "origin offsets: worst {worst_ref:.2e} px from f64, worst move {worst_move:.2e} px (world-space f32 at 1e7 m: {naive_worst:.1} px)"
+    );
 }
 
 /// Cameras at the edges of what a flight can do, over the generated scene.
@@ -827,6 +845,7 @@ fn half_metre_at_fifty_km_stays_ordered_on_the_gpu() {
             }
         }
     }
+    eprintln!("ridges at 50 km: {correct}/{occluding} pixels show the nearer ridge");
     assert!(occluding > 100, "only {occluding} pixels see both ridges");
     assert!(
         correct as f64 >= 0.98 * occluding as f64,

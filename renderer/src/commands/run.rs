@@ -24,8 +24,8 @@ use crate::output::write_text;
 use crate::terrain::select::SelectParams;
 use crate::vk::DeviceDesc;
 use crate::window::{
-    new_event_loop, required_instance_extensions, run_channels, PoseSource, RunOptions,
-    RunReport, WindowError,
+    new_event_loop, required_instance_extensions, run_channels, PoseSource, RunOptions, RunReport,
+    WindowError,
 };
 
 /// Window size of a fullscreen channel shown with `--windowed` when it has no resolution.
@@ -96,10 +96,7 @@ impl PoseSource for StraightPassSource {
             0.0
         };
         let (position, attitude) = self.pass.pose_at(t);
-        AircraftPose {
-            position,
-            attitude,
-        }
+        AircraftPose { position, attitude }
     }
 }
 
@@ -180,9 +177,7 @@ fn plan(a: &RunArgs) -> Result<Plan, Failure> {
             .map_err(|e| bad_input(format!("--window-size: {e}")))?;
         let mut x = 0i32;
         for c in &mut channels {
-            let (w, h) = size
-                .or(c.nominal_size())
-                .unwrap_or(WINDOWED_DEFAULT);
+            let (w, h) = size.or(c.nominal_size()).unwrap_or(WINDOWED_DEFAULT);
             if c.is_fullscreen() || size.is_some() {
                 c.display = ChannelDisplay::Window {
                     x: Some(x),

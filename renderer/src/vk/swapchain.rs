@@ -240,12 +240,20 @@ impl Swapchain {
         present_mode: vk::PresentModeKHR,
     ) -> Result<Option<Self>, VkError> {
         let loader = khr::swapchain::Device::new(&instance.raw, &device.raw);
-        let Some((raw, format, extent, images)) =
-            Self::create_raw(&instance.raw, &loader, device, surface, window, present_mode, None)?
+        let Some((raw, format, extent, images)) = Self::create_raw(
+            &instance.raw,
+            &loader,
+            device,
+            surface,
+            window,
+            present_mode,
+            None,
+        )?
         else {
             return Ok(None);
         };
-        let unwind = |loader: &khr::swapchain::Device| unsafe { loader.destroy_swapchain(raw, None) };
+        let unwind =
+            |loader: &khr::swapchain::Device| unsafe { loader.destroy_swapchain(raw, None) };
         let rendered = match create_semaphores(device, images.len()) {
             Ok(s) => s,
             Err(e) => {
