@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # Installs the system packages aerie needs on Debian/Ubuntu, once: the Vulkan loader, lavapipe
 # (Mesa's CPU Vulkan driver), the Khronos validation layer, shaderc/glslang/SPIRV-Tools static
-# libraries for the shader build, and Xvfb for window tests. Idempotent; uses sudo when not root.
+# libraries for the shader build, and Xvfb + the X11 client libraries for windows and their
+# tests. Idempotent; uses sudo when not root.
 set -euo pipefail
 
-packages=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers libshaderc-dev glslang-dev spirv-tools xvfb)
+# xvfb + the X11 client libraries winit loads at run time (windowed presentation and its tests).
+packages=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers libshaderc-dev glslang-dev spirv-tools
+  xvfb libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0)
 missing=()
 for p in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then

@@ -770,13 +770,43 @@ impl<'de> Deserialize<'de> for Node {
 /// Line and column of the value at `path`, or of the nearest enclosing value that exists
 /// (a missing key points at its table).
 pub(crate) fn locate(text: &str, path: &[Seg]) -> Option<Location> {
+    let owned: Vec<SegOwned> = path
+        .iter()
+        .map(|s| match s {
+            Seg::Key(k) => SegOwned::Key((*k).to_owned()),
+            Seg::Index(i) => SegOwned::Index(*i),
+        })
+        .collect();
+    walk(text, &owned, true)
+}
+
+/// Line and column of the value of a dotted key such as `channel[1].monitor` or
+/// `render.tau_px` in config `text` (for errors found after parsing, e.g. when windows open).
+pub fn key_location(text: &str, key: &str) -> Option<Location> {
+    let mut path = Vec::new();
+    for part in key.split('.') {
+        let (name, mut rest) = part.split_once('[').map_or((part, ""), |(n, r)| (n, r));
+        if !name.is_empty() {
+            path.push(SegOwned::Key(name.to_owned()));
+        }
+        while let Some((index, after)) = rest.split_once(']') {
+            path.push(SegOwned::Index(index.parse().ok()?));
+            rest = after.strip_prefix('[').unwrap_or(after);
+        }
+    }
+    walk(text, &path, false)
+}
+
+/// Follows `path` through the spanned document; with `nearest`, stops at the deepest value
+/// that exists instead of failing.
+fn walk(text: &str, path: &[SegOwned], nearest: bool) -> Option<Location> {
     let root: Node = toml::from_str(text).ok()?;
     let mut node = &root;
     let mut span = None;
     for seg in path {
         let next = match (seg, node) {
-            (Seg::Key(k), Node::Table(t)) => t.get(*k),
-            (Seg::Index(i), Node::Array(a)) => a.get(*i),
+            (SegOwned::Key(k), Node::Table(t)) => t.get(k),
+            (SegOwned::Index(i), Node::Array(a)) => a.get(*i),
             _ => None,
         };
         match next {
@@ -784,8 +814,14 @@ pub(crate) fn locate(text: &str, path: &[Seg]) -> Option<Location> {
                 span = Some(n.span());
                 node = n.get_ref();
             }
-            None => break,
+            None if nearest => break,
+            None => return None,
         }
     }
     span.map(|s| Location::from_offset(text, s.start))
+}
+
+enum SegOwned {
+    Key(String),
+    Index(usize),
 }

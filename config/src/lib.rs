@@ -36,8 +36,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 pub use channels::{
-    Channel, ChannelDisplay, ChannelFrustum, EyeOffset, FullscreenMode, MonitorSelector,
-    PresentMode, ViewOffset,
+    key_location, Channel, ChannelDisplay, ChannelFrustum, EyeOffset, FullscreenMode,
+    MonitorSelector, PresentMode, ViewOffset,
 };
 pub use error::{ConfigError, Location};
 

@@ -537,3 +537,15 @@ fn cockpit5_preset_has_asymmetric_frusta_whose_edges_meet() {
         assert!((c.view.pitch_deg + up - fd).abs() < 1e-9, "{n}");
     }
 }
+
+#[test]
+fn key_location_finds_dotted_keys_with_indices() {
+    let text = "[render]\ntau_px = 2.0\n\n[[channel]]\nname = \"a\"\n\n[[channel]]\nname = \"b\"\nmonitor = 3\n[channel.frustum]\nhfov = 50.0\n";
+    let at = |k: &str| aerie_config::key_location(text, k).map(|l| (l.line, l.column));
+    assert_eq!(at("render.tau_px"), Some((2, 10)));
+    assert_eq!(at("channel[1].monitor"), Some((9, 11)));
+    assert_eq!(at("channel[1].frustum.hfov"), Some((11, 8)));
+    assert_eq!(at("channel[0].name"), Some((5, 8)));
+    assert_eq!(at("channel[0].monitor"), None);
+    assert_eq!(at("channel[5].name"), None);
+}

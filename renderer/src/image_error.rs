@@ -97,7 +97,11 @@ impl ErrorHistogram {
 
     /// Adds one error (pixels, ≥ 0; NaN counts as +∞ so it cannot hide).
     pub fn add(&mut self, e: f64) {
-        let e = if e.is_nan() { f64::INFINITY } else { e.max(0.0) };
+        let e = if e.is_nan() {
+            f64::INFINITY
+        } else {
+            e.max(0.0)
+        };
         self.bins[Self::bin(e)] += 1;
         self.count += 1;
         self.sum += e;
@@ -624,6 +628,7 @@ pub struct OracleResult {
 /// and as many more drawn at random (deterministic in `seed`), each on at most ~129² samples
 /// (a node of level ℓ > 3 is sampled every 2^(ℓ−3)-th sample with varying offsets — the exact,
 /// all-sample oracle is the `bound_oracle` test).
+#[allow(clippy::too_many_arguments)]
 pub fn oracle_selection(
     ds: &Dataset,
     camera: &Camera,
@@ -634,10 +639,7 @@ pub fn oracle_selection(
     nodes: usize,
     seed: u64,
 ) -> OracleResult {
-    let max_bound_px = items
-        .iter()
-        .map(|i| i.rho_px as f64)
-        .fold(0.0, f64::max);
+    let max_bound_px = items.iter().map(|i| i.rho_px as f64).fold(0.0, f64::max);
     if items.is_empty() || nodes == 0 {
         return OracleResult {
             max_bound_px,
@@ -785,9 +787,7 @@ mod tests {
                     continue;
                 }
                 let (a, d) = cam.project_px(p, w, h).unwrap();
-                let (b, _) = cam
-                    .project_px(DVec3::new(p.x, p.y, 100.0), w, h)
-                    .unwrap();
+                let (b, _) = cam.project_px(DVec3::new(p.x, p.y, 100.0), w, h).unwrap();
                 depth[(py * w + px) as usize] = d as f32;
                 want[(py * w + px) as usize] = (a - b).length();
             }
@@ -811,13 +811,21 @@ mod tests {
             }
         }
         assert!(worst < 1e-3, "relative error {worst}");
-        let max_want = want.iter().copied().filter(|v| !v.is_nan()).fold(0.0, f64::max);
+        let max_want = want
+            .iter()
+            .copied()
+            .filter(|v| !v.is_nan())
+            .fold(0.0, f64::max);
         assert!((e.max_px() - max_want).abs() < 1e-3 * max_want);
         // Holes: a reference that has terrain where the frame has sky.
         let reference = vec![0.5f32; (w * h) as usize];
         let e = measure(&ds, &cam, (w, h), &depth, Some(&reference), &params, None);
         assert_eq!(e.holes_px, (w * h) as u64 - terrain);
-        assert!(e.hole_max_px >= 1.0 && e.hole_max_px <= 8.0, "{}", e.hole_max_px);
+        assert!(
+            e.hole_max_px >= 1.0 && e.hole_max_px <= 8.0,
+            "{}",
+            e.hole_max_px
+        );
         assert_eq!(e.hist.count(), terrain);
     }
 

@@ -30,7 +30,7 @@ use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
 use winit::event::{ElementState, WindowEvent};
-use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::event_loop::{ActiveEventLoop, ControlFlow};
 use winit::keyboard::{Key, NamedKey};
 use winit::monitor::{MonitorHandle, VideoModeHandle};
 use winit::platform::run_on_demand::EventLoopExtRunOnDemand;
@@ -40,6 +40,9 @@ use crate::channel::{channel_camera, AircraftPose};
 use crate::frame::TerrainRenderer;
 use crate::vk::swapchain::{choose_present_mode, Acquire, Presented, Surface, Swapchain};
 use crate::vk::{Device, Instance, VkError};
+
+/// The winit event loop type sessions run on (re-exported so callers need no winit dependency).
+pub use winit::event_loop::EventLoop;
 
 /// How long an idle loop (every window minimised) sleeps between checks when no event comes.
 const IDLE_WAIT: Duration = Duration::from_millis(100);

@@ -359,6 +359,18 @@ pub fn replay(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Arbitrary bytes after a valid header never panic the parser.
+        #[test]
+        fn random_recordings_never_panic(body in prop::collection::vec(any::<u8>(), 0..400)) {
+            let mut b = header().to_vec();
+            b.extend_from_slice(&body);
+            let _ = parse_recording(&b, Path::new("r"));
+            let _ = parse_recording(&body, Path::new("r"));
+        }
+    }
 
     fn sample() -> Vec<RecordedPacket> {
         vec![

@@ -159,6 +159,9 @@ pub enum ShmError {
 /// A 136-byte shared mapping viewed as 64-bit atomic words.
 struct Words {
     map: MmapRaw,
+    /// Kept open to check the file's size before touching the mapping (a file truncated
+    /// under a mapping raises SIGBUS on access).
+    file: std::fs::File,
 }
 
 impl Words {
@@ -202,7 +205,15 @@ impl Words {
             opts.map_raw_read_only(&file)
         }
         .map_err(io)?;
-        Ok(Words { map })
+        Ok(Words { map, file })
+    }
+
+    /// Whether the file still covers the mapping.
+    fn intact(&self) -> bool {
+        self.file
+            .metadata()
+            .map(|m| m.len() >= SHM_SIZE as u64)
+            .unwrap_or(false)
     }
 }
 
@@ -300,6 +311,9 @@ pub enum ShmRead {
         /// Attempts made.
         retries: u32,
     },
+    /// The file was truncated below the layout's size: the mapping is not read (it would
+    /// fault); reopen the file.
+    Truncated,
 }
 
 /// Reads poses from a shared-memory file. Never blocks: [`read`](Self::read) makes at most
@@ -343,8 +357,13 @@ impl ShmReader {
         &self.path
     }
 
-    /// One seqlock read attempt series; see [`ShmRead`].
+    /// One seqlock read attempt series; see [`ShmRead`]. Checks first that the file was not
+    /// truncated (writers must never shrink the file while readers run; the check narrows the
+    /// window in which one that does could fault the reader to microseconds).
     pub fn read(&mut self) -> ShmRead {
+        if !self.words.intact() {
+            return ShmRead::Truncated;
+        }
         let w = |i: usize| self.words.word(i);
         let mut v = [0u64; WORDS];
         for attempt in 0..=self.max_retries {
@@ -523,6 +542,11 @@ fn poll_loop(cfg: ShmConfig, mut ingest: Ingest, stop: Arc<AtomicBool>) {
                     counters.retries(retries.into());
                     counters.busy();
                 }
+                ShmRead::Truncated => {
+                    tracing::warn!("shm {}: file truncated; reopening", cfg.path.display());
+                    reader = None;
+                    next_open = Instant::now() + Duration::from_millis(100);
+                }
                 ShmRead::Unchanged | ShmRead::NotWritten => {
                     if last_change.elapsed() > Duration::from_secs(1) {
                         // Look again: the writer may have been restarted on a new file.
@@ -626,6 +650,20 @@ mod tests {
         assert_eq!(&raw[16..20], &SHM_FLAG_VELOCITY.to_le_bytes());
         assert_eq!(&raw[24..32], &42u64.to_le_bytes());
         assert_eq!(&raw[40..48], &47.1f64.to_le_bytes());
+        // A truncated file is noticed before the mapping is touched.
+        let trunc = TempShm::new("trunc");
+        let mut tw = ShmWriter::create(&trunc.0).unwrap();
+        let mut tr = ShmReader::open(&trunc.0).unwrap();
+        tw.write(&p);
+        assert!(matches!(tr.read(), ShmRead::New { .. }));
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(&trunc.0)
+            .unwrap()
+            .set_len(8)
+            .unwrap();
+        assert_eq!(tr.read(), ShmRead::Truncated);
+        drop(tw);
         // A reopened writer continues the sequence.
         drop(w);
         let mut w2 = ShmWriter::create(&f.0).unwrap();

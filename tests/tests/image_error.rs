@@ -137,7 +137,10 @@ fn full_is_exact_bounded_within_target_clipmap_worse() {
     // at grazing angles), hence a looser max than p99.
     assert!(ef.p99_px() < 0.01 && ef.max_px() < 1.0, "full: {ef:?}");
     assert!(eb.max_px() <= tau + 0.5, "bounded: {eb:?}");
-    assert!(ep.max_px() > eb.max_px(), "clipmap {ep:?} vs bounded {eb:?}");
+    assert!(
+        ep.max_px() > eb.max_px(),
+        "clipmap {ep:?} vs bounded {eb:?}"
+    );
 
     // The CPU oracle of the same selection: every node checked within τ and within its bound.
     let clip = ClipmapDesc {

@@ -124,7 +124,7 @@ fn check_selection(
     let hf = &s.ds.hf;
     for it in &sel.items {
         assert!(
-            it.node_level <= it.level && it.level - it.node_level <= it.refinement.max(0),
+            it.node_level <= it.level && it.level - it.node_level <= it.refinement,
             "{what}: {it:?}"
         );
         let up = it.level - it.node_level;
@@ -284,7 +284,8 @@ fn origin_offsets_move_features_less_than_an_eighth_of_a_pixel() {
             let ij = (((col - n0x) / step) as u32, ((row - n0y) / step) as u32);
             let hgt = (p.z + 37.0 * ((col as f64) * 0.01).sin()) as f32;
             // World positions with the origin shift (offsets are multiples of the spacing).
-            let node_origin = DVec2::new(n0x as f64 * SPACING + offset, n0y as f64 * SPACING + offset);
+            let node_origin =
+                DVec2::new(n0x as f64 * SPACING + offset, n0y as f64 * SPACING + offset);
             let world = DVec3::new(
                 col as f64 * SPACING + offset,
                 row as f64 * SPACING + offset,
@@ -337,7 +338,10 @@ fn origin_offsets_move_features_less_than_an_eighth_of_a_pixel() {
         }
     }
     assert!(checked >= 3 * 20, "{checked} features compared");
-    assert!(naive_worst > 1.0, "a world-space f32 path at 1e7 m is off by only {naive_worst} px");
+    assert!(
+        naive_worst > 1.0,
+        "a world-space f32 path at 1e7 m is off by only {naive_worst} px"
+    );
     eprintln!(
         "origin offsets: worst {worst_ref:.2e} px from f64, worst move {worst_move:.2e} px (world-space f32 at 1e7 m: {naive_worst:.1} px)"
     );
@@ -431,7 +435,16 @@ fn extreme_cameras_render_validation_clean_with_terrain_where_expected() {
     let mut cams: Vec<(String, Camera)> = all
         .into_iter()
         .filter(|(name, _)| wanted.contains(&name.as_str()))
-        .map(|(name, c)| (name, Camera::new(c.position, c.attitude, Frustum::symmetric(90f64.to_radians(), w, h))))
+        .map(|(name, c)| {
+            (
+                name,
+                Camera::new(
+                    c.position,
+                    c.attitude,
+                    Frustum::symmetric(90f64.to_radians(), w, h),
+                ),
+            )
+        })
         .collect();
     // FOV extremes on the same renderer.
     let base = cams.iter().find(|(n, _)| n == "heading 0.01").unwrap().1;
@@ -454,15 +467,25 @@ fn extreme_cameras_render_validation_clean_with_terrain_where_expected() {
     let terrain = |f: &Rendered| f.depth.iter().filter(|&&d| d > 0.0).count();
     let n = (w * h) as usize;
     for ((name, _), f) in cams.iter().zip(&frames) {
-        assert!(f.depth.iter().all(|d| d.is_finite() && *d >= 0.0 && *d <= 1.0), "{name}");
+        assert!(
+            f.depth
+                .iter()
+                .all(|d| d.is_finite() && *d >= 0.0 && *d <= 1.0),
+            "{name}"
+        );
         let t = terrain(f);
         match name.as_str() {
-            "0.5 m AGL looking down" | "pitch -89.999" => assert_eq!(t, n, "{name}: {t}/{n} terrain"),
+            "0.5 m AGL looking down" | "pitch -89.999" => {
+                assert_eq!(t, n, "{name}: {t}/{n} terrain")
+            }
             "pitch 90" => assert_eq!(t, 0, "{name}: {t} terrain pixels looking up"),
             "50000 m AGL" => {
                 // Looking straight down at a 12.8 km square from 50 km: terrain in the middle
                 // (≈ 14 % of the width), sky in the corners.
-                assert!(f.depth[(h / 2 * w + w / 2) as usize] > 0.0, "{name}: centre");
+                assert!(
+                    f.depth[(h / 2 * w + w / 2) as usize] > 0.0,
+                    "{name}: centre"
+                );
                 assert_eq!(f.depth[0], 0.0, "{name}: corner");
                 assert!(t > 20 && t < n / 4, "{name}: {t} terrain pixels");
             }
@@ -472,14 +495,20 @@ fn extreme_cameras_render_validation_clean_with_terrain_where_expected() {
                 let top = f.depth[..half].iter().filter(|&&d| d > 0.0).count();
                 let bottom = f.depth[half..].iter().filter(|&&d| d > 0.0).count();
                 let first_row = f.depth[..w as usize].iter().all(|&d| d > 0.0);
-                assert!(first_row && top > 2 * bottom, "{name}: top {top}, bottom {bottom}");
+                assert!(
+                    first_row && top > 2 * bottom,
+                    "{name}: top {top}, bottom {bottom}"
+                );
             }
             _ => assert!(t > n / 4, "{name}: {t} terrain pixels"),
         }
     }
     let img = |name: &str| &frames[cams.iter().position(|(n, _)| n == name).unwrap()];
     let d = diff_images(&img("heading 359.99").rgba, &img("heading 0.01").rgba, 16);
-    assert!(d.fraction_over < 0.02 && d.mean < 2.0, "heading wrap: {d:?}");
+    assert!(
+        d.fraction_over < 0.02 && d.mean < 2.0,
+        "heading wrap: {d:?}"
+    );
 }
 
 /// An integrated flight: position += velocity·dt, so rounding accumulates as in a simulator.
@@ -509,7 +538,13 @@ impl Flight {
         self.frame += 1;
         let heading = v.x.atan2(v.y).to_degrees();
         let pitch = -25.0 + 20.0 * (5.0 * a).sin();
-        camera(self.pos, [heading, pitch, 15.0 * (2.0 * a).sin()], 90.0, 160, 90)
+        camera(
+            self.pos,
+            [heading, pitch, 15.0 * (2.0 * a).sin()],
+            90.0,
+            160,
+            90,
+        )
     }
 }
 
@@ -524,7 +559,10 @@ fn hundred_thousand_frame_cpu_flight_stays_snapped_bounded_and_flat() {
         ..SelectParams::default()
     };
     let capacities = [24u32, 12, 6, 3, 0, 0];
-    let mut pools: Vec<RefinedTilePool> = capacities.iter().map(|&c| RefinedTilePool::new(c)).collect();
+    let mut pools: Vec<RefinedTilePool> = capacities
+        .iter()
+        .map(|&c| RefinedTilePool::new(c))
+        .collect();
     let mut caches: Vec<Option<CacheRegion>> = vec![None; clip.level_count() as usize];
     let mut sel = Selection::default();
     let c = (N as f64 - 1.0) * SPACING / 2.0;
@@ -601,8 +639,19 @@ fn hundred_thousand_frame_cpu_flight_stays_snapped_bounded_and_flat() {
             }
             caches[i] = Some(region);
         }
-        select_tiles(&s.bake, clip, &placements, &cam, (160, 90), &params, &mut sel);
-        assert!(sel.items.iter().all(|i| i.rho_px >= 0.0 && i.eps_m.is_finite()));
+        select_tiles(
+            &s.bake,
+            clip,
+            &placements,
+            &cam,
+            (160, 90),
+            &params,
+            &mut sel,
+        );
+        assert!(sel
+            .items
+            .iter()
+            .all(|i| i.rho_px >= 0.0 && i.eps_m.is_finite()));
         for p in &mut pools {
             p.begin_frame(frame);
         }
@@ -661,8 +710,14 @@ fn hundred_thousand_frame_cpu_flight_stays_snapped_bounded_and_flat() {
         })
         .sum();
     assert_eq!(counted, requests);
-    assert!(requests > 10_000 && uploads > 100 && late > 0, "{requests} {uploads} {late}");
-    assert!(strip_frames > 1_000, "{strip_frames} frames uploaded strips");
+    assert!(
+        requests > 10_000 && uploads > 100 && late > 0,
+        "{requests} {uploads} {late}"
+    );
+    assert!(
+        strip_frames > 1_000,
+        "{strip_frames} frames uploaded strips"
+    );
     eprintln!(
         "100k frames: {requests} refined-tile requests, {uploads} uploads, {late} late, {strip_frames} level moves"
     );
@@ -694,7 +749,10 @@ fn tau_viewport_and_fov_extremes_keep_selection_valid() {
         for fov in [1u32, 90, 170] {
             let fine = nodes[&(w, fov, 0.1f64.to_bits())];
             let coarse = nodes[&(w, fov, 100.0f64.to_bits())];
-            assert!(fine >= coarse, "{w} px fov {fov}: τ 0.1 {fine} < τ 100 {coarse}");
+            assert!(
+                fine >= coarse,
+                "{w} px fov {fov}: τ 0.1 {fine} < τ 100 {coarse}"
+            );
         }
     }
     // A bigger viewport at the same τ never needs fewer nodes.
@@ -712,7 +770,10 @@ fn one_pixel_and_max_width_targets_render_and_over_limit_is_refused() {
         let f = &frames[0];
         assert_eq!(f.depth.len(), (w * h) as usize);
         let t = f.depth.iter().filter(|&&d| d > 0.0).count();
-        assert!(t as u32 >= (w * 9 / 10).max(1), "{w}x{h}: {t} terrain pixels");
+        assert!(
+            t as u32 >= (w * 9 / 10).max(1),
+            "{w}x{h}: {t} terrain pixels"
+        );
     }
     let err = TerrainRenderer::new(&test_desc(16385, 1))
         .err()

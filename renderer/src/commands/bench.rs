@@ -164,11 +164,9 @@ pub fn parse_modes(s: &str) -> Result<Vec<LodMode>, String> {
             "distance" => LodMode::Distance,
             "full" => LodMode::Full,
             "" => return Err(format!("--modes {s:?}: empty mode name")),
-            other => {
-                return Err(format!(
-                    "--modes {s:?}: unknown mode {other:?} (expected bounded, clipmap, distance, full)"
-                ))
-            }
+            other => return Err(format!(
+                "--modes {s:?}: unknown mode {other:?} (expected bounded, clipmap, distance, full)"
+            )),
         };
         if !out.contains(&mode) {
             out.push(mode);
@@ -457,10 +455,8 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
         .filter(|_| image_error);
     let bar = indicatif::ProgressBar::new(total_frames as u64 * lanes.len() as u64);
     bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{msg} [{bar:30}] {pos}/{len} renders, eta {eta}",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} renders, eta {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let mut rows: Vec<FrameRow> = Vec::new();
     let size = (p.width, p.height);
@@ -628,8 +624,13 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
         if let Some((frame, _)) = lane.worst {
             let scale = 2.0 * lane.config.tau_for_error();
             let path = out.join(format!("heatmap_{}_frame{frame:04}.png", lane.config.key()));
-            write_png(&path, p.width, p.height, &heatmap_rgba(&lane.worst_heat, scale))
-                .map_err(runtime)?;
+            write_png(
+                &path,
+                p.width,
+                p.height,
+                &heatmap_rgba(&lane.worst_heat, scale),
+            )
+            .map_err(runtime)?;
             heatmaps += 1;
         }
     }
@@ -711,7 +712,12 @@ mod tests {
             let e = parse_modes(bad).unwrap_err();
             assert!(e.contains(word) && e.contains("--modes"), "{e}");
         }
-        for (bad, word) in [("1,x", "\"x\""), ("0", "positive"), ("-1", "positive"), ("nan", "positive")] {
+        for (bad, word) in [
+            ("1,x", "\"x\""),
+            ("0", "positive"),
+            ("-1", "positive"),
+            ("nan", "positive"),
+        ] {
             let e = parse_taus(bad).unwrap_err();
             assert!(e.contains(word) && e.contains("--tau"), "{e}");
         }

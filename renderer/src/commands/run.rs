@@ -270,7 +270,21 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
     let counters = renderer.validation_counters();
     renderer.destroy();
     let report = result.map_err(|e| match e {
-        e @ WindowError::Channel { .. } => bad_input(format!("{}: {e}", plan.source)),
+        WindowError::Channel { channel, key, .. } => {
+            // Name the file, the line and column of the key, the key and the reason.
+            let at = a
+                .config
+                .as_ref()
+                .and_then(|p| std::fs::read_to_string(p).ok())
+                .and_then(|text| {
+                    aerie_config::key_location(&text, &format!("channel[{channel}].{key}")).or_else(
+                        || aerie_config::key_location(&text, &format!("channel[{channel}]")),
+                    )
+                })
+                .map(|l| format!(":{l}"))
+                .unwrap_or_default();
+            bad_input(format!("{}{at}: {e}", plan.source))
+        }
         e => runtime(e),
     })?;
     let summary = summary_json(&report, &plan, a, &device, &desc, &counters);

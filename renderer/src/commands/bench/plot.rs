@@ -24,16 +24,15 @@ const SIZE: (u32, u32) = (1200, 800);
 
 fn ensure_font() -> Result<(), String> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
-    let ok = *REGISTERED.get_or_init(|| {
-        plotters::style::register_font(FAMILY, FontStyle::Normal, FONT).is_ok()
-    });
+    let ok = *REGISTERED
+        .get_or_init(|| plotters::style::register_font(FAMILY, FontStyle::Normal, FONT).is_ok());
     ok.then_some(())
         .ok_or_else(|| "embedded chart font is not a valid TrueType font".to_string())
 }
 
 /// Labels of a log axis: only 1, 2 and 5 of each decade ("0.05", "2", "10k", "1M").
 fn log_tick(v: f64) -> String {
-    if !(v > 0.0) {
+    if v.is_nan() || v <= 0.0 {
         return String::new();
     }
     let e = v.log10().floor();

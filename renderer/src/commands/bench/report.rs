@@ -143,10 +143,7 @@ pub(crate) fn summarize(
         .iter()
         .enumerate()
         .map(|(i, &config)| {
-            let mine: Vec<&FrameRow> = rows
-                .iter()
-                .filter(|r| r.config == i && !r.warmup)
-                .collect();
+            let mine: Vec<&FrameRow> = rows.iter().filter(|r| r.config == i && !r.warmup).collect();
             let q = |f: &dyn Fn(&FrameRow) -> f64| {
                 Quantiles::of(&mine.iter().map(|r| f(r)).collect::<Vec<_>>())
             };
@@ -168,10 +165,7 @@ pub(crate) fn summarize(
                 }
             });
             let oracle: Vec<_> = mine.iter().filter_map(|r| r.oracle).collect();
-            let bytes: Vec<f64> = mine
-                .iter()
-                .map(|r| r.stats.bytes_uploaded as f64)
-                .collect();
+            let bytes: Vec<f64> = mine.iter().map(|r| r.stats.bytes_uploaded as f64).collect();
             Summary {
                 config,
                 frames: mine.len(),
@@ -267,12 +261,7 @@ pub(crate) fn summary_csv(summaries: &[Summary]) -> String {
         "config,mode,tau_px,frames,frame_ms_median,frame_ms_p95,frame_ms_p99,frame_ms_max,cpu_ms_median,cpu_ms_p95,cpu_ms_p99,cpu_ms_max,gpu_ms_median,gpu_ms_p95,gpu_ms_p99,gpu_ms_max,triangles_median,triangles_max,instances_median,instances_max,draw_calls_median,bytes_uploaded_mean,bytes_uploaded_max,tiles_drawn,tiles_late,late_fraction,tiles_unbounded,img_max_px,img_p99_px,img_mean_px,img_frac_over_tau,img_holes_px,img_hole_max_px,frames_over_tau_plus_half,img_frame_max_median_px,oracle_max_px,bound_max_px\n",
     );
     for m in summaries {
-        let q = |q: &Quantiles| {
-            format!(
-                "{:.3},{:.3},{:.3},{:.3}",
-                q.median, q.p95, q.p99, q.max
-            )
-        };
+        let q = |q: &Quantiles| format!("{:.3},{:.3},{:.3},{:.3}", q.median, q.p95, q.p99, q.max);
         let _ = write!(
             s,
             "{},{},{},{},{},{},{},{:.0},{:.0},{:.0},{:.0},{:.0},{:.0},{:.0},{},{},{:.6},{},",
@@ -413,7 +402,10 @@ fn match_bounded<'a>(summaries: &'a [Summary], base: &Summary) -> Option<(&'a Su
 /// Sentences comparing `bounded` with each baseline at equal measured max error.
 pub(crate) fn comparisons(summaries: &[Summary]) -> Vec<String> {
     let mut out = Vec::new();
-    for base in summaries.iter().filter(|s| s.config.mode != LodMode::Bounded) {
+    for base in summaries
+        .iter()
+        .filter(|s| s.config.mode != LodMode::Bounded)
+    {
         let Some((b, equal)) = match_bounded(summaries, base) else {
             continue;
         };
