@@ -178,14 +178,13 @@ pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError>
             key: key.to_owned(),
             message,
         })?;
-    cfg.channels = channels::validate(raw_channels, &cfg.render).map_err(|e| {
-        ConfigError::Invalid {
+    cfg.channels =
+        channels::validate(raw_channels, &cfg.render).map_err(|e| ConfigError::Invalid {
             source_name: source_name.to_owned(),
             location: channels::locate(text, &e.path),
             key: e.dotted(),
             message: e.message,
-        }
-    })?;
+        })?;
     Ok(cfg)
 }
 

@@ -18,6 +18,11 @@
 //!   video mode of the requested size) stops everything before the first frame, as a
 //!   [`WindowError::Channel`] naming the channel's key.
 //!
+//! - With several channels, one tile selection serves all of them
+//!   ([`TerrainRenderer::set_channels`]), so shared tiles match across seams. The renderer has
+//!   one offscreen target: channels of one process should share a render resolution, otherwise
+//!   the target is recreated (after a device wait) whenever consecutive channels differ.
+//!
 //! A session runs on a caller-owned [`EventLoop`] through `run_app_on_demand`, so one process
 //! (e.g. a test binary) can run several sessions; winit allows one event loop per process.
 

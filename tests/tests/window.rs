@@ -34,6 +34,14 @@ use aerie_config::{
 use aerie_tests::{assert_validation_clean, prepare, synthetic, test_desc};
 use glam::DVec3;
 
+/// A note on the real stderr, past libtest's output capture, so skips are seen in CI logs.
+macro_rules! note {
+    ($($t:tt)*) => {{
+        use std::io::Write;
+        let _ = writeln!(std::io::stderr(), "window tests: {}", format!($($t)*));
+    }};
+}
+
 type Job = Box<dyn FnOnce(&mut EventLoop<()>) + Send>;
 
 struct Ui {
@@ -101,16 +109,14 @@ fn ui() -> Option<&'static Ui> {
                 Some(fb)
             }
             Err(why) if std::env::var_os("DISPLAY").is_some() => {
-                eprintln!(
-                    "window tests: {why}; using DISPLAY={:?}",
+                note!(
+                    "{why}; using DISPLAY={:?} (no pixel checks)",
                     std::env::var("DISPLAY")
                 );
                 None
             }
             Err(why) => {
-                eprintln!(
-                    "window tests SKIPPED: Xvfb cannot be started ({why}) and DISPLAY is not set"
-                );
+                note!("SKIPPED: Xvfb cannot be started ({why}) and DISPLAY is not set");
                 return None;
             }
         };
@@ -733,6 +739,36 @@ impl FakeUser {
     }
 }
 
+impl FakeUser {
+    /// Marks the window minimised the way a window manager does (`_NET_WM_STATE_HIDDEN`), or
+    /// restores it.
+    fn set_minimised(&self, window: u64, minimised: bool) {
+        use x11_dl::xlib;
+        unsafe {
+            let atom = |name: &std::ffi::CStr| {
+                (self.xlib.XInternAtom)(self.display, name.as_ptr(), xlib::False)
+            };
+            let state = atom(c"_NET_WM_STATE");
+            if minimised {
+                let hidden = [atom(c"_NET_WM_STATE_HIDDEN")];
+                (self.xlib.XChangeProperty)(
+                    self.display,
+                    window,
+                    state,
+                    xlib::XA_ATOM,
+                    32,
+                    xlib::PropModeReplace,
+                    hidden.as_ptr().cast(),
+                    1,
+                );
+            } else {
+                (self.xlib.XDeleteProperty)(self.display, window, state);
+            }
+            (self.xlib.XSync)(self.display, xlib::False);
+        }
+    }
+}
+
 impl Drop for FakeUser {
     fn drop(&mut self) {
         unsafe { (self.xlib.XCloseDisplay)(self.display) };
@@ -744,7 +780,7 @@ fn escape_and_the_close_button_end_the_session_with_everything_destroyed() {
     if framebuffer().is_none() {
         // Only on our private Xvfb: never type into someone's desktop.
         if ui().is_some() {
-            eprintln!("skipped: needs the private Xvfb to fake key presses");
+            note!("skipped: needs the private Xvfb to fake key presses");
         }
         return;
     }
@@ -793,4 +829,59 @@ fn escape_and_the_close_button_end_the_session_with_everything_destroyed() {
             frames - sent
         );
     }
+}
+
+#[test]
+fn minimised_window_waits_without_spinning_then_resumes() {
+    if framebuffer().is_none() {
+        if ui().is_some() {
+            note!("skipped: needs the private Xvfb to play the window manager");
+        }
+        return;
+    }
+    let hidden_ms = 700u64;
+    let out = on_ui(move |el| {
+        let opts = RunOptions {
+            max_frames: Some(30),
+            ..Default::default()
+        };
+        let user = FakeUser::open();
+        let (w, h) = (144, 81);
+        let ch = window("minimise", 600, 800, w, h, 0.0);
+        let mut hidden_at = None;
+        let (result, poses) = session_with(el, vec![ch], opts, |frame| {
+            if frame == 10 {
+                let win = user
+                    .find(600, 800, w as i32, h as i32)
+                    .expect("our window on the X server");
+                user.set_minimised(win, true);
+                hidden_at = Some(std::time::Instant::now());
+                // Another client restores it later (the loop itself is asleep meanwhile).
+                std::thread::spawn(move || {
+                    std::thread::sleep(Duration::from_millis(hidden_ms));
+                    FakeUser::open().set_minimised(win, false);
+                });
+            }
+        });
+        let waited = hidden_at.map(|t| t.elapsed());
+        (result, poses, waited)
+    });
+    let Some((result, poses, waited)) = out else {
+        return;
+    };
+    let report = result.expect("session");
+    assert_eq!(report.exit, ExitReason::Frames);
+    assert_eq!((report.frames, poses), (30, 30), "no frame while minimised");
+    assert!(waited.expect("minimised at frame 10") >= Duration::from_millis(hidden_ms));
+    // Asleep while minimised: woken by events or every 100 ms, not thousands of times.
+    let expected = hidden_ms / 100;
+    assert!(
+        (expected / 2..=expected * 4).contains(&report.idle_waits),
+        "{} idle wake-ups in {hidden_ms} ms",
+        report.idle_waits
+    );
+    // The longest gap between frames is the minimised time.
+    let longest = report.frame_ms.iter().cloned().fold(0.0, f64::max);
+    assert!(longest >= hidden_ms as f64, "{longest} ms");
+    assert_eq!(report.channels[0].presented, 30);
 }
