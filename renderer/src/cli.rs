@@ -285,7 +285,9 @@ pub fn prepare_terrain(
         tile_size,
         levels: 0,
     };
-    params.resolve_levels(&ds).map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+    params
+        .resolve_levels(&ds)
+        .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
     let bake_path = bake_path_for(path);
     let t = Instant::now();
     let quiet = |_: u64, _: u64| {};

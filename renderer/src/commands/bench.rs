@@ -164,9 +164,11 @@ pub fn parse_modes(s: &str) -> Result<Vec<LodMode>, String> {
             "distance" => LodMode::Distance,
             "full" => LodMode::Full,
             "" => return Err(format!("--modes {s:?}: empty mode name")),
-            other => return Err(format!(
+            other => {
+                return Err(format!(
                 "--modes {s:?}: unknown mode {other:?} (expected bounded, clipmap, distance, full)"
-            )),
+            ))
+            }
         };
         if !out.contains(&mode) {
             out.push(mode);
@@ -327,6 +329,8 @@ pub(crate) struct FrameRow {
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct ImageRow {
     pub max_px: f64,
+    /// Largest error confirmed by a neighbouring pixel ([`ImageError::confirmed`]).
+    pub confirmed_max_px: f64,
     pub p99_px: f64,
     pub mean_px: f64,
     pub fraction_over_tau: f64,
@@ -341,6 +345,7 @@ impl ImageRow {
     fn of(e: &ImageError) -> Self {
         Self {
             max_px: e.max_px(),
+            confirmed_max_px: e.confirmed_max_px(),
             p99_px: e.p99_px(),
             mean_px: e.mean_px(),
             fraction_over_tau: e.fraction_over_tau(),
@@ -679,10 +684,10 @@ fn measure_lane(
         lane.image_total.merge(&e);
         let worse = match lane.worst {
             None => true,
-            Some((_, m)) => e.max_px() > m,
+            Some((_, m)) => e.confirmed_max_px() > m,
         };
         if worse {
-            lane.worst = Some((frame, e.max_px()));
+            lane.worst = Some((frame, e.confirmed_max_px()));
             std::mem::swap(&mut lane.heat, &mut lane.worst_heat);
         }
     }

@@ -139,7 +139,7 @@ where
                 .build_cartesian_2d((xmin..xmax).log_scale(), y_range)
                 .map_err(|e| err(&e))?;
             c.configure_mesh()
-                .x_desc("measured max image-space error (px, log scale)")
+                .x_desc("measured max image-space error, confirmed by a neighbouring pixel (px, log scale)")
                 .y_desc(y_desc)
                 .label_style((FAMILY, 16))
                 .axis_desc_style((FAMILY, 18))
