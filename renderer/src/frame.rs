@@ -811,10 +811,7 @@ impl TerrainRenderer {
     /// Gathers one upload's samples into the open staging region; returns its copy region.
     fn stage_upload(&mut self, job: &ImageUpload) -> Result<vk::BufferImageCopy, VkError> {
         let t = self.terrain.as_ref().expect("terrain set");
-        let (offset, bytes) = self.staging.alloc(job.bytes(), 4)?;
-        let out: &mut [f32] = bytemuck::cast_slice_mut(bytes);
-        gather(&t.dataset.hf, job.origin_sample, job.step, job.size, out);
-        Ok(buffer_image_copy(offset, job))
+        stage_gather(&mut self.staging, &t.dataset.hf, job)
     }
 
     fn create_frame_buffers(d: &Device, max_instances: usize) -> Result<FrameBuffers, VkError> {
@@ -1172,15 +1169,11 @@ impl TerrainRenderer {
                 Request::Miss { slot, .. } => {
                     stats.pool_misses += 1;
                     let job = refined_upload(q, &key, slot, pool.side);
-                    let (offset, bytes) = self.staging.alloc(job.bytes(), 4)?;
-                    gather(
+                    copies[r as usize - 1].push(stage_gather(
+                        &mut self.staging,
                         &t.dataset.hf,
-                        job.origin_sample,
-                        job.step,
-                        job.size,
-                        bytemuck::cast_slice_mut(bytes),
-                    );
-                    copies[r as usize - 1].push(buffer_image_copy(offset, &job));
+                        &job,
+                    )?);
                     stats.bytes_refined += job.bytes();
                     (r, slot)
                 }
@@ -1294,15 +1287,11 @@ impl TerrainRenderer {
             let mut can = || staging.remaining() >= slot_bytes + reserve + 256;
             if let Request::Miss { slot, .. } = pool.lru.prefetch(key, &mut can, 2) {
                 let job = refined_upload(q, &key, slot, pool.side);
-                let (offset, bytes) = self.staging.alloc(job.bytes(), 4)?;
-                gather(
+                copies[item.refinement as usize - 1].push(stage_gather(
+                    &mut self.staging,
                     &t.dataset.hf,
-                    job.origin_sample,
-                    job.step,
-                    job.size,
-                    bytemuck::cast_slice_mut(bytes),
-                );
-                copies[item.refinement as usize - 1].push(buffer_image_copy(offset, &job));
+                    &job,
+                )?);
                 stats.bytes_refined += job.bytes();
                 stats.prefetched += 1;
             } else if self.staging.remaining() < slot_bytes + reserve + 256 {
@@ -1405,6 +1394,23 @@ impl Drop for TerrainRenderer {
     fn drop(&mut self) {
         self.destroy();
     }
+}
+
+/// Gathers one upload's samples straight into the open staging region; returns its copy region.
+fn stage_gather(
+    staging: &mut StagingRing,
+    hf: &crate::terrain::Heightfield,
+    job: &ImageUpload,
+) -> Result<vk::BufferImageCopy, VkError> {
+    let (offset, bytes) = staging.alloc(job.bytes(), 4)?;
+    gather(
+        hf,
+        job.origin_sample,
+        job.step,
+        job.size,
+        bytemuck::cast_slice_mut(bytes),
+    );
+    Ok(buffer_image_copy(offset, job))
 }
 
 /// The upload of refined tile `key` into `slot`: (2^r q + 1)² samples at stride 2^(L−r).
