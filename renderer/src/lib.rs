@@ -12,6 +12,7 @@ pub mod frame;
 pub mod gpu;
 pub mod image_error;
 pub mod output;
+pub mod panorama;
 pub mod terrain;
 pub mod vk;
 pub mod window;
