@@ -80,87 +80,32 @@ mod tests {
 
 /// A scripted flight from timed waypoints, linearly interpolated (heading along the shorter
 /// arc). File format: one waypoint per line, `t_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg`;
-/// blank lines and `#` comments are ignored; times strictly increase.
+/// blank lines and `#` comments are ignored; times strictly increase. A thin wrapper over
+/// `aerie_sim_bridge::script::Waypoints`, so `aerie fly --path` and `aerie-send --path` fly
+/// exactly the same path.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Waypoints {
-    points: Vec<[f64; 7]>,
+    inner: aerie_sim_bridge::script::Waypoints,
 }
 
 impl Waypoints {
     /// Parses the text of a waypoint file; errors name `source:line` and the reason.
     pub fn parse(text: &str, source: &str) -> Result<Self, String> {
-        const FIELDS: [&str; 7] = [
-            "t_s",
-            "x_m",
-            "y_m",
-            "z_m",
-            "heading_deg",
-            "pitch_deg",
-            "roll_deg",
-        ];
-        let mut points: Vec<[f64; 7]> = Vec::new();
-        for (n, line) in text.lines().enumerate() {
-            let line = line.split('#').next().unwrap_or("").trim();
-            if line.is_empty() {
-                continue;
-            }
-            let at = |reason: String| format!("{source}:{}: {reason}", n + 1);
-            let parts: Vec<&str> = line.split(',').map(str::trim).collect();
-            if parts.len() != 7 {
-                return Err(at(format!(
-                    "expected 7 values {} , got {}",
-                    FIELDS.join(","),
-                    parts.len()
-                )));
-            }
-            let mut p = [0.0; 7];
-            for ((slot, text), name) in p.iter_mut().zip(&parts).zip(FIELDS) {
-                *slot = text
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|v| v.is_finite())
-                    .ok_or_else(|| at(format!("{name} = {text:?} is not a finite number")))?;
-            }
-            if let Some(prev) = points.last() {
-                if p[0] <= prev[0] {
-                    return Err(at(format!(
-                        "time {} s does not increase (previous {} s)",
-                        p[0], prev[0]
-                    )));
-                }
-            }
-            points.push(p);
-        }
-        if points.is_empty() {
-            return Err(format!("{source}: no waypoints"));
-        }
-        Ok(Self { points })
+        aerie_sim_bridge::script::Waypoints::parse(text, source).map(|inner| Self { inner })
     }
 
     /// Time of the last waypoint, seconds.
     pub fn duration(&self) -> f64 {
-        self.points.last().map(|p| p[0]).unwrap_or(0.0)
+        self.inner.duration()
     }
 
     /// Pose at time `t`, held before the first and after the last waypoint.
     pub fn pose_at(&self, t: f64) -> (DVec3, Attitude) {
-        let pts = &self.points;
-        let k = pts.partition_point(|p| p[0] <= t);
-        let (a, b) = match k {
-            0 => (&pts[0], &pts[0]),
-            k if k == pts.len() => (&pts[k - 1], &pts[k - 1]),
-            k => (&pts[k - 1], &pts[k]),
-        };
-        let s = if b[0] > a[0] {
-            (t - a[0]) / (b[0] - a[0])
-        } else {
-            0.0
-        };
-        let lerp = |i: usize| a[i] + (b[i] - a[i]) * s;
-        let dh = (b[4] - a[4] + 540.0).rem_euclid(360.0) - 180.0;
+        let s = self.inner.sample(t);
+        let [h, p, r] = s.attitude_deg;
         (
-            DVec3::new(lerp(1), lerp(2), lerp(3)),
-            Attitude::from_degrees((a[4] + dh * s).rem_euclid(360.0), lerp(5), lerp(6)),
+            DVec3::from_array(s.position),
+            Attitude::from_degrees(h, p, r),
         )
     }
 }

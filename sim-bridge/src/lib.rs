@@ -13,6 +13,7 @@
 //! - [`codec`]: the packet layouts (`sim-bridge/PROTOCOL.md`).
 //! - [`timing`]: pure decisions (sequence acceptance, extrapolation, staleness).
 //! - [`record`]: recordings of raw datagrams and their replay.
+//! - [`script`] / [`send`]: scripted flights and the sending side (`aerie-send`).
 //!
 //! Everything is f64; degrees at the API boundary, radians inside.
 
@@ -22,6 +23,8 @@ pub mod handoff;
 pub mod ingest;
 pub mod pose;
 pub mod record;
+pub mod script;
+pub mod send;
 pub mod shm;
 pub mod stats;
 pub mod timing;

@@ -1,0 +1,378 @@
+//! `aerie-send`: sends a scripted flight to aerie the way a flight simulator would — over UDP in
+//! any supported protocol, or through the shared-memory file. See README.md ("Driving aerie
+//! from a simulator") and `aerie-send --help`.
+
+use std::io::Write;
+use std::net::{IpAddr, Ipv4Addr, SocketAddr, ToSocketAddrs, UdpSocket};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use aerie_sim_bridge::codec::cigi::StartOfFrame;
+use aerie_sim_bridge::geodesy::{Geodetic, LocalTangentPlane};
+use aerie_sim_bridge::script::{Script, Straight, Waypoints};
+use aerie_sim_bridge::send::{datagram, packet_count, pose_for, SendProtocol};
+use aerie_sim_bridge::shm::{shm_path, ShmWriter, DEFAULT_SHM_NAME};
+use aerie_sim_bridge::{Protocol, DEFAULT_PORT};
+
+const HELP: &str = "\
+aerie-send: send a scripted flight to aerie, as a flight simulator would
+
+usage: aerie-send (--path <waypoints.csv> | --straight x,y,z,heading,pitch,roll,speed_mps)
+                  [--protocol native|cigi|xplane|fgfs|shm] [--to <addr:port>]
+                  [--shm-name <name>] [--rate <Hz>] [--seconds <S> | --count <N>]
+                  [--origin lat,lon,alt] [--start-frame <n>]
+                  [--realtime | --as-fast-as-possible] [--multicast-if <ipv4>]
+                  [--json <file>] [--quiet]
+
+  --path         timed waypoints `t_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg` (aerie fly's)
+  --straight     level pass along the heading at speed_mps from x,y,z (local ENU metres)
+  --protocol     native (default), cigi, xplane, fgfs (UDP) or shm (shared memory)
+  --to           UDP destination, default 127.0.0.1:47800; a multicast group is fine
+  --multicast-if local IPv4 address to send multicast from (e.g. 127.0.0.1)
+  --shm-name     shared-memory file for --protocol shm (default aerie-pose: /dev/shm/aerie-pose)
+  --rate         packets per second (default 60); packet i carries script time i/rate
+  --seconds      script seconds to send, both ends included (default: the path's duration;
+                 10 s for --straight)
+  --count        number of packets instead of --seconds
+  --origin       WGS84 origin of the script's ENU frame; required for cigi/xplane/fgfs; native
+                 and shm send geodetic positions when it is given, else local x/y/z
+  --start-frame  first sequence number / CIGI host frame (default 1), +1 per packet
+  --as-fast-as-possible  do not pace by --rate (the script time still steps by 1/rate)
+  --json         also write the summary as JSON to this file
+  --quiet        no progress lines
+
+exit status: 0 sent, 1 nothing could be sent, 2 bad arguments or input";
+
+struct Args {
+    script: Script,
+    protocol: SendProtocol,
+    to: SocketAddr,
+    multicast_if: Option<Ipv4Addr>,
+    shm_name: String,
+    rate: f64,
+    count: u64,
+    origin: Option<Geodetic>,
+    start_frame: u32,
+    realtime: bool,
+    json: Option<PathBuf>,
+    quiet: bool,
+}
+
+fn number<T: std::str::FromStr>(flag: &str, v: &str) -> Result<T, String>
+where
+    T::Err: std::fmt::Display,
+{
+    v.parse::<T>().map_err(|e| format!("{flag} {v:?}: {e}"))
+}
+
+fn parse_origin(v: &str) -> Result<Geodetic, String> {
+    let parts: Vec<f64> = v
+        .split(',')
+        .map(|s| s.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or_else(|| format!("--origin {v:?}: expected three numbers lat,lon,alt"))?;
+    let [lat, lon, alt] = parts[..] else {
+        return Err(format!(
+            "--origin {v:?}: expected three numbers lat,lon,alt"
+        ));
+    };
+    if !(-90.0..=90.0).contains(&lat) || !(-180.0..360.0).contains(&lon) {
+        return Err(format!(
+            "--origin {v:?}: latitude must be in [-90, 90], longitude in [-180, 360)"
+        ));
+    }
+    Ok(Geodetic::new(lat, lon, alt))
+}
+
+fn resolve(v: &str) -> Result<SocketAddr, String> {
+    v.to_socket_addrs()
+        .map_err(|e| format!("--to {v:?}: bad address ({e})"))?
+        .next()
+        .ok_or_else(|| format!("--to {v:?}: bad address (resolves to nothing)"))
+}
+
+fn parse_args(argv: &[String]) -> Result<Option<Args>, String> {
+    let mut path = None;
+    let mut straight = None;
+    let mut protocol = SendProtocol::Udp(Protocol::Aerie);
+    let mut to = format!("127.0.0.1:{DEFAULT_PORT}");
+    let mut multicast_if = None;
+    let mut shm_name = DEFAULT_SHM_NAME.to_string();
+    let mut rate: f64 = 60.0;
+    let (mut seconds, mut count) = (None::<f64>, None::<u64>);
+    let mut origin = None;
+    let mut start_frame = 1u32;
+    let mut realtime = true;
+    let mut json = None;
+    let mut quiet = false;
+    let mut it = argv.iter();
+    while let Some(flag) = it.next() {
+        let mut value = || {
+            it.next()
+                .cloned()
+                .ok_or_else(|| format!("{flag}: missing value"))
+        };
+        match flag.as_str() {
+            "-h" | "--help" => return Ok(None),
+            "--path" => path = Some(PathBuf::from(value()?)),
+            "--straight" => {
+                let v = value()?;
+                straight = Some(Straight::parse(&v).map_err(|e| format!("--straight: {e}"))?);
+            }
+            "--protocol" => protocol = value()?.parse().map_err(|e| format!("--protocol: {e}"))?,
+            "--to" => to = value()?,
+            "--multicast-if" => multicast_if = Some(number::<Ipv4Addr>(flag, &value()?)?),
+            "--shm-name" => shm_name = value()?,
+            "--rate" => rate = number(flag, &value()?)?,
+            "--seconds" => seconds = Some(number(flag, &value()?)?),
+            "--count" => count = Some(number(flag, &value()?)?),
+            "--origin" => origin = Some(parse_origin(&value()?)?),
+            "--start-frame" => start_frame = number(flag, &value()?)?,
+            "--realtime" => realtime = true,
+            "--as-fast-as-possible" => realtime = false,
+            "--json" => json = Some(PathBuf::from(value()?)),
+            "--quiet" => quiet = true,
+            other => return Err(format!("unknown option {other:?} (see --help)")),
+        }
+    }
+    if !(rate.is_finite() && rate > 0.0) {
+        return Err(format!("--rate {rate}: must be a positive number of Hz"));
+    }
+    let script = match (path, straight) {
+        (Some(p), None) => {
+            let text =
+                std::fs::read_to_string(&p).map_err(|e| format!("--path {}: {e}", p.display()))?;
+            Script::Waypoints(Waypoints::parse(&text, &p.display().to_string())?)
+        }
+        (None, Some(s)) => Script::Straight(s),
+        (Some(_), Some(_)) => return Err("give either --path or --straight, not both".into()),
+        (None, None) => return Err("a flight is needed: --path <file> or --straight ...".into()),
+    };
+    let count = match (seconds, count) {
+        (Some(_), Some(_)) => return Err("give either --seconds or --count, not both".into()),
+        (Some(s), None) if !(s.is_finite() && s >= 0.0) => {
+            return Err(format!("--seconds {s}: must be a non-negative number"))
+        }
+        (Some(s), None) => packet_count(s, rate),
+        (None, Some(n)) => n,
+        (None, None) => packet_count(script.duration().unwrap_or(10.0), rate),
+    };
+    if protocol.needs_geodetic() && origin.is_none() {
+        return Err(format!(
+            "--protocol {} carries latitude/longitude: --origin lat,lon,alt is required",
+            protocol.name()
+        ));
+    }
+    let to = match protocol {
+        SendProtocol::Udp(_) => resolve(&to)?,
+        SendProtocol::Shm => SocketAddr::from(([127, 0, 0, 1], DEFAULT_PORT)),
+    };
+    Ok(Some(Args {
+        script,
+        protocol,
+        to,
+        multicast_if,
+        shm_name,
+        rate,
+        count,
+        origin,
+        start_frame,
+        realtime,
+        json,
+        quiet,
+    }))
+}
+
+/// Where the poses go.
+enum Sink {
+    Udp(UdpSocket),
+    Shm(ShmWriter),
+}
+
+fn open_sink(a: &Args) -> Result<Sink, String> {
+    match a.protocol {
+        SendProtocol::Shm => ShmWriter::create(&shm_path(&a.shm_name))
+            .map(Sink::Shm)
+            .map_err(|e| format!("--shm-name: {e}")),
+        SendProtocol::Udp(_) => {
+            let any: SocketAddr = if a.to.is_ipv4() {
+                (Ipv4Addr::UNSPECIFIED, 0).into()
+            } else {
+                (std::net::Ipv6Addr::UNSPECIFIED, 0).into()
+            };
+            let s = socket2::Socket::from(
+                UdpSocket::bind(any).map_err(|e| format!("bind {any}: {e}"))?,
+            );
+            if let IpAddr::V4(group) = a.to.ip() {
+                if group.is_multicast() {
+                    // Loop back so receivers on this host (other channels, tests) get it too.
+                    s.set_multicast_loop_v4(true)
+                        .map_err(|e| format!("--to {group}: multicast loop: {e}"))?;
+                    if let Some(ifa) = a.multicast_if {
+                        s.set_multicast_if_v4(&ifa)
+                            .map_err(|e| format!("--multicast-if {ifa}: {e}"))?;
+                    }
+                } else if group.is_broadcast() {
+                    s.set_broadcast(true)
+                        .map_err(|e| format!("--to {group}: broadcast: {e}"))?;
+                }
+            }
+            let s: UdpSocket = s.into();
+            s.set_nonblocking(true)
+                .map_err(|e| format!("non-blocking socket: {e}"))?;
+            Ok(Sink::Udp(s))
+        }
+    }
+}
+
+#[derive(Default)]
+struct Summary {
+    sent: u64,
+    errors: u64,
+    first_error: Option<String>,
+    cigi_answers: u64,
+    elapsed_s: f64,
+    last_frame: u32,
+}
+
+fn json_string(s: &str) -> String {
+    let mut o = String::from('"');
+    for c in s.chars() {
+        match c {
+            '"' => o.push_str("\\\""),
+            '\\' => o.push_str("\\\\"),
+            c if (c as u32) < 0x20 => o.push_str(&format!("\\u{:04x}", c as u32)),
+            c => o.push(c),
+        }
+    }
+    o.push('"');
+    o
+}
+
+fn main() {
+    let argv: Vec<String> = std::env::args().skip(1).collect();
+    let a = match parse_args(&argv) {
+        Ok(Some(a)) => a,
+        Ok(None) => {
+            println!("{HELP}");
+            return;
+        }
+        Err(e) => {
+            eprintln!("aerie-send: {e}");
+            std::process::exit(2);
+        }
+    };
+    let mut sink = match open_sink(&a) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("aerie-send: {e}");
+            std::process::exit(2);
+        }
+    };
+    let ltp = a.origin.map(LocalTangentPlane::new);
+    let dest = match (&sink, a.protocol) {
+        (Sink::Shm(w), _) => w.path().display().to_string(),
+        (Sink::Udp(_), _) => a.to.to_string(),
+    };
+    let mut sum = Summary::default();
+    let start = Instant::now();
+    let mut next_progress = 1.0;
+    let mut buf = [0u8; 256];
+    for i in 0..a.count {
+        let t = i as f64 / a.rate;
+        if a.realtime {
+            let due = start + Duration::from_secs_f64(t);
+            if let Some(d) = due.checked_duration_since(Instant::now()) {
+                std::thread::sleep(d);
+            }
+        }
+        let frame = a.start_frame.wrapping_add(i as u32);
+        let pose = pose_for(&a.script.sample(t), t, u64::from(frame), ltp.as_ref());
+        match (&mut sink, a.protocol) {
+            (Sink::Shm(w), _) => {
+                w.write(&pose);
+                sum.sent += 1;
+            }
+            (Sink::Udp(s), SendProtocol::Udp(p)) => {
+                // Geodetic-only protocols always have an origin here (checked in parse_args).
+                let Some(bytes) = datagram(p, &pose, frame) else {
+                    unreachable!("{p} without --origin")
+                };
+                match s.send_to(&bytes, a.to) {
+                    Ok(_) => sum.sent += 1,
+                    Err(e) => {
+                        sum.errors += 1;
+                        sum.first_error
+                            .get_or_insert_with(|| format!("send to {}: {e}", a.to));
+                    }
+                }
+                // CIGI: count the IG's Start of Frame answers (never waits).
+                while let Ok((n, _)) = s.recv_from(&mut buf) {
+                    if StartOfFrame::decode(&buf[..n]).is_ok() {
+                        sum.cigi_answers += 1;
+                    }
+                }
+            }
+            (Sink::Udp(_), SendProtocol::Shm) => unreachable!("shm protocol opens a shm sink"),
+        }
+        sum.last_frame = frame;
+        let now = start.elapsed().as_secs_f64();
+        if !a.quiet && now >= next_progress {
+            next_progress = now.floor() + 1.0;
+            eprintln!(
+                "aerie-send: {}/{} packets, script t {:.2} s, {} errors",
+                i + 1,
+                a.count,
+                t,
+                sum.errors
+            );
+        }
+    }
+    sum.elapsed_s = start.elapsed().as_secs_f64();
+    let achieved = if a.count > 1 && sum.elapsed_s > 0.0 {
+        (a.count - 1) as f64 / sum.elapsed_s
+    } else {
+        0.0
+    };
+    let mut line = format!(
+        "aerie-send: sent {} {} packets to {dest} in {:.2} s ({:.1} Hz achieved, {} Hz asked), {} errors",
+        sum.sent,
+        a.protocol.name(),
+        sum.elapsed_s,
+        achieved,
+        a.rate,
+        sum.errors
+    );
+    if a.protocol == SendProtocol::Udp(Protocol::Cigi) {
+        line.push_str(&format!(", {} Start of Frame answers", sum.cigi_answers));
+    }
+    if let Some(e) = &sum.first_error {
+        line.push_str(&format!(" (first: {e})"));
+    }
+    println!("{line}");
+    if let Some(path) = &a.json {
+        let json = format!(
+            "{{\"protocol\":{},\"to\":{},\"packets\":{},\"sent\":{},\"errors\":{},\"first_error\":{},\"seconds\":{},\"rate_hz\":{},\"achieved_hz\":{},\"first_frame\":{},\"last_frame\":{},\"cigi_answers\":{},\"geodetic\":{}}}\n",
+            json_string(a.protocol.name()),
+            json_string(&dest),
+            a.count,
+            sum.sent,
+            sum.errors,
+            sum.first_error.as_deref().map_or("null".into(), json_string),
+            sum.elapsed_s,
+            a.rate,
+            achieved,
+            a.start_frame,
+            sum.last_frame,
+            sum.cigi_answers,
+            a.origin.is_some()
+        );
+        if let Err(e) = std::fs::File::create(path).and_then(|mut f| f.write_all(json.as_bytes())) {
+            eprintln!("aerie-send: --json {}: {e}", path.display());
+            std::process::exit(2);
+        }
+    }
+    if sum.sent == 0 && a.count > 0 {
+        std::process::exit(1);
+    }
+}
