@@ -84,6 +84,18 @@ pub trait PoseSource {
     /// The pose to draw for display frame `frame` (0-based), `t_s` seconds after the first
     /// frame began.
     fn pose(&mut self, frame: u64, t_s: f64) -> AircraftPose;
+
+    /// Age of the pose last returned (its packet's arrival to the frame's predicted display
+    /// time), milliseconds, for the overlay; `None` when the source is not a stream.
+    fn pose_age_ms(&self) -> Option<f64> {
+        None
+    }
+
+    /// Set when the source cannot go on (e.g. geodetic poses on a dataset without a
+    /// geo-reference): checked after every pose, the session then ends with this error.
+    fn failure(&mut self) -> Option<String> {
+        None
+    }
 }
 
 impl<F: FnMut(u64, f64) -> AircraftPose> PoseSource for F {
@@ -552,6 +564,9 @@ impl App<'_> {
         }
         self.last_frame = Some(now);
         let pose = self.pose.pose(self.frames, (now - start).as_secs_f64());
+        if let Some(why) = self.pose.failure() {
+            return Err(WindowError::System(why));
+        }
         self.share_selection(&drawable, &pose);
         for (k, ok) in drawable.into_iter().enumerate() {
             let i = self.windows[k].channel;

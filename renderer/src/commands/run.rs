@@ -1,16 +1,26 @@
-//! `aerie run`: the image generator on screen. Opens one window (or fullscreen display) per
-//! channel of a config (`config/presets/*.toml`), all in one process on one device, or only the
-//! channels named with `--channel` (one process per channel, e.g. one machine per projector,
-//! sharing the config). Flies the built-in straight pass until Esc, a closed window, `--frames`
-//! or `--seconds`; prints a summary (frames, frame times, per-channel presentation, validation)
-//! and writes it as JSON with `--json`.
+//! `aerie run`: the image generator. Opens one window (or fullscreen display) per channel of a
+//! config (`config/presets/*.toml`), all in one process on one device, or only the channels
+//! named with `--channel` (one process per channel, e.g. one machine per projector, sharing the
+//! config); or, with `--headless`, renders the same channels offscreen. Runs until Esc, a closed
+//! window, `--frames` or `--seconds`; prints a summary (frames, frame times, per-channel
+//! presentation, pose input, validation) and writes it as JSON with `--json`.
 //!
-//! The aircraft pose comes from a [`PoseSource`]; the built-in pass is [`StraightPassSource`].
-//! A simulator stream plugs in there without touching the presentation code.
+//! The aircraft pose comes from a [`PoseSource`]: the built-in pass ([`StraightPassSource`])
+//! without input, else the simulator stream ([`RunPoses`] over a
+//! [`SimInput`](crate::pose_input::SimInput)): with `--listen`, `--protocol`, `--multicast` or
+//! `--shm-name`, each frame draws `PoseReader::pose_at(predicted display time)` (carried forward
+//! at most `--max-extrapolation-ms`), or with `--sync-frames k` the pose of host frame
+//! newest − k exactly (one process per channel on one stream). `--stats` writes the pose used
+//! per frame ([`crate::stats_csv`]).
 
+use std::net::{IpAddr, Ipv4Addr, SocketAddr, SocketAddrV4};
 use std::path::PathBuf;
+use std::time::Instant;
 
 use aerie_config::{Channel, ChannelDisplay, RenderConfig};
+use aerie_sim_bridge::codec::ProtocolChoice;
+use aerie_sim_bridge::shm::DEFAULT_SHM_NAME;
+use aerie_sim_bridge::{DropReason, DEFAULT_PORT};
 use clap::Args;
 use winit::event_loop::EventLoop;
 
@@ -21,6 +31,8 @@ use crate::cli::{bad_input, prepare_terrain, runtime, Failure};
 use crate::flight::StraightPass;
 use crate::frame::{RendererDesc, TerrainRenderer};
 use crate::output::write_text;
+use crate::pose_input::{counters_text, GeoMapping, InputProtocol, InputSpec, SimInput};
+use crate::stats_csv::{FrameRow, PoseOrigin, StatsWriter};
 use crate::terrain::select::SelectParams;
 use crate::vk::DeviceDesc;
 use crate::window::{
@@ -79,6 +91,91 @@ pub struct RunArgs {
     /// Built-in pass: height above the highest sample of the DEM, metres.
     #[arg(long, default_value_t = 600.0)]
     pub agl: f64,
+    /// Take the aircraft pose from a simulator on this UDP address (default 127.0.0.1:47800
+    /// when --protocol is given; 0.0.0.0:47800 with --multicast).
+    #[arg(long, value_name = "ADDR:PORT")]
+    pub listen: Option<SocketAddr>,
+    /// Pose protocol: auto (detected per datagram), native, cigi, xplane, fgfs, or shm (shared
+    /// memory, see --shm-name). Any input flag turns the input on.
+    #[arg(long, value_parser = parse_input_protocol)]
+    pub protocol: Option<InputProtocol>,
+    /// Shared-memory pose file: a name in /dev/shm or a path (implies --protocol shm).
+    #[arg(long, value_name = "NAME")]
+    pub shm_name: Option<String>,
+    /// Join this IPv4 multicast group (several channel machines on one stream).
+    #[arg(long, value_name = "GROUP")]
+    pub multicast: Option<Ipv4Addr>,
+    /// Accept poses only from these source addresses (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    pub allow: Vec<IpAddr>,
+    /// Carry a pose forward to the frame's display time by at most this much, milliseconds
+    /// (0: draw poses as received).
+    #[arg(long, default_value_t = 100.0, value_name = "MS")]
+    pub max_extrapolation_ms: f64,
+    /// Frame-locked: draw host frame newest − K with its own pose (never extrapolated), so one
+    /// process per channel on one stream draws the same host frame. K ≥ 1 absorbs network
+    /// jitter between machines at the price of K host frames of latency.
+    #[arg(long, value_name = "K")]
+    pub sync_frames: Option<u32>,
+    /// Headless: how long to wait for the first pose before giving up (exit 1), seconds.
+    #[arg(long, default_value_t = 10.0, value_name = "S")]
+    pub wait_pose_s: f64,
+    /// Render offscreen, no window: every channel of the config (or one of --size).
+    #[arg(long)]
+    pub headless: bool,
+    /// Headless: render size of every channel, WxH (default: each channel's resolution).
+    #[arg(long, value_name = "WxH")]
+    pub size: Option<String>,
+    /// Write one CSV row per frame: the pose used, where it came from, frame cost.
+    #[arg(long, value_name = "FILE.csv")]
+    pub stats: Option<PathBuf>,
+    /// Headless: frame rate to pace at.
+    #[arg(long, default_value_t = 60.0)]
+    pub fps: f64,
+    /// Headless: do not pace, render frames back to back.
+    #[arg(long)]
+    pub as_fast_as_possible: bool,
+}
+
+fn parse_input_protocol(s: &str) -> Result<InputProtocol, String> {
+    s.parse()
+}
+
+impl RunArgs {
+    /// The simulator input asked for, if any.
+    pub fn input_spec(&self) -> Option<InputSpec> {
+        let wanted = self.listen.is_some()
+            || self.protocol.is_some()
+            || self.shm_name.is_some()
+            || self.multicast.is_some();
+        if !wanted {
+            return None;
+        }
+        let protocol = match (self.protocol, &self.shm_name) {
+            (Some(p), _) => p,
+            (None, Some(_)) => InputProtocol::Shm,
+            (None, None) => InputProtocol::Udp(ProtocolChoice::Auto),
+        };
+        let host = if self.multicast.is_some() {
+            Ipv4Addr::UNSPECIFIED
+        } else {
+            Ipv4Addr::LOCALHOST
+        };
+        Some(InputSpec {
+            protocol,
+            listen: self
+                .listen
+                .unwrap_or(SocketAddr::V4(SocketAddrV4::new(host, DEFAULT_PORT))),
+            multicast: self.multicast,
+            allow: self.allow.clone(),
+            shm_name: self
+                .shm_name
+                .clone()
+                .unwrap_or_else(|| DEFAULT_SHM_NAME.to_string()),
+            cap_s: self.max_extrapolation_ms / 1e3,
+            sync_frames: self.sync_frames,
+        })
+    }
 }
 
 /// The built-in straight pass as a pose source: the pass restarts at its beginning after
@@ -100,11 +197,255 @@ impl PoseSource for StraightPassSource {
     }
 }
 
+/// The pose of every frame of `aerie run`: the simulator stream when one is configured (the
+/// built-in pass's first pose as a default view while none has arrived), else the built-in
+/// pass. Keeps the figures of the summary and writes the `--stats` rows.
+pub struct RunPoses {
+    pub input: Option<SimInput>,
+    pub builtin: StraightPassSource,
+    /// From a frame's start to its display, seconds: what the pose is carried forward to.
+    pub lead_s: f64,
+    pub stats: Option<StatsWriter>,
+    /// Pose ages of the frames drawn from the stream, milliseconds.
+    pub ages_ms: Vec<f64>,
+    /// Frames drawn from the stream, and how many of them extrapolated.
+    pub input_frames: u64,
+    pub extrapolated: u64,
+    /// Frame-locked frames that drew exactly their target host frame.
+    pub exact_sync: u64,
+    /// Frames drawn with the default view while waiting.
+    pub waiting_frames: u64,
+    said_waiting: bool,
+    got_first: bool,
+    last_age_ms: Option<f64>,
+    last_call: Option<Instant>,
+    /// Why the run must stop (set in the window path, where a pose source cannot return one).
+    pub fail: Option<Failure>,
+}
+
+impl RunPoses {
+    pub fn new(
+        input: Option<SimInput>,
+        builtin: StraightPassSource,
+        lead_s: f64,
+        stats: Option<StatsWriter>,
+    ) -> Self {
+        Self {
+            input,
+            builtin,
+            lead_s,
+            stats,
+            ages_ms: Vec::new(),
+            input_frames: 0,
+            extrapolated: 0,
+            exact_sync: 0,
+            waiting_frames: 0,
+            said_waiting: false,
+            got_first: false,
+            last_age_ms: None,
+            last_call: None,
+            fail: None,
+        }
+    }
+
+    /// The default view while no pose has arrived: the start of the built-in pass.
+    pub fn default_view(&self) -> AircraftPose {
+        let (position, attitude) = self.builtin.pass.pose_at(0.0);
+        AircraftPose { position, attitude }
+    }
+
+    /// The pose of display frame `frame`, `t_s` seconds after the first frame began. `Err`
+    /// (bad input, exit 2) when a pose cannot be placed on this dataset.
+    pub fn next(&mut self, frame: u64, t_s: f64) -> Result<(AircraftPose, PoseOrigin), Failure> {
+        let Some(input) = &mut self.input else {
+            return Ok((self.builtin.pose(frame, t_s), PoseOrigin::Builtin));
+        };
+        match input.sample_now(self.lead_s).map_err(bad_input)? {
+            Some((pose, info)) => {
+                if !self.got_first {
+                    self.got_first = true;
+                    eprintln!(
+                        "first pose from {} (host frame {})",
+                        input.what, info.host_frame
+                    );
+                }
+                self.last_age_ms = Some(info.age_s * 1e3);
+                self.ages_ms.push(info.age_s * 1e3);
+                self.input_frames += 1;
+                self.extrapolated += u64::from(info.extrapolated);
+                self.exact_sync += u64::from(info.sync_target == Some(info.host_frame));
+                Ok((pose, PoseOrigin::Input(info)))
+            }
+            None => {
+                if !self.said_waiting {
+                    self.said_waiting = true;
+                    eprintln!(
+                        "waiting for poses on {}; holding the default view",
+                        input.what
+                    );
+                }
+                self.last_age_ms = None;
+                self.waiting_frames += 1;
+                Ok((self.default_view(), PoseOrigin::Waiting))
+            }
+        }
+    }
+
+    /// Writes a `--stats` row (no-op without --stats).
+    pub fn record(&mut self, row: &FrameRow) -> Result<(), Failure> {
+        match &mut self.stats {
+            Some(w) => w.row(row).map_err(runtime),
+            None => Ok(()),
+        }
+    }
+
+    /// Flushes the stats file.
+    pub fn finish(&mut self) -> Result<(), Failure> {
+        if let Some(i) = &mut self.input {
+            i.stop();
+        }
+        match &mut self.stats {
+            Some(w) => w.flush().map_err(runtime),
+            None => Ok(()),
+        }
+    }
+
+    /// The input part of the summary (`null` without input).
+    pub fn summary_json(&self) -> serde_json::Value {
+        let Some(input) = &self.input else {
+            return serde_json::Value::Null;
+        };
+        let s = input.stats();
+        let mut dropped = serde_json::Map::new();
+        for r in DropReason::ALL {
+            dropped.insert(r.name().to_string(), s.dropped(r).into());
+        }
+        let mut ages = self.ages_ms.clone();
+        ages.sort_by(f64::total_cmp);
+        serde_json::json!({
+            "source": input.what,
+            "received": s.received,
+            "accepted": s.accepted,
+            "without_pose": s.no_pose,
+            "dropped_total": s.dropped_total(),
+            "dropped": dropped,
+            "gaps": s.gaps,
+            "frames_from_stream": self.input_frames,
+            "frames_waiting": self.waiting_frames,
+            "pose_age_ms": {
+                "median": (!ages.is_empty()).then(|| percentile(&ages, 0.5)),
+                "max": ages.last(),
+            },
+            "extrapolated_pct": pct(self.extrapolated, self.input_frames),
+            "sync_frames": input_sync(input),
+            "sync_exact_pct": input_sync(input).map(|_| pct(self.exact_sync, self.input_frames)),
+        })
+    }
+
+    /// One line for the end of the run.
+    pub fn summary_line(&self) -> Option<String> {
+        let input = self.input.as_ref()?;
+        let mut ages = self.ages_ms.clone();
+        ages.sort_by(f64::total_cmp);
+        Some(format!(
+            "poses from {}: {}; {} frames from the stream ({} waiting), pose age median {:.1} ms, max {:.1} ms, {:.0} % extrapolated{}",
+            input.what,
+            counters_text(&input.stats()),
+            self.input_frames,
+            self.waiting_frames,
+            percentile(&ages, 0.5),
+            ages.last().copied().unwrap_or(0.0),
+            pct(self.extrapolated, self.input_frames),
+            match input_sync(input) {
+                Some(k) => format!(
+                    ", frame-locked newest−{k}: {:.0} % exact",
+                    pct(self.exact_sync, self.input_frames)
+                ),
+                None => String::new(),
+            }
+        ))
+    }
+}
+
+fn input_sync(i: &SimInput) -> Option<u32> {
+    i.sync_frames()
+}
+
+fn pct(n: u64, of: u64) -> f64 {
+    if of == 0 {
+        0.0
+    } else {
+        100.0 * n as f64 / of as f64
+    }
+}
+
+impl PoseSource for RunPoses {
+    fn pose(&mut self, frame: u64, t_s: f64) -> AircraftPose {
+        let now = Instant::now();
+        let frame_ms = self.last_call.map(|l| (now - l).as_secs_f64() * 1e3);
+        self.last_call = Some(now);
+        let got = self.next(frame, t_s).and_then(|(pose, origin)| {
+            self.record(&FrameRow {
+                frame,
+                wall_s: t_s,
+                pose,
+                origin,
+                triangles: None,
+                frame_ms,
+            })
+            .map(|_| pose)
+        });
+        match got {
+            Ok(pose) => pose,
+            Err(f) => {
+                self.fail.get_or_insert(f);
+                self.default_view()
+            }
+        }
+    }
+
+    fn pose_age_ms(&self) -> Option<f64> {
+        self.last_age_ms
+    }
+
+    fn failure(&mut self) -> Option<String> {
+        self.fail.as_ref().map(|f| f.message.clone())
+    }
+}
+
+/// Opens the simulator input of the arguments (if any) for dataset `ds`.
+pub fn open_input(
+    a: &RunArgs,
+    ds: &crate::terrain::dataset::Dataset,
+) -> Result<Option<SimInput>, Failure> {
+    let Some(spec) = a.input_spec() else {
+        return Ok(None);
+    };
+    let input = SimInput::open(&spec, GeoMapping::of_dataset(ds)).map_err(runtime)?;
+    eprintln!(
+        "pose input: {}{}",
+        input.what,
+        match spec.sync_frames {
+            Some(k) => format!(", frame-locked to host frame newest−{k}"),
+            None => format!(", extrapolated at most {} ms", a.max_extrapolation_ms),
+        }
+    );
+    Ok(Some(input))
+}
+
+/// The `--stats` file, if asked for.
+pub fn open_stats(a: &RunArgs, geo: Option<GeoMapping>) -> Result<Option<StatsWriter>, Failure> {
+    a.stats
+        .as_ref()
+        .map(|p| StatsWriter::create(p, geo).map_err(runtime))
+        .transpose()
+}
+
 /// Everything decided from the arguments and the config before anything opens.
-struct Plan {
-    config: RenderConfig,
-    source: String,
-    channels: Vec<Channel>,
+pub(crate) struct Plan {
+    pub config: RenderConfig,
+    pub source: String,
+    pub channels: Vec<Channel>,
 }
 
 fn check_args(a: &RunArgs) -> Result<(), Failure> {
@@ -136,10 +477,64 @@ fn check_args(a: &RunArgs) -> Result<(), Failure> {
     if let Some(j) = &a.json {
         check_out_folder("--json", j)?;
     }
+    if let Some(p) = &a.stats {
+        check_out_folder("--stats", p)?;
+    }
+    if !(a.max_extrapolation_ms.is_finite() && a.max_extrapolation_ms >= 0.0) {
+        return Err(bad_input(format!(
+            "--max-extrapolation-ms: {} must be a finite number ≥ 0",
+            a.max_extrapolation_ms
+        )));
+    }
+    for (name, v) in [("--wait-pose-s", a.wait_pose_s), ("--fps", a.fps)] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(bad_input(format!(
+                "{name}: {v} must be a finite positive number"
+            )));
+        }
+    }
+    if a.headless {
+        if a.windowed {
+            return Err(bad_input("--windowed and --headless exclude each other"));
+        }
+        if a.frames.is_none() && a.seconds.is_none() {
+            return Err(bad_input(
+                "--headless: give --frames N or --seconds S (there is no window to close)",
+            ));
+        }
+    } else {
+        for (flag, set) in [
+            ("--size", a.size.is_some()),
+            ("--as-fast-as-possible", a.as_fast_as_possible),
+        ] {
+            if set {
+                return Err(bad_input(format!("{flag}: only with --headless")));
+            }
+        }
+    }
+    if let Some(s) = &a.size {
+        parse_size_arg(s).map_err(|e| bad_input(format!("--size: {e}")))?;
+    }
+    match a.input_spec() {
+        None if a.sync_frames.is_some() => return Err(bad_input(
+            "--sync-frames: needs a pose input (--listen, --protocol, --multicast or --shm-name)",
+        )),
+        Some(spec) if spec.protocol == InputProtocol::Shm => {
+            if a.listen.is_some() || a.multicast.is_some() || !a.allow.is_empty() {
+                return Err(bad_input(
+                    "--protocol shm reads shared memory: --listen, --multicast and --allow apply to UDP only",
+                ));
+            }
+        }
+        Some(_) if a.shm_name.is_some() => {
+            return Err(bad_input("--shm-name: only with --protocol shm"));
+        }
+        _ => {}
+    }
     Ok(())
 }
 
-fn plan(a: &RunArgs) -> Result<Plan, Failure> {
+pub(crate) fn plan(a: &RunArgs) -> Result<Plan, Failure> {
     check_args(a)?;
     let (config, source) = match &a.config {
         Some(p) => (
@@ -205,11 +600,14 @@ fn plan(a: &RunArgs) -> Result<Plan, Failure> {
 pub fn run(a: RunArgs) -> Result<(), Failure> {
     // Arguments and config first: nothing opens when they are bad.
     plan(&a)?;
+    if a.headless {
+        return crate::headless::run(&a).map(|_| ());
+    }
     let mut event_loop = new_event_loop(false).map_err(runtime)?;
     run_on(&mut event_loop, &a).map(|_| ())
 }
 
-fn percentile(sorted: &[f64], p: f64) -> f64 {
+pub(crate) fn percentile(sorted: &[f64], p: f64) -> f64 {
     if sorted.is_empty() {
         return 0.0;
     }
@@ -250,9 +648,18 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
         .unwrap_or(60.0)
         .max(1.0);
     let pass = StraightPass::over(&ds, a.heading, a.pitch, a.speed, a.agl, period_s);
-    let mut source = StraightPassSource { pass, period_s };
+    let input = open_input(a, &ds)?;
+    let geo = GeoMapping::of_dataset(&ds).ok();
+    // Predicted display: one frame after the frame starts (FIFO, frames in flight).
+    let lead_s = 1.0 / 60.0;
+    let mut source = RunPoses::new(
+        input,
+        StraightPassSource { pass, period_s },
+        lead_s,
+        open_stats(a, geo)?,
+    );
     let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
-    let start = source.pose(0, 0.0).position;
+    let start = source.default_view().position;
     renderer.load_terrain(ds, bake, start).map_err(runtime)?;
     let opts = RunOptions {
         max_frames: a.frames,
@@ -269,6 +676,11 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
     let device = renderer.device_name().to_string();
     let counters = renderer.validation_counters();
     renderer.destroy();
+    let finished = source.finish();
+    if let Some(f) = source.fail.take() {
+        return Err(f);
+    }
+    finished?;
     let report = result.map_err(|e| match e {
         WindowError::Channel { channel, key, .. } => {
             // Name the file, the line and column of the key, the key and the reason.
@@ -287,8 +699,13 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
         }
         e => runtime(e),
     })?;
-    let summary = summary_json(&report, &plan, a, &device, &desc, &counters);
+    let mut summary = summary_json(&report, &plan, a, &device, &desc, &counters);
+    summary["input"] = source.summary_json();
+    summary["stats"] = a.stats.as_ref().map(|p| p.display().to_string()).into();
     print_summary(&report, &device, &counters);
+    if let Some(line) = source.summary_line() {
+        println!("{line}");
+    }
     if let Some(path) = &a.json {
         write_text(path, &format!("{summary:#}\n")).map_err(runtime)?;
     }
