@@ -144,6 +144,21 @@ pub struct FlyArgs {
     pub every: u32,
     #[command(flatten)]
     pub gpu: GpuArgs,
+    /// Render every `[[channel]]` of this config (e.g. config/presets/wall3.toml) offscreen from
+    /// the one aircraft pose: `<out>/<channel>/frame_NNNN.png` and a stitched
+    /// `<out>/panorama_NNNN.png`. Sizes, views, frusta and τ come from the config.
+    #[arg(long)]
+    pub channels: Option<PathBuf>,
+    /// With --channels: multiply every channel's resolution by this (e.g. 0.1 for quick runs).
+    #[arg(long, default_value_t = 1.0)]
+    pub channel_scale: f64,
+    /// With --channels: no line along the borders between channels in the panorama.
+    #[arg(long)]
+    pub no_panorama_borders: bool,
+    /// Draw the statistics overlay (frame time, τ, tiles, late tiles, triangles, pose age)
+    /// into the top-left corner of every frame.
+    #[arg(long)]
+    pub overlay: bool,
     /// Output folder (created): frame_NNNN.png, frames.csv, summary.json.
     #[arg(long)]
     pub out: PathBuf,
@@ -435,6 +450,11 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
             return Err(bad_input(format!("{name}: {v} is not finite")));
         }
     }
+    // The channel config is checked before any data is loaded.
+    let channel_plan = match &a.channels {
+        Some(p) => Some(crate::commands::fly::plan_channels(p, a.channel_scale)?),
+        None => None,
+    };
     std::fs::create_dir_all(&a.out).map_err(|e| {
         bad_input(format!(
             "--out {}: cannot create folder: {e}",
@@ -463,7 +483,11 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
         }
         (p, att)
     };
-    let mut r = TerrainRenderer::new(&s.desc).map_err(runtime)?;
+    let mut desc = s.desc.clone();
+    if let Some((_, chans)) = &channel_plan {
+        (desc.width, desc.height) = chans[0].size;
+    }
+    let mut r = TerrainRenderer::new(&desc).map_err(runtime)?;
     let t_upload = Instant::now();
     let up = r.load_terrain(ds, b, pose_at(0.0).0).map_err(runtime)?;
     eprintln!(
@@ -474,6 +498,16 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
         t_upload.elapsed().as_secs_f64(),
         r.device_name()
     );
+    if let Some((_, channels)) = channel_plan {
+        let job = crate::commands::fly::ChannelFlight {
+            args: &a,
+            config_path: a.channels.clone().unwrap_or_default(),
+            channels,
+            pose_at: &pose_at,
+        };
+        return crate::commands::fly::fly_channels(&mut r, job);
+    }
+    let mut overlay = crate::overlay::OverlayState::new(a.overlay);
     let bar = indicatif::ProgressBar::new(a.frames as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, eta {eta}")
@@ -491,9 +525,14 @@ fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {
         let t = f as f64 / a.fps;
         let (pos, att) = pose_at(t);
         let camera = Camera::new(pos, att, s.frustum);
+        r.set_overlay(overlay.panel((s.width, s.height), None));
         let wall = Instant::now();
         let stats = r.render(&camera).map_err(runtime)?;
         frame_ms.push(wall.elapsed().as_secs_f64() * 1e3);
+        overlay.record(
+            wall.elapsed().as_secs_f64() * 1e3,
+            crate::overlay::OverlayInfo::from_stats(&stats, s.desc.select.tau_px),
+        );
         gpu_ms.push(stats.gpu_upload_ms + stats.gpu_terrain_ms);
         triangles.push(stats.triangles as f64);
         late += stats.tiles_late as u64;

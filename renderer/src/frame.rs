@@ -299,6 +299,8 @@ pub struct TerrainRenderer {
     /// Channels sharing one selection (issue 7): when set, every frame selects tiles for all of
     /// them (per tile the largest ρ/τ among the channels that see it), whichever one is drawn.
     channels: Vec<(Camera, (u32, u32), f64)>,
+    /// Statistics panel copied into the top-left corner of every frame while set (overlay.rs).
+    overlay: Option<crate::overlay::Panel>,
     destroyed: bool,
 }
 
@@ -378,6 +380,7 @@ impl TerrainRenderer {
             instances: Default::default(),
             draw_list: Vec::new(),
             channels: Vec::new(),
+            overlay: None,
             destroyed: false,
         };
         let dst = this.tile_index_buffer.raw;
@@ -480,6 +483,11 @@ impl TerrainRenderer {
     /// Empty = select for the camera being drawn only.
     pub fn set_channels(&mut self, channels: Vec<(Camera, (u32, u32), f64)>) {
         self.channels = channels;
+    }
+
+    /// Draws `panel` over the top-left corner of the following frames (None: no overlay).
+    pub fn set_overlay(&mut self, panel: Option<crate::overlay::Panel>) {
+        self.overlay = panel;
     }
 
     /// Changes the LOD decision (mode, τ, curvature...) for the following frames.
@@ -934,7 +942,8 @@ impl TerrainRenderer {
         let t1 = Instant::now();
         let fixed_reserve = 1024
             + (std::mem::size_of::<DrawIndexedIndirect>() * RESOLUTIONS) as u64
-            + (self.selection.items.len() * std::mem::size_of::<TileInstance>()) as u64;
+            + (self.selection.items.len() * std::mem::size_of::<TileInstance>()) as u64
+            + self.overlay.as_ref().map_or(0, |p| p.bytes() + 16);
         let clip_bytes: u64 = clip_jobs.iter().map(ImageUpload::bytes).sum();
         if clip_bytes + fixed_reserve + 64 * clip_jobs.len() as u64 > self.staging.budget() {
             // A jump (or a tiny budget): stream the level updates before this frame.
@@ -999,6 +1008,10 @@ impl TerrainRenderer {
             }
             off_instances = Some(offset);
         }
+        let off_overlay = match &self.overlay {
+            Some(p) if p.bytes() > 0 => Some(self.staging.push(&p.rgba, 16)?),
+            _ => None,
+        };
         stats.bytes_uploaded = self.staging.used();
         stats.cpu_upload_us = t1.elapsed().as_secs_f64() * 1e6;
 
@@ -1083,6 +1096,10 @@ impl TerrainRenderer {
         );
         stats.draw_calls = (draw_count > 0) as u32;
         self.timer.end(d, cmd, i, Pass::Terrain);
+        if let (Some(p), Some(off)) = (&self.overlay, off_overlay) {
+            let extent = (self.target.width, self.target.height);
+            crate::overlay::record_panel_copy(d, cmd, src, off, self.target.colour.raw, extent, p);
+        }
         match present {
             None => {
                 self.target.record_readback(d, cmd);

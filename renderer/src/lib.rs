@@ -13,6 +13,7 @@ pub mod gpu;
 pub mod headless;
 pub mod image_error;
 pub mod output;
+pub mod overlay;
 pub mod panorama;
 pub mod pose_input;
 pub mod stats_csv;

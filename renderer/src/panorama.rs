@@ -135,10 +135,7 @@ pub fn locate(channels: &[PanoramaChannel], dir: DVec3) -> Option<Source> {
     let mut best: Option<(f64, usize, DVec2)> = None;
     for (i, p) in candidates(channels, dir) {
         let (w, h) = (channels[i].size.0 as f64, channels[i].size.1 as f64);
-        let margin = (p.x / w)
-            .min(1.0 - p.x / w)
-            .min(p.y / h)
-            .min(1.0 - p.y / h);
+        let margin = (p.x / w).min(1.0 - p.x / w).min(p.y / h).min(1.0 - p.y / h);
         if best.is_none_or(|(m, _, _)| margin > m) {
             best = Some((margin, i, p));
         }
@@ -169,7 +166,8 @@ impl Canvas {
     /// The direction through the centre of canvas pixel (i, j).
     pub fn pixel_direction(&self, i: u32, j: u32) -> DVec3 {
         let az = self.az0_deg + (i as f64 + 0.5) / self.width as f64 * self.az_span_deg;
-        let el = self.el1_deg - (j as f64 + 0.5) / self.height as f64 * (self.el1_deg - self.el0_deg);
+        let el =
+            self.el1_deg - (j as f64 + 0.5) / self.height as f64 * (self.el1_deg - self.el0_deg);
         direction(az, el)
     }
 }
@@ -461,7 +459,10 @@ mod tests {
 
     #[test]
     fn azimuth_cover_takes_the_complement_of_the_largest_gap() {
-        assert_eq!(azimuth_cover(&[(-90.0, 60.0), (-30.0, 60.0), (30.0, 60.0)]), (-90.0, 180.0));
+        assert_eq!(
+            azimuth_cover(&[(-90.0, 60.0), (-30.0, 60.0), (30.0, 60.0)]),
+            (-90.0, 180.0)
+        );
         // Across ±180: a rear channel (160°..220°) and a front one; the largest gap is 30°..160°,
         // so the canvas runs from 160° through the tail to +30°.
         let (s, span) = azimuth_cover(&[(160.0, 60.0), (-30.0, 60.0)]);
@@ -483,8 +484,13 @@ mod tests {
         assert!((c.az0_deg + 90.0).abs() < 1e-9, "{c:?}");
         assert!((c.az_span_deg - 180.0).abs() < 1e-9, "{c:?}");
         // Vertical half-angle at the centre of the top edge: atan(tan 30° · 90/160).
-        let v = (30f64.to_radians().tan() * 90.0 / 160.0).atan().to_degrees();
-        assert!((c.el1_deg - v).abs() < 1e-6 && (c.el0_deg + v).abs() < 1e-6, "{c:?}");
+        let v = (30f64.to_radians().tan() * 90.0 / 160.0)
+            .atan()
+            .to_degrees();
+        assert!(
+            (c.el1_deg - v).abs() < 1e-6 && (c.el0_deg + v).abs() < 1e-6,
+            "{c:?}"
+        );
         // 160 px over tan 30° · 2 on the axis.
         let ppd = 160.0 / (2.0 * 30f64.to_radians().tan()) * std::f64::consts::PI / 180.0;
         assert_eq!(c.width, (180.0 * ppd).round() as u32);

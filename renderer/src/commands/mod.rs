@@ -3,6 +3,7 @@
 
 pub mod bake;
 pub mod bench;
+pub mod fly;
 pub mod gen_dem;
 pub mod listen;
 pub mod replay;

@@ -36,7 +36,10 @@ impl OffscreenTarget {
                 width,
                 height,
                 format: COLOUR_FORMAT,
-                usage: vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+                // TRANSFER_DST: the overlay panel is copied into the top-left corner.
+                usage: vk::ImageUsageFlags::COLOR_ATTACHMENT
+                    | vk::ImageUsageFlags::TRANSFER_SRC
+                    | vk::ImageUsageFlags::TRANSFER_DST,
                 aspect: vk::ImageAspectFlags::COLOR,
                 layers: 0,
             },
