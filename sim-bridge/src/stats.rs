@@ -1,7 +1,10 @@
 //! Input counters: shared between the receiving thread (writes, relaxed atomics) and whoever
 //! reports them (reads a [`StatsSnapshot`]). No locks.
 
-use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::sync::atomic::{
+    AtomicU64,
+    Ordering::{Acquire, Relaxed, Release},
+};
 
 /// Why a datagram (or shared-memory sample) was not used. Each is counted separately.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -94,8 +97,11 @@ impl Counters {
         self.received.fetch_add(1, Relaxed);
     }
     /// One more pose accepted, arriving at `arrival_s` (seconds on the monotonic timeline).
+    /// Called after the pose was published to the reader; the release pairs with the acquire
+    /// in [`snapshot`](Self::snapshot), so whoever reads `accepted = n` and then polls the
+    /// reader gets the n-th accepted pose or a newer one (the flood test relies on it).
     pub(crate) fn accepted(&self, arrival_s: f64) {
-        if self.accepted.fetch_add(1, Relaxed) == 0 {
+        if self.accepted.fetch_add(1, Release) == 0 {
             self.first_accept_bits.store(arrival_s.to_bits(), Relaxed);
         }
         self.last_accept_bits.store(arrival_s.to_bits(), Relaxed);
@@ -123,7 +129,8 @@ impl Counters {
         self.busy.fetch_add(1, Relaxed);
     }
 
-    /// A consistent-enough copy for reporting (each counter read once, relaxed).
+    /// A consistent-enough copy for reporting (each counter read once; `accepted` with
+    /// acquire, see [`accepted`](Self::accepted)).
     pub fn snapshot(&self) -> StatsSnapshot {
         let mut dropped = [0; DropReason::ALL.len()];
         for (d, a) in dropped.iter_mut().zip(&self.dropped) {
@@ -131,7 +138,7 @@ impl Counters {
         }
         StatsSnapshot {
             received: self.received.load(Relaxed),
-            accepted: self.accepted.load(Relaxed),
+            accepted: self.accepted.load(Acquire),
             no_pose: self.no_pose.load(Relaxed),
             dropped,
             gaps: self.gaps.load(Relaxed),

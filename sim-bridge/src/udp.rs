@@ -1,6 +1,7 @@
 //! UDP transport: a receiver thread per port, handing the newest valid pose to the frame loop
 //! through a [`PoseReader`] (lock-free), answering CIGI hosts with Start of Frame, optionally
-//! joining a multicast group, filtering senders and recording every datagram.
+//! joining a multicast group (the port shared with other processes on the host), filtering
+//! senders and recording every datagram.
 
 use std::io;
 use std::net::{IpAddr, Ipv4Addr, SocketAddr, SocketAddrV4, UdpSocket};
@@ -73,6 +74,9 @@ pub struct UdpConfig {
     pub sequence: SequenceParams,
     /// Extrapolation limits for the reader.
     pub extrapolation: ExtrapolationParams,
+    /// Kernel receive buffer (`SO_RCVBUF`) to ask for, bytes; `None` keeps the system default
+    /// (≈ 200 kB on Linux, ~1,500 datagrams). The kernel may cap it (`net.core.rmem_max`).
+    pub recv_buffer_bytes: Option<usize>,
 }
 
 impl Default for UdpConfig {
@@ -88,8 +92,92 @@ impl Default for UdpConfig {
             xplane_rpos: None,
             sequence: SequenceParams::default(),
             extrapolation: ExtrapolationParams::default(),
+            recv_buffer_bytes: None,
         }
     }
+}
+
+/// Socket options a port needs before `bind`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BindOptions {
+    /// `SO_REUSEADDR` (and `SO_REUSEPORT` where the platform has it): several processes on
+    /// one host bind the same multicast port and each gets every group datagram. Only for
+    /// multicast ports: on a unicast port it would let a second aerie silently share (and
+    /// split) the stream instead of failing with "address in use".
+    pub reuse: bool,
+    /// `SO_RCVBUF`, bytes.
+    pub recv_buffer_bytes: Option<usize>,
+}
+
+/// The options for `cfg` (plain decision; [`UdpReceiver::spawn`] applies them).
+pub fn bind_options(cfg: &UdpConfig) -> BindOptions {
+    BindOptions {
+        reuse: cfg.multicast.is_some(),
+        recv_buffer_bytes: cfg.recv_buffer_bytes,
+    }
+}
+
+/// Creates the socket, applies `opts` and binds `addr`.
+fn bind_socket(addr: SocketAddr, opts: BindOptions) -> io::Result<UdpSocket> {
+    use socket2::{Domain, Socket, Type};
+    let s = Socket::new(
+        Domain::for_address(addr),
+        Type::DGRAM,
+        Some(socket2::Protocol::UDP),
+    )?;
+    if opts.reuse {
+        s.set_reuse_address(true)
+            .map_err(ctx("set SO_REUSEADDR".into()))?;
+        #[cfg(all(unix, not(any(target_os = "solaris", target_os = "illumos"))))]
+        s.set_reuse_port(true)
+            .map_err(ctx("set SO_REUSEPORT".into()))?;
+    }
+    if let Some(n) = opts.recv_buffer_bytes {
+        s.set_recv_buffer_size(n)
+            .map_err(ctx(format!("set SO_RCVBUF {n}")))?;
+    }
+    s.bind(&addr.into())?;
+    Ok(s.into())
+}
+
+/// A socket for sending to an IPv4 multicast group from `interface` (`0.0.0.0`: the kernel
+/// chooses by its routes; `127.0.0.1`: stay on this host, the way tests and one-machine setups
+/// want it), with `IP_MULTICAST_LOOP` on so receivers on the sending host get the datagrams.
+pub fn multicast_sender(interface: Ipv4Addr) -> io::Result<UdpSocket> {
+    let s = socket2::Socket::from(
+        UdpSocket::bind((Ipv4Addr::UNSPECIFIED, 0)).map_err(ctx("bind 0.0.0.0:0".into()))?,
+    );
+    s.set_multicast_loop_v4(true)
+        .map_err(ctx("set IP_MULTICAST_LOOP".into()))?;
+    if !interface.is_unspecified() {
+        s.set_multicast_if_v4(&interface)
+            .map_err(ctx(format!("set IP_MULTICAST_IF {interface}")))?;
+    }
+    Ok(s.into())
+}
+
+/// The kernel's drop count for the IPv4 UDP socket bound to local `port`, from the text of
+/// Linux's `/proc/net/udp` (the last column, `drops`: datagrams lost because the socket's
+/// receive buffer was full). Sums every socket on the port. `None` if no line matches.
+pub fn kernel_drops_in(proc_net_udp: &str, port: u16) -> Option<u64> {
+    let want = format!(":{port:04X}");
+    let mut total = None;
+    for line in proc_net_udp.lines().skip(1) {
+        let cols: Vec<&str> = line.split_whitespace().collect();
+        if cols.len() < 2 || !cols[1].ends_with(&want) {
+            continue;
+        }
+        if let Some(d) = cols.last().and_then(|d| d.parse::<u64>().ok()) {
+            *total.get_or_insert(0) += d;
+        }
+    }
+    total
+}
+
+/// [`kernel_drops_in`] on this host's `/proc/net/udp` (Linux; `None` elsewhere).
+pub fn kernel_drops(port: u16) -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/net/udp").ok()?;
+    kernel_drops_in(&text, port)
 }
 
 /// A running receiver thread. Dropping it stops the thread.
@@ -121,7 +209,8 @@ impl UdpReceiver {
     /// Binds, joins the multicast group, creates the recording, and starts the thread.
     /// Errors name the address or file.
     pub fn spawn(cfg: UdpConfig) -> io::Result<(UdpReceiver, PoseReader)> {
-        let socket = UdpSocket::bind(cfg.bind).map_err(ctx(format!("bind {}", cfg.bind)))?;
+        let socket =
+            bind_socket(cfg.bind, bind_options(&cfg)).map_err(ctx(format!("bind {}", cfg.bind)))?;
         if let Some(group) = cfg.multicast {
             socket
                 .join_multicast_v4(&group, &cfg.multicast_interface)
@@ -289,5 +378,47 @@ fn receive_loop(
     match record_error {
         Some(e) => Err(e),
         None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reuse_only_for_multicast_ports() {
+        let mut cfg = UdpConfig::default();
+        assert!(!bind_options(&cfg).reuse);
+        cfg.multicast = Some(Ipv4Addr::new(239, 255, 0, 1));
+        cfg.recv_buffer_bytes = Some(1 << 20);
+        assert_eq!(
+            bind_options(&cfg),
+            BindOptions {
+                reuse: true,
+                recv_buffer_bytes: Some(1 << 20)
+            }
+        );
+    }
+
+    #[test]
+    fn unicast_port_is_not_shared() {
+        let a = bind_socket(
+            "127.0.0.1:0".parse().unwrap(),
+            bind_options(&UdpConfig::default()),
+        )
+        .unwrap();
+        let taken = a.local_addr().unwrap();
+        assert!(bind_socket(taken, bind_options(&UdpConfig::default())).is_err());
+    }
+
+    #[test]
+    fn kernel_drops_are_read_from_proc_net_udp() {
+        let text = "   sl  local_address rem_address   st tx_queue rx_queue tr tm->when retrnsmt   uid  timeout inode ref pointer drops\n\
+  215: 0100007F:BAB8 00000000:0000 07 00000000:00000000 00:00000000 00000000  1000        0 123 2 0000000000000000 17\n\
+  300: 00000000:BAB8 00000000:0000 07 00000000:00000000 00:00000000 00000000  1000        0 124 2 0000000000000000 3\n\
+  301: 0100007F:0035 00000000:0000 07 00000000:00000000 00:00000000 00000000     0        0 125 2 0000000000000000 9\n";
+        assert_eq!(kernel_drops_in(text, 0xBAB8), Some(20));
+        assert_eq!(kernel_drops_in(text, 53), Some(9));
+        assert_eq!(kernel_drops_in(text, 1), None);
     }
 }

@@ -12,6 +12,7 @@ use aerie_sim_bridge::geodesy::{Geodetic, LocalTangentPlane};
 use aerie_sim_bridge::script::{Script, Straight, Waypoints};
 use aerie_sim_bridge::send::{datagram, packet_count, pose_for, SendProtocol};
 use aerie_sim_bridge::shm::{shm_path, ShmWriter, DEFAULT_SHM_NAME};
+use aerie_sim_bridge::udp::multicast_sender;
 use aerie_sim_bridge::{Protocol, DEFAULT_PORT};
 
 const HELP: &str = "\
@@ -200,24 +201,20 @@ fn open_sink(a: &Args) -> Result<Sink, String> {
             } else {
                 (std::net::Ipv6Addr::UNSPECIFIED, 0).into()
             };
-            let s = socket2::Socket::from(
-                UdpSocket::bind(any).map_err(|e| format!("bind {any}: {e}"))?,
-            );
-            if let IpAddr::V4(group) = a.to.ip() {
-                if group.is_multicast() {
-                    // Loop back so receivers on this host (other channels, tests) get it too.
-                    s.set_multicast_loop_v4(true)
-                        .map_err(|e| format!("--to {group}: multicast loop: {e}"))?;
-                    if let Some(ifa) = a.multicast_if {
-                        s.set_multicast_if_v4(&ifa)
-                            .map_err(|e| format!("--multicast-if {ifa}: {e}"))?;
-                    }
-                } else if group.is_broadcast() {
-                    s.set_broadcast(true)
-                        .map_err(|e| format!("--to {group}: broadcast: {e}"))?;
+            let s = match a.to.ip() {
+                IpAddr::V4(group) if group.is_multicast() => {
+                    multicast_sender(a.multicast_if.unwrap_or(Ipv4Addr::UNSPECIFIED))
+                        .map_err(|e| format!("--to {group}: {e}"))?
                 }
-            }
-            let s: UdpSocket = s.into();
+                ip => {
+                    let s = UdpSocket::bind(any).map_err(|e| format!("bind {any}: {e}"))?;
+                    if matches!(ip, IpAddr::V4(v4) if v4.is_broadcast()) {
+                        s.set_broadcast(true)
+                            .map_err(|e| format!("--to {ip}: broadcast: {e}"))?;
+                    }
+                    s
+                }
+            };
             s.set_nonblocking(true)
                 .map_err(|e| format!("non-blocking socket: {e}"))?;
             Ok(Sink::Udp(s))
