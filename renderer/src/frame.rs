@@ -41,8 +41,12 @@ use crate::vk::{
 pub const DEFAULT_TILE_SIZE: u32 = 17;
 /// Instance groups drawn: unrefined (r = 0) and r = 1..=MAX_REFINEMENT.
 const RESOLUTIONS: usize = MAX_REFINEMENT as usize + 1;
-/// Largest number of m×m instances one frame may draw (48 bytes each per frame in flight).
-const MAX_INSTANCES: usize = 1 << 16;
+/// Largest number of m×m instances one frame may draw (48 bytes each per frame in flight). The
+/// instance buffers start smaller (sized from the ring tiles) and grow on demand up to this —
+/// `full` on a large dataset draws every visible finest node.
+const MAX_INSTANCES: usize = 1 << 20;
+/// Initial instance capacity cap: what every LOD mode but `full` needs at most in practice.
+const INITIAL_MAX_INSTANCES: usize = 1 << 16;
 
 #[derive(Debug, Clone)]
 pub struct RendererDesc {
@@ -188,6 +192,8 @@ struct FrameBuffers {
     uniforms: Buffer,
     instances: Buffer,
     indirect: Buffer,
+    /// TileInstance slots in `instances`.
+    instance_capacity: usize,
 }
 
 impl FrameBuffers {
@@ -270,7 +276,6 @@ struct GpuTerrain {
     caches: Vec<Option<CacheRegion>>,
     pools: Vec<PoolTexture>,
     frame_buffers: Vec<FrameBuffers>,
-    max_instances: usize,
     prev_eye: Option<DVec3>,
 }
 
@@ -680,7 +685,7 @@ impl TerrainRenderer {
         let [cx, cy] = clipmap.dataset_tiles(level_count - 1);
         let ring_tiles =
             (level_count * clipmap.patch_tiles * clipmap.patch_tiles + cx * cy) as usize;
-        let max_instances = (ring_tiles * 16).clamp(4096, MAX_INSTANCES);
+        let max_instances = (ring_tiles * 16).clamp(4096, INITIAL_MAX_INSTANCES);
         let mut frame_buffers = Vec::new();
         for _ in 0..FRAMES_IN_FLIGHT {
             match Self::create_frame_buffers(d, max_instances) {
@@ -705,7 +710,6 @@ impl TerrainRenderer {
             levels,
             pools,
             frame_buffers,
-            max_instances,
             prev_eye: None,
         });
         self.initialise_images()?;
@@ -857,6 +861,7 @@ impl TerrainRenderer {
             uniforms,
             instances,
             indirect,
+            instance_capacity: max_instances.max(1),
         })
     }
 
@@ -985,12 +990,23 @@ impl TerrainRenderer {
             stats.triangles += n as u64 * (range.count as u64 / 3);
         }
         let total_instances = first_instance as usize;
-        if total_instances > t.max_instances {
+        if total_instances > MAX_INSTANCES {
             return Err(VkError::Other(format!(
-                "selection of {total_instances} tiles exceeds the instance buffer ({})",
-                t.max_instances
+                "selection of {total_instances} tiles exceeds the largest instance buffer ({MAX_INSTANCES})"
             )));
         }
+        if total_instances > t.frame_buffers[i].instance_capacity {
+            // Grow this frame's buffers: their fence has signalled (begin_context waited), so
+            // nothing in flight reads them.
+            let grown = Self::create_frame_buffers(
+                &self.device,
+                total_instances.next_power_of_two().min(MAX_INSTANCES),
+            )?;
+            let t = self.terrain.as_mut().expect("checked");
+            let mut old = std::mem::replace(&mut t.frame_buffers[i], grown);
+            old.destroy(&self.device);
+        }
+        let t = self.terrain.as_ref().expect("checked");
         let uniforms = frame_uniforms(camera, t, &self.desc);
         let off_uniforms = self.staging.push(&[uniforms], 16)?;
         let off_draws = self.staging.push(&draws, 4)?;
