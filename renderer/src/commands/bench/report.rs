@@ -406,6 +406,39 @@ fn match_bounded<'a>(summaries: &'a [Summary], base: &Summary) -> Option<(&'a Su
     }
 }
 
+/// `bounded`'s median triangles and frame ms at exactly `target` px of measured max error,
+/// interpolated log-log between the two bounded configurations whose measured errors bracket
+/// it (work falls roughly as a power of the error). None when no pair brackets the target.
+pub(crate) fn bounded_at_error(summaries: &[Summary], target: f64) -> Option<(f64, f64, f64, f64)> {
+    if !(target > 0.0) {
+        return None;
+    }
+    let mut pts: Vec<(f64, f64, f64, f64)> = summaries
+        .iter()
+        .filter(|s| s.config.mode == LodMode::Bounded)
+        .map(|s| {
+            (
+                s.error_px(),
+                s.triangles.median,
+                s.frame_ms.median,
+                s.config.tau_for_error(),
+            )
+        })
+        .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.2 > 0.0)
+        .collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let hi = pts.iter().position(|p| p.0 >= target)?;
+    if pts[hi].0 == target {
+        let p = pts[hi];
+        return Some((p.1, p.2, p.3, p.3));
+    }
+    let lo = hi.checked_sub(1)?;
+    let (a, b) = (pts[lo], pts[hi]);
+    let t = (target.ln() - a.0.ln()) / (b.0.ln() - a.0.ln());
+    let lerp = |x: f64, y: f64| (x.ln() + t * (y.ln() - x.ln())).exp();
+    Some((lerp(a.1, b.1), lerp(a.2, b.2), a.3, b.3))
+}
+
 /// Sentences comparing `bounded` with each baseline at equal measured max error.
 pub(crate) fn comparisons(summaries: &[Summary]) -> Vec<String> {
     let mut out = Vec::new();
@@ -432,6 +465,21 @@ pub(crate) fn comparisons(summaries: &[Summary]) -> Vec<String> {
             base.frame_ms.median,
             ratio(b.gpu_ms.median, base.gpu_ms.median),
         ));
+        if let Some((tris, ms, tau_a, tau_b)) = bounded_at_error(summaries, base.error_px()) {
+            out.push(format!(
+                "vs **{}**, interpolated (log-log between bounded τ={} and τ={}) to exactly its {} px: {:.3}× the triangles ({} vs {}), {:.2}× the median frame time ({:.1} vs {:.1} ms)",
+                base.config.label(),
+                tau_a,
+                tau_b,
+                px(base.error_px()),
+                ratio(tris, base.triangles.median),
+                count(tris),
+                count(base.triangles.median),
+                ratio(ms, base.frame_ms.median),
+                ms,
+                base.frame_ms.median,
+            ));
+        }
     }
     out
 }
@@ -539,5 +587,57 @@ mod tests {
             pareto_front(&pts),
             vec![true, true, false, true, true, false, true]
         );
+    }
+
+    fn summary(mode: LodMode, tau: Option<f64>, err: f64, tris: f64, ms: f64) -> Summary {
+        let q = |v: f64| Quantiles {
+            median: v,
+            p95: v,
+            p99: v,
+            max: v,
+        };
+        Summary {
+            config: BenchConfig { mode, tau_px: tau },
+            frames: 1,
+            frame_ms: q(ms),
+            cpu_ms: q(0.0),
+            gpu_ms: q(ms),
+            triangles: q(tris),
+            instances: q(1.0),
+            draw_calls: q(1.0),
+            bytes_uploaded: q(0.0),
+            bytes_uploaded_mean: 0.0,
+            tiles_drawn: 1,
+            tiles_late: 0,
+            tiles_unbounded: 0,
+            image: Some(ImageSummary {
+                max_px: err,
+                ..Default::default()
+            }),
+            oracle_max_px: None,
+            bound_max_px: None,
+        }
+    }
+
+    #[test]
+    fn bounded_work_is_interpolated_log_log_at_the_baselines_error() {
+        let s = vec![
+            summary(LodMode::Bounded, Some(5.0), 2.0, 400_000.0, 400.0),
+            summary(LodMode::Bounded, Some(20.0), 8.0, 25_000.0, 100.0),
+            summary(LodMode::Bounded, Some(10.0), 4.0, 100_000.0, 200.0),
+            summary(LodMode::Clipmap, None, 5.0, 50_000.0, 150.0),
+        ];
+        // 5 px lies between 4 px (τ=10) and 8 px (τ=20): t = ln(5/4)/ln 2.
+        let (tris, ms, a, b) = bounded_at_error(&s, 5.0).expect("bracketed");
+        let t = (5.0f64 / 4.0).ln() / 2f64.ln();
+        assert!((tris - 100_000.0 * 0.25f64.powf(t)).abs() < 1e-6, "{tris}");
+        assert!((ms - 200.0 * 0.5f64.powf(t)).abs() < 1e-9, "{ms}");
+        assert_eq!((a, b), (10.0, 20.0));
+        // Exactly on a point, and outside the measured range.
+        assert_eq!(bounded_at_error(&s, 4.0).map(|r| r.0), Some(100_000.0));
+        assert_eq!(bounded_at_error(&s, 1.0), None);
+        assert_eq!(bounded_at_error(&s, 9.0), None);
+        let text = comparisons(&s).join("\n");
+        assert!(text.contains("interpolated"), "{text}");
     }
 }
