@@ -338,6 +338,11 @@ impl OverlayState {
         self.last = info;
     }
 
+    /// Records a frame's numbers without a frame time (the first frame of a session).
+    pub fn record_info(&mut self, info: OverlayInfo) {
+        self.last = info;
+    }
+
     pub fn lines(&self, pose_age_ms: Option<f64>) -> Vec<String> {
         overlay_lines(
             median(self.frame_ms.iter().copied()),

@@ -42,7 +42,8 @@ use winit::platform::run_on_demand::EventLoopExtRunOnDemand;
 use winit::window::{Fullscreen, Window, WindowId};
 
 use crate::channel::{channel_camera, AircraftPose};
-use crate::frame::TerrainRenderer;
+use crate::frame::{FrameStats, TerrainRenderer};
+use crate::overlay::{OverlayInfo, OverlayState};
 use crate::vk::swapchain::{choose_present_mode, Acquire, Presented, Surface, Swapchain};
 use crate::vk::{Device, Instance, VkError};
 
@@ -128,6 +129,8 @@ pub struct RunOptions {
     pub max_frames: Option<u64>,
     pub max_seconds: Option<f64>,
     pub actions: Vec<ScheduledAction>,
+    /// Start with the statistics overlay shown (F1 or O toggles it).
+    pub overlay: bool,
 }
 
 /// Why a session ended.
@@ -158,6 +161,8 @@ pub struct ChannelReport {
     pub extents: Vec<[u32; 2]>,
     /// Render resolution of the last frame drawn.
     pub render_size: [u32; 2],
+    /// Frames presented with the statistics overlay on.
+    pub overlay_frames: u64,
 }
 
 /// What a session did.
@@ -341,6 +346,10 @@ pub fn run_channels(
         last_frame: None,
         frame_ms: Vec::new(),
         next_action: 0,
+        overlays: channels
+            .iter()
+            .map(|_| OverlayState::new(opts.overlay))
+            .collect(),
     };
     let loop_result = event_loop.run_app_on_demand(&mut app);
     app.teardown();
@@ -401,6 +410,8 @@ struct App<'a> {
     last_frame: Option<Instant>,
     frame_ms: Vec<f64>,
     next_action: usize,
+    /// Per channel: overlay on/off (toggled together) and its recent numbers.
+    overlays: Vec<OverlayState>,
 }
 
 impl App<'_> {
@@ -568,19 +579,30 @@ impl App<'_> {
             return Err(WindowError::System(why));
         }
         self.share_selection(&drawable, &pose);
+        let pose_age_ms = self.pose.pose_age_ms();
+        // Frame time as seen by the pilot: between the starts of consecutive frames.
+        let frame_ms = self.frame_ms.last().copied();
         for (k, ok) in drawable.into_iter().enumerate() {
             let i = self.windows[k].channel;
             if !ok {
                 self.reports[i].skipped += 1;
                 continue;
             }
-            draw_channel(
+            let stats = draw_channel(
                 self.renderer,
                 &mut self.windows[k],
                 &self.channels[i],
                 &mut self.reports[i],
                 &pose,
+                (&self.overlays[i], pose_age_ms),
             )?;
+            if let Some(stats) = stats {
+                let info = OverlayInfo::from_stats(&stats, self.channels[i].tau_px);
+                match frame_ms {
+                    Some(ms) => self.overlays[i].record(ms, info),
+                    None => self.overlays[i].record_info(info),
+                }
+            }
         }
         self.frames += 1;
         if self.opts.max_frames.is_some_and(|n| self.frames >= n) {
@@ -619,6 +641,13 @@ impl ApplicationHandler for App<'_> {
                     && event.logical_key == Key::Named(NamedKey::Escape) =>
             {
                 self.finish(event_loop, Some(ExitReason::Escape))
+            }
+            WindowEvent::KeyboardInput { event, .. }
+                if is_overlay_toggle(&event.logical_key, event.state, event.repeat) =>
+            {
+                for o in &mut self.overlays {
+                    o.toggle();
+                }
             }
             WindowEvent::Resized(_) | WindowEvent::ScaleFactorChanged { .. } => {
                 if let Some(w) = self.windows.iter_mut().find(|w| w.window.id() == id) {
@@ -795,19 +824,34 @@ fn rebuild(
     Ok(true)
 }
 
-/// Acquires, renders the channel's view into the image and presents it.
+/// True for the key event that toggles the statistics overlay: F1, or O (either case), pressed
+/// (auto-repeat ignored, so holding the key does not make it flicker).
+pub fn is_overlay_toggle(key: &Key, state: ElementState, repeat: bool) -> bool {
+    if state != ElementState::Pressed || repeat {
+        return false;
+    }
+    match key {
+        Key::Named(NamedKey::F1) => true,
+        Key::Character(c) => c.eq_ignore_ascii_case("o"),
+        _ => false,
+    }
+}
+
+/// Acquires, renders the channel's view (with the overlay panel when on) into the image and
+/// presents it. Returns the frame's statistics when a frame was drawn.
 fn draw_channel(
     renderer: &mut TerrainRenderer,
     w: &mut ChannelWindow,
     ch: &Channel,
     report: &mut ChannelReport,
     pose: &AircraftPose,
-) -> Result<(), WindowError> {
+    (overlay, pose_age_ms): (&OverlayState, Option<f64>),
+) -> Result<Option<FrameStats>, WindowError> {
     let acquired = {
         let (instance, device) = renderer.vulkan();
         if (w.stale || w.swapchain.is_none()) && !rebuild(instance, device, w, report)? {
             report.skipped += 1;
-            return Ok(());
+            return Ok(None);
         }
         let mut acquired = None;
         for _ in 0..2 {
@@ -830,7 +874,7 @@ fn draw_channel(
     };
     let Some(image) = acquired else {
         report.skipped += 1;
-        return Ok(());
+        return Ok(None);
     };
     let extent = image.target.extent;
     let (rw, rh) = ch.resolution.unwrap_or((extent.width, extent.height));
@@ -841,7 +885,11 @@ fn draw_channel(
         renderer.set_select_params(params);
     }
     let camera = channel_camera((pose.position, pose.attitude), ch, rw as f64 / rh as f64);
-    renderer.render_frame(&camera, Some(&image.target))?;
+    let panel = overlay.panel((rw, rh), pose_age_ms);
+    let with_overlay = panel.is_some();
+    renderer.set_overlay(panel);
+    let stats = renderer.render_frame(&camera, Some(&image.target))?;
+    renderer.set_overlay(None);
     let (_, device) = renderer.vulkan();
     let sc = w.swapchain.as_ref().expect("acquired from it");
     match sc.present(device, image.index)? {
@@ -852,8 +900,9 @@ fn draw_channel(
         w.stale = true;
     }
     report.presented += 1;
+    report.overlay_frames += with_overlay as u64;
     report.render_size = [rw, rh];
-    Ok(())
+    Ok(Some(stats))
 }
 
 #[cfg(test)]
@@ -939,6 +988,49 @@ mod tests {
             vk_present_mode(PresentMode::Immediate),
             vk::PresentModeKHR::IMMEDIATE
         );
+    }
+
+    #[test]
+    fn f1_and_o_toggle_the_overlay_once_per_press() {
+        use winit::keyboard::SmolStr;
+        let pressed = ElementState::Pressed;
+        let o = Key::Character(SmolStr::new("o"));
+        let big_o = Key::Character(SmolStr::new("O"));
+        let f1 = Key::Named(NamedKey::F1);
+        assert!(is_overlay_toggle(&o, pressed, false));
+        assert!(is_overlay_toggle(&big_o, pressed, false));
+        assert!(is_overlay_toggle(&f1, pressed, false));
+        // Releases and auto-repeat do nothing; other keys neither.
+        assert!(!is_overlay_toggle(&f1, ElementState::Released, false));
+        assert!(!is_overlay_toggle(&o, pressed, true));
+        assert!(!is_overlay_toggle(
+            &Key::Character(SmolStr::new("p")),
+            pressed,
+            false
+        ));
+        assert!(!is_overlay_toggle(
+            &Key::Named(NamedKey::F2),
+            pressed,
+            false
+        ));
+        assert!(!is_overlay_toggle(
+            &Key::Named(NamedKey::Escape),
+            pressed,
+            false
+        ));
+        // A press, its repeats and its release flip the state exactly once.
+        let mut s = OverlayState::new(false);
+        for (state, repeat) in [
+            (pressed, false),
+            (pressed, true),
+            (pressed, true),
+            (ElementState::Released, false),
+        ] {
+            if is_overlay_toggle(&o, state, repeat) {
+                s.toggle();
+            }
+        }
+        assert!(s.is_on());
     }
 
     #[test]

@@ -330,6 +330,7 @@ fn window_presents_60_frames_resizes_twice_and_exits_clean() {
                     },
                 },
             ],
+            ..Default::default()
         };
         let ch = window("main", 0, 0, 320, 180, 0.0);
         session(el, vec![ch], opts, fb, 80)
@@ -688,6 +689,11 @@ impl FakeUser {
     }
 
     fn press_escape(&self, window: u64) {
+        self.press_key(window, x11_dl::keysym::XK_Escape);
+    }
+
+    /// Focuses `window` and presses and releases the key of `keysym` in it (XTest).
+    fn press_key(&self, window: u64, keysym: std::os::raw::c_uint) {
         use x11_dl::xlib;
         unsafe {
             (self.xlib.XSetInputFocus)(
@@ -696,10 +702,7 @@ impl FakeUser {
                 xlib::RevertToParent,
                 xlib::CurrentTime,
             );
-            let key = (self.xlib.XKeysymToKeycode)(
-                self.display,
-                x11_dl::keysym::XK_Escape as std::os::raw::c_ulong,
-            );
+            let key = (self.xlib.XKeysymToKeycode)(self.display, keysym as std::os::raw::c_ulong);
             (self.xtest.XTestFakeKeyEvent)(self.display, key as u32, xlib::True, 0);
             (self.xtest.XTestFakeKeyEvent)(self.display, key as u32, xlib::False, 0);
             (self.xlib.XSync)(self.display, xlib::False);
@@ -884,4 +887,66 @@ fn minimised_window_waits_without_spinning_then_resumes() {
     let longest = report.frame_ms.iter().cloned().fold(0.0, f64::max);
     assert!(longest >= hidden_ms as f64, "{longest} ms");
     assert_eq!(report.channels[0].presented, 30);
+}
+
+#[test]
+fn overlay_key_toggles_the_statistics_panel_on_screen() {
+    if framebuffer().is_none() {
+        if ui().is_some() {
+            note!("skipped: needs the private Xvfb to fake key presses");
+        }
+        return;
+    }
+    let fb = framebuffer();
+    let out = on_ui(move |el| {
+        let opts = RunOptions {
+            max_frames: Some(40),
+            ..Default::default()
+        };
+        let user = FakeUser::open();
+        let (x, y, w, h) = (300, 520, 160, 90);
+        let ch = window("overlay", x, y, w, h, 0.0);
+        let (mut before, mut after, mut pressed_at) = (None, None, None);
+        let (result, _) = session_with(el, vec![ch], opts, |frame| {
+            let grab = || fb.as_deref().map(Screen::grab);
+            if frame == 8 {
+                before = grab();
+            }
+            if frame >= 10 && pressed_at.is_none() {
+                if let Some(win) = user.find(x, y, w as i32, h as i32) {
+                    user.press_key(win, x11_dl::keysym::XK_o);
+                    pressed_at = Some(frame);
+                }
+            }
+            if frame == 36 {
+                after = grab();
+            }
+        });
+        (result, before, after, pressed_at)
+    });
+    let Some((result, before, after, pressed_at)) = out else {
+        return;
+    };
+    let report = result.expect("session");
+    let pressed = pressed_at.expect("our window was found on the X server");
+    let c = &report.channels[0];
+    assert_eq!(c.presented, 40);
+    // Off until the key, on after it: some frames with and some without.
+    assert!(
+        c.overlay_frames > 0 && c.overlay_frames <= 40 - pressed,
+        "{} overlay frames, key at frame {pressed}",
+        c.overlay_frames
+    );
+    // On screen: the top-left corner (inside the panel's padding) shows sky before and the
+    // panel's dark background after.
+    let (before, after) = (before.expect("grab"), after.expect("grab"));
+    assert!(is_sky(before.rgb(302, 522)), "{:?}", before.rgb(302, 522));
+    let dark = after.rgb(302, 522);
+    assert!(dark.iter().all(|&v| v < 50), "{dark:?}");
+    // Outside the panel the picture is still the terrain view (sky at the top right).
+    assert!(
+        is_sky(after.rgb(300 + 155, 522)),
+        "{:?}",
+        after.rgb(455, 522)
+    );
 }

@@ -62,6 +62,10 @@ pub struct RunArgs {
     /// Stop after this many seconds.
     #[arg(long)]
     pub seconds: Option<f64>,
+    /// Start with the statistics overlay shown (frame time, τ, tiles, late tiles, triangles,
+    /// pose age); F1 or O toggles it in a window.
+    #[arg(long)]
+    pub overlay: bool,
     /// Also write the summary as JSON to this file.
     #[arg(long)]
     pub json: Option<PathBuf>,
@@ -665,6 +669,7 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
         max_frames: a.frames,
         max_seconds: a.seconds,
         actions: Vec::new(),
+        overlay: a.overlay,
     };
     let result = run_channels(
         event_loop,
