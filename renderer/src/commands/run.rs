@@ -523,14 +523,15 @@ fn check_args(a: &RunArgs) -> Result<(), Failure> {
         None if a.sync_frames.is_some() => return Err(bad_input(
             "--sync-frames: needs a pose input (--listen, --protocol, --multicast or --shm-name)",
         )),
-        Some(spec) if spec.protocol == InputProtocol::Shm => {
-            if a.listen.is_some() || a.multicast.is_some() || !a.allow.is_empty() {
-                return Err(bad_input(
-                    "--protocol shm reads shared memory: --listen, --multicast and --allow apply to UDP only",
-                ));
-            }
+        Some(spec)
+            if spec.protocol == InputProtocol::Shm
+                && (a.listen.is_some() || a.multicast.is_some() || !a.allow.is_empty()) =>
+        {
+            return Err(bad_input(
+                "--protocol shm reads shared memory: --listen, --multicast and --allow apply to UDP only",
+            ));
         }
-        Some(_) if a.shm_name.is_some() => {
+        Some(spec) if spec.protocol != InputProtocol::Shm && a.shm_name.is_some() => {
             return Err(bad_input("--shm-name: only with --protocol shm"));
         }
         _ => {}

@@ -1,0 +1,603 @@
+//! `aerie run` as the image generator fed by a simulator (issue 6 item 7, issue 7 item 4), end to
+//! end through real processes: `aerie-send` (or a sender thread) → UDP / shared memory →
+//! `aerie run --headless` → its `--stats` CSV. For every rendered frame the camera the renderer
+//! used must equal the sent pose (after the geodetic → dataset-grid conversion) within 1 mm and
+//! 0.001°. Debug builds run with the validation layer on and `aerie run` exits non-zero on any
+//! validation message, so a clean exit also means a clean validation log.
+//!
+//! The binaries are found next to this test's executable (target/<profile>/); if `aerie-send` or
+//! `aerie` is missing they are built once with cargo.
+
+use std::collections::HashMap;
+use std::net::UdpSocket;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, OnceLock};
+use std::time::{Duration, Instant};
+
+use aerie::flight::Waypoints;
+use aerie_sim_bridge::codec::native;
+use aerie_sim_bridge::{Geodetic, LocalTangentPlane, Pose, PosePosition};
+
+const MM: f64 = 1e-3;
+const DEG: f64 = 1e-3;
+
+/// target/<profile>/, where cargo puts the binaries (this test runs from target/<profile>/deps).
+fn bin_dir() -> PathBuf {
+    let exe = std::env::current_exe().expect("test executable path");
+    exe.parent()
+        .and_then(Path::parent)
+        .expect("target/<profile>/deps/<test>")
+        .to_path_buf()
+}
+
+fn bins() -> &'static (PathBuf, PathBuf) {
+    static BINS: OnceLock<(PathBuf, PathBuf)> = OnceLock::new();
+    BINS.get_or_init(|| {
+        let dir = bin_dir();
+        let (aerie, send) = (dir.join("aerie"), dir.join("aerie-send"));
+        if !aerie.is_file() || !send.is_file() {
+            let status = Command::new(env!("CARGO"))
+                .args([
+                    "build",
+                    "-p",
+                    "aerie",
+                    "--bin",
+                    "aerie",
+                    "-p",
+                    "aerie-sim-bridge",
+                    "--bin",
+                    "aerie-send",
+                ])
+                .current_dir(aerie_tests::repo_root())
+                .status()
+                .expect("run cargo build");
+            assert!(status.success(), "cargo build of aerie / aerie-send failed");
+        }
+        (aerie, send)
+    })
+}
+
+/// The demo DEM copied (with its bake, made once) into a folder shared by every test here, so
+/// processes running at the same time never write a bake next to each other's data.
+fn demo_dem() -> PathBuf {
+    static DEM: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
+    let (_, p) = DEM.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("N47E011.hgt.zip");
+        std::fs::copy(aerie_tests::demo_dem(), &p).unwrap();
+        let out = Command::new(&bins().0)
+            .arg("bake")
+            .arg(&p)
+            .output()
+            .expect("run aerie bake");
+        assert!(out.status.success(), "bake: {}", text(&out.stderr));
+        (dir, p)
+    });
+    p.clone()
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn free_port() -> u16 {
+    UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+fn spawn(bin: &Path, args: &[String]) -> Child {
+    Command::new(bin)
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap_or_else(|e| panic!("spawn {}: {e}", bin.display()))
+}
+
+/// Waits for `child` at most `limit`; kills it (and fails) when it takes longer.
+fn wait(mut child: Child, limit: Duration, what: &str) -> Output {
+    let start = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            return child.wait_with_output().unwrap();
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let out = child.wait_with_output().unwrap();
+            panic!(
+                "{what} did not finish within {limit:?}; stderr:\n{}",
+                text(&out.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Stops a sender that runs longer than the renderer needs.
+fn stop(mut child: Child) {
+    let _ = child.kill();
+    let _ = child.wait();
+}
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+fn args(list: &[&str]) -> Vec<String> {
+    list.iter().map(|a| a.to_string()).collect()
+}
+
+type Row = HashMap<String, String>;
+
+fn read_csv(path: &Path) -> Vec<Row> {
+    let t = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = t.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    lines
+        .map(|l| {
+            let cols: Vec<&str> = l.split(',').collect();
+            assert_eq!(cols.len(), header.len(), "{l}");
+            header
+                .iter()
+                .zip(cols)
+                .map(|(h, c)| (h.to_string(), c.to_string()))
+                .collect()
+        })
+        .collect()
+}
+
+fn num(r: &Row, k: &str) -> f64 {
+    r[k].parse()
+        .unwrap_or_else(|_| panic!("column {k} = {:?} in {r:?}", r[k]))
+}
+
+fn angle_diff(a: f64, b: f64) -> f64 {
+    ((a - b + 540.0).rem_euclid(360.0) - 180.0).abs()
+}
+
+/// A 20 s flight over the Inn valley: climbing, turning through north, rolling.
+const WAYPOINTS: &str = "\
+# t_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg
+0,30000,20000,3500,330,-5,0
+5,29400,21000,3600,350,-3,-10
+10,29300,22100,3700,15,0,12
+20,30200,24000,3650,40,2,0
+";
+
+/// What the stats CSV must show for the pose the sender sent at script time `t`.
+struct Expected {
+    position: [f64; 3],
+    attitude: [f64; 3],
+}
+
+/// Runs `aerie run --headless` on `dem` with `run_args`, then `aerie-send` with `send_args`;
+/// returns the stats rows and the JSON summary.
+fn fly(
+    dir: &Path,
+    dem: &Path,
+    run_args: &[String],
+    send_args: &[String],
+) -> (Vec<Row>, serde_json::Value) {
+    let (aerie, send) = bins();
+    let stats = dir.join("stats.csv");
+    let json = dir.join("run.json");
+    let path = dir.join("flight.csv");
+    std::fs::write(&path, WAYPOINTS).unwrap();
+    let mut a = args(&[
+        "run",
+        "--headless",
+        "--frames",
+        "20",
+        "--size",
+        "160x90",
+        "--max-extrapolation-ms",
+        "0",
+        "--wait-pose-s",
+        "30",
+    ]);
+    a.extend([
+        "--dem".into(),
+        s(dem),
+        "--stats".into(),
+        s(&stats),
+        "--json".into(),
+        s(&json),
+    ]);
+    a.extend_from_slice(run_args);
+    let run = spawn(aerie, &a);
+    let mut b = args(&["--path", &s(&path), "--quiet"]);
+    b.extend_from_slice(send_args);
+    let sender = spawn(send, &b);
+    let out = wait(run, Duration::from_secs(90), "aerie run");
+    stop(sender);
+    assert!(
+        out.status.success(),
+        "aerie run exit {:?}\nstdout:\n{}\nstderr:\n{}",
+        out.status.code(),
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    (read_csv(&stats), summary)
+}
+
+/// Every frame's camera equals `expect(sim time)`; the frames came from the stream, were not
+/// extrapolated, and the aircraft moved during the run.
+fn check_rows(rows: &[Row], summary: &serde_json::Value, expect: impl Fn(f64) -> Expected) {
+    assert_eq!(rows.len(), 20, "one row per frame");
+    assert_eq!(summary["frames"], 20);
+    assert_eq!(summary["validation"]["enabled"], true);
+    assert_eq!(summary["validation"]["errors"], 0);
+    assert_eq!(summary["validation"]["warnings"], 0);
+    assert!(
+        summary["input"]["accepted"].as_u64().unwrap() > 0,
+        "{summary}"
+    );
+    assert_eq!(summary["input"]["dropped_total"], 0, "{summary}");
+    let mut times = Vec::new();
+    for r in rows {
+        assert_eq!(r["stream"], "live", "{r:?}");
+        assert_eq!(r["extrapolated"], "0", "{r:?}");
+        let t = num(r, "sim_time_s");
+        let e = expect(t);
+        for (k, want) in ["x_m", "y_m", "z_m"].iter().zip(e.position) {
+            let got = num(r, k);
+            assert!(
+                (got - want).abs() <= MM,
+                "frame {} t {t}: {k} {got} vs {want}",
+                r["frame"]
+            );
+        }
+        for (k, want) in ["heading_deg", "pitch_deg", "roll_deg"]
+            .iter()
+            .zip(e.attitude)
+        {
+            let got = num(r, k);
+            assert!(
+                angle_diff(got, want) <= DEG,
+                "frame {} t {t}: {k} {got} vs {want}",
+                r["frame"]
+            );
+        }
+        times.push(t);
+    }
+    times.dedup();
+    assert!(
+        times.len() >= 5,
+        "the pose should change during the run: sim times {times:?}"
+    );
+    assert!(times.windows(2).all(|w| w[1] > w[0]), "{times:?}");
+}
+
+fn local_expected(w: &Waypoints) -> impl Fn(f64) -> Expected + '_ {
+    move |t| {
+        let (p, a) = w.pose_at(t);
+        Expected {
+            position: p.to_array(),
+            attitude: [a.heading, a.pitch, a.roll].map(f64::to_degrees),
+        }
+    }
+}
+
+#[test]
+fn native_local_poses_reach_the_camera_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let port = free_port();
+    let to = format!("127.0.0.1:{port}");
+    let (rows, summary) = fly(
+        dir.path(),
+        &demo_dem(),
+        &args(&["--listen", &to, "--protocol", "native"]),
+        &args(&["--protocol", "native", "--to", &to, "--rate", "60"]),
+    );
+    let w = Waypoints::parse(WAYPOINTS, "flight.csv").unwrap();
+    check_rows(&rows, &summary, local_expected(&w));
+    // Host frame = sequence, 1 at script time 0, +1 per 1/60 s.
+    for r in &rows {
+        let f = num(r, "host_frame");
+        assert!(
+            (f - 1.0 - 60.0 * num(r, "sim_time_s")).abs() < 1e-6,
+            "{r:?}"
+        );
+    }
+}
+
+#[test]
+fn cigi_geodetic_poses_land_on_the_dataset_grid() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = demo_dem();
+    let port = free_port();
+    let to = format!("127.0.0.1:{port}");
+    // The sender's local frame is the tangent plane at the dataset's south-west corner.
+    let (lat0, lon0) = (47.0, 11.0);
+    let (rows, summary) = fly(
+        dir.path(),
+        &dem,
+        &args(&["--listen", &to, "--protocol", "cigi"]),
+        // 50 Hz: script times k/50 s are whole 10 µs CIGI timestamp ticks.
+        &args(&[
+            "--protocol",
+            "cigi",
+            "--to",
+            &to,
+            "--rate",
+            "50",
+            "--origin",
+            "47,11,0",
+        ]),
+    );
+    let w = Waypoints::parse(WAYPOINTS, "flight.csv").unwrap();
+    let ltp = LocalTangentPlane::new(Geodetic::new(lat0, lon0, 0.0));
+    // The dataset's grid, restated: x = Δlon / dlon · spacing_x, y = Δlat / dlat · spacing_y.
+    let ds = aerie::terrain::dataset::load_dataset(&dem).unwrap();
+    let (sx, sy) = (ds.hf.spacing_x, ds.hf.spacing_y);
+    let step = 1.0 / 1200.0; // SRTM3
+    let geodetic = |t: f64| {
+        let (p, _) = w.pose_at(t);
+        ltp.enu_to_geodetic(p)
+    };
+    check_rows(&rows, &summary, |t| {
+        let g = geodetic(t);
+        let (_, a) = w.pose_at(t);
+        Expected {
+            position: [
+                (g.lon_deg - lon0) / step * sx,
+                (g.lat_deg - lat0) / step * sy,
+                g.alt_m,
+            ],
+            attitude: [a.heading, a.pitch, a.roll].map(f64::to_degrees),
+        }
+    });
+    // The geodetic columns give back what was sent (1e-8° ≈ 1 mm).
+    for r in &rows {
+        let g = geodetic(num(r, "sim_time_s"));
+        assert!((num(r, "lat_deg") - g.lat_deg).abs() < 1e-8, "{r:?}");
+        assert!((num(r, "lon_deg") - g.lon_deg).abs() < 1e-8, "{r:?}");
+        assert!((num(r, "alt_m") - g.alt_m).abs() < MM, "{r:?}");
+    }
+}
+
+#[test]
+fn shared_memory_poses_reach_the_camera_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = format!("aerie-e2e-{}", std::process::id());
+    let (rows, summary) = fly(
+        dir.path(),
+        &demo_dem(),
+        &args(&["--protocol", "shm", "--shm-name", &name]),
+        &args(&["--protocol", "shm", "--shm-name", &name, "--rate", "60"]),
+    );
+    let _ = std::fs::remove_file(Path::new("/dev/shm").join(&name));
+    let w = Waypoints::parse(WAYPOINTS, "flight.csv").unwrap();
+    check_rows(&rows, &summary, local_expected(&w));
+}
+
+/// The pose of host frame `f` in the frame-locked test: moving and turning every frame.
+fn frame_pose(f: u64) -> Pose {
+    Pose {
+        position: PosePosition::LocalEnu {
+            x: 30000.0 + 2.5 * f as f64,
+            y: 20000.0 + 1.25 * f as f64,
+            z: 3500.0,
+        },
+        attitude_deg: [(f as f64 * 0.7).rem_euclid(360.0), -5.0, 0.0],
+        sim_time_s: f as f64 / 5.0,
+        frame: f,
+        velocity_enu: Some([50.0, 25.0, 0.0]),
+        angular_rates_deg_s: Some([14.0, 0.0, 0.0]),
+    }
+}
+
+#[test]
+fn one_process_per_channel_renders_the_same_host_frame_with_the_same_pose() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = demo_dem();
+    let (aerie, _) = bins();
+    let wall3 = aerie_tests::repo_root().join("config/presets/wall3.toml");
+    let ports = [free_port(), free_port()];
+    let mut runs = Vec::new();
+    for (channel, port) in ["left", "centre"].iter().zip(ports) {
+        let mut a = args(&[
+            "run",
+            "--headless",
+            "--frames",
+            "20",
+            "--size",
+            "160x90",
+            "--sync-frames",
+            "1",
+            "--fps",
+            "10",
+            "--protocol",
+            "native",
+            "--wait-pose-s",
+            "30",
+            "--channel",
+            channel,
+        ]);
+        a.extend([
+            "--config".into(),
+            s(&wall3),
+            "--dem".into(),
+            s(&dem),
+            "--listen".into(),
+            format!("127.0.0.1:{port}"),
+            "--stats".into(),
+            s(&dir.path().join(format!("{channel}.csv"))),
+        ]);
+        runs.push(spawn(aerie, &a));
+    }
+    // One host at 5 Hz, both processes paced at 10 Hz: each host frame is drawn by both most of
+    // the time. Every packet goes to both channel processes (as a multicast would).
+    let done = Arc::new(AtomicBool::new(false));
+    let sender = {
+        let done = done.clone();
+        std::thread::spawn(move || {
+            let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+            let mut f = 1u64;
+            while !done.load(Ordering::Relaxed) && f < 5 * 120 {
+                let bytes = native::encode(&frame_pose(f), f as u32);
+                for p in ports {
+                    socket.send_to(&bytes, ("127.0.0.1", p)).unwrap();
+                }
+                f += 1;
+                std::thread::sleep(Duration::from_millis(200));
+            }
+        })
+    };
+    let outs: Vec<Output> = runs
+        .into_iter()
+        .map(|r| wait(r, Duration::from_secs(90), "aerie run --channel"))
+        .collect();
+    done.store(true, Ordering::Relaxed);
+    sender.join().unwrap();
+    for o in &outs {
+        assert!(
+            o.status.success(),
+            "exit {:?}: {}",
+            o.status.code(),
+            text(&o.stderr)
+        );
+    }
+    let by_frame = |channel: &str| -> HashMap<u64, Row> {
+        let rows = read_csv(&dir.path().join(format!("{channel}.csv")));
+        assert_eq!(rows.len(), 20);
+        rows.into_iter()
+            .map(|r| {
+                let f: u64 = r["host_frame"].parse().unwrap();
+                // Frame-locked: host frame newest − 1 (or older after a loss), drawn with its
+                // own pose exactly as sent, never extrapolated.
+                let target: u64 = r["sync_target"].parse().unwrap();
+                assert!(f <= target, "{r:?}");
+                assert_eq!(r["extrapolated"], "0", "{r:?}");
+                let sent = frame_pose(f);
+                let PosePosition::LocalEnu { x, y, z } = sent.position else {
+                    unreachable!()
+                };
+                assert_eq!([num(&r, "x_m"), num(&r, "y_m"), num(&r, "z_m")], [x, y, z]);
+                assert!(angle_diff(num(&r, "heading_deg"), sent.attitude_deg[0]) < 1e-9);
+                (f, r)
+            })
+            .collect()
+    };
+    let (left, centre) = (by_frame("left"), by_frame("centre"));
+    let pose_columns = [
+        "sim_time_s",
+        "x_m",
+        "y_m",
+        "z_m",
+        "lat_deg",
+        "lon_deg",
+        "alt_m",
+        "heading_deg",
+        "pitch_deg",
+        "roll_deg",
+    ];
+    let mut common = 0;
+    for (f, l) in &left {
+        if let Some(c) = centre.get(f) {
+            common += 1;
+            for k in pose_columns {
+                assert_eq!(l[k], c[k], "host frame {f}: {k} differs between channels");
+            }
+        }
+    }
+    assert!(
+        common >= 3,
+        "only {common} host frames drawn by both channels: left {:?}, centre {:?}",
+        left.keys().collect::<Vec<_>>(),
+        centre.keys().collect::<Vec<_>>()
+    );
+}
+
+#[test]
+fn bad_streams_stop_with_a_clear_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let (aerie, send) = bins();
+    // A dataset without geo-reference fed geodetic poses: exit 2 naming the reason.
+    let (w, h) = (65usize, 65usize);
+    let bytes: Vec<u8> = (0..w * h).flat_map(|_| 500f32.to_le_bytes()).collect();
+    let raw = dir.path().join("flat.f32");
+    std::fs::write(&raw, bytes).unwrap();
+    std::fs::write(
+        dir.path().join("flat.f32.json"),
+        format!(r#"{{"width": {w}, "height": {h}, "spacing_x": 30.0, "spacing_y": 30.0}}"#),
+    )
+    .unwrap();
+    let port = free_port();
+    let to = format!("127.0.0.1:{port}");
+    let mut a = args(&[
+        "run",
+        "--headless",
+        "--frames",
+        "5",
+        "--size",
+        "160x90",
+        "--protocol",
+        "native",
+        "--wait-pose-s",
+        "30",
+        "--listen",
+        &to,
+    ]);
+    a.extend(["--dem".into(), s(&raw)]);
+    let run = spawn(aerie, &a);
+    let sender = spawn(
+        send,
+        &args(&[
+            "--straight",
+            "900,900,1500,90,0,0,100",
+            "--origin",
+            "47,11,0",
+            "--to",
+            &to,
+            "--seconds",
+            "30",
+            "--quiet",
+        ]),
+    );
+    let out = wait(run, Duration::from_secs(60), "aerie run (geodetic)");
+    stop(sender);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("geodetic") && err.contains("no geo-reference"),
+        "{err}"
+    );
+
+    // Nothing arrives: after --wait-pose-s, exit 1 naming the address, protocol and counters.
+    let port = free_port();
+    let mut a = args(&[
+        "run",
+        "--headless",
+        "--frames",
+        "5",
+        "--size",
+        "160x90",
+        "--protocol",
+        "cigi",
+        "--wait-pose-s",
+        "0.5",
+        "--listen",
+    ]);
+    a.extend([format!("127.0.0.1:{port}"), "--dem".into(), s(&raw)]);
+    let out = wait(
+        spawn(aerie, &a),
+        Duration::from_secs(60),
+        "aerie run (silent)",
+    );
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains(&format!("127.0.0.1:{port}")), "{err}");
+    assert!(
+        err.contains("(cigi)") && err.contains("received 0"),
+        "{err}"
+    );
+}
