@@ -18,6 +18,7 @@
 //! Everything is f64; degrees at the API boundary, radians inside.
 
 pub mod codec;
+pub mod fuzzing;
 pub mod geodesy;
 pub mod handoff;
 pub mod ingest;

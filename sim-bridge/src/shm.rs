@@ -422,6 +422,50 @@ fn pose_from_words(v: &[u64; WORDS]) -> Pose {
     }
 }
 
+/// A byte copy of the shared-memory file, decoded (tools, tests and the fuzz target; the live
+/// reader goes through atomics and the seqlock instead).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShmSnapshot {
+    /// The seqlock counter (odd: the copy was taken mid-write and may be torn).
+    pub seq: u64,
+    /// The pose, `None` when `seq` is 0 (never written). Not validated: see [`Pose::validate`].
+    pub pose: Option<Pose>,
+}
+
+/// Decodes a byte copy of the file (host byte order, at least [`SHM_SIZE`] bytes; the file
+/// may be longer). Errors name the byte offset.
+pub fn decode_snapshot(b: &[u8]) -> Result<ShmSnapshot, String> {
+    if b.len() < SHM_SIZE {
+        return Err(format!("{} bytes, the layout needs {SHM_SIZE}", b.len()));
+    }
+    let mut v = [0u64; WORDS];
+    for (i, w) in v.iter_mut().enumerate() {
+        let mut word = [0u8; 8];
+        word.copy_from_slice(&b[i * 8..i * 8 + 8]);
+        *w = u64::from_ne_bytes(word);
+    }
+    let (magic, version, size) = split_header(v[W_HEADER]);
+    if magic != SHM_MAGIC {
+        return Err(format!(
+            "offset 0: magic {magic:#010x}, expected {SHM_MAGIC:#010x}"
+        ));
+    }
+    if version != SHM_VERSION {
+        return Err(format!(
+            "offset 4: version {version}, expected {SHM_VERSION}"
+        ));
+    }
+    if usize::from(size) != SHM_SIZE {
+        return Err(format!("offset 6: size {size}, expected {SHM_SIZE}"));
+    }
+    // Unknown flag bits are ignored, as by the live reader.
+    let seq = v[W_SEQ];
+    Ok(ShmSnapshot {
+        seq,
+        pose: (seq != 0).then(|| pose_from_words(&v)),
+    })
+}
+
 /// A shared-memory input.
 #[derive(Clone, Debug)]
 pub struct ShmConfig {

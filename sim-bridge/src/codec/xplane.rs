@@ -314,6 +314,23 @@ mod tests {
         assert_eq!(decode(&b).unwrap(), p);
     }
 
+    /// X-Plane sends P, Q, R in radians per second (see PROTOCOL.md for the evidence): a
+    /// level standard-rate turn (3°/s) arrives as R = 0.05236 and must come out as a 3°/s
+    /// heading rate — read as degrees it would be 0.052°/s, 57× too slow.
+    #[test]
+    fn rpos_body_rates_are_radians_per_second() {
+        let mut f = golden_fields();
+        (f.pitch_deg, f.roll_deg) = (0.0, 0.0);
+        (f.p_rad_s, f.q_rad_s, f.r_rad_s) = (0.0, 0.0, 3f32.to_radians());
+        let rates = decode(&encode(&f)).unwrap().angular_rates_deg_s.unwrap();
+        assert!((rates[0] - 3.0).abs() < 1e-5, "{rates:?}");
+        assert!(rates[1].abs() < 1e-9 && rates[2].abs() < 1e-9, "{rates:?}");
+        // A roll rate of 10°/s likewise.
+        (f.r_rad_s, f.p_rad_s) = (0.0, 10f32.to_radians());
+        let rates = decode(&encode(&f)).unwrap().angular_rates_deg_s.unwrap();
+        assert!((rates[2] - 10.0).abs() < 1e-5, "{rates:?}");
+    }
+
     #[test]
     fn request_bytes() {
         assert_eq!(rpos_request(60), b"RPOS\x0060\x00");
