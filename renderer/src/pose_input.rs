@@ -493,6 +493,14 @@ impl SimInput {
         self.sample(monotonic_s() + lead_s)
     }
 
+    /// The UDP address bound (port 0 picks one), `None` for shared memory.
+    pub fn local_addr(&self) -> Option<SocketAddr> {
+        match &self.transport {
+            Some(Transport::Udp(rx)) => Some(rx.local_addr()),
+            _ => None,
+        }
+    }
+
     /// `--sync-frames k`.
     pub fn sync_frames(&self) -> Option<u32> {
         self.sync_frames

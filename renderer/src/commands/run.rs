@@ -790,3 +790,128 @@ fn print_summary(report: &RunReport, device: &str, counters: &crate::vk::Validat
         counters.warnings()
     );
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::terrain::dataset::Dataset;
+    use crate::terrain::Heightfield;
+    use aerie_sim_bridge::codec::native;
+    use aerie_sim_bridge::{Pose, PosePosition};
+    use glam::DVec3;
+    use std::time::Duration;
+
+    fn flat() -> Dataset {
+        let n = 65;
+        Dataset::from_heightfield(
+            Heightfield {
+                width: n,
+                height: n,
+                spacing_x: 30.0,
+                spacing_y: 30.0,
+                heights: vec![500.0; n * n],
+                geo: None,
+                voids_filled: 0,
+                spacing_note: String::new(),
+            },
+            "flat".into(),
+        )
+    }
+
+    fn pose(seq: u64, position: PosePosition) -> Pose {
+        Pose {
+            position,
+            attitude_deg: [45.0, -3.0, 7.0],
+            sim_time_s: seq as f64 / 60.0,
+            frame: seq,
+            velocity_enu: Some([100.0, 0.0, 0.0]),
+            angular_rates_deg_s: None,
+        }
+    }
+
+    /// The window path's pose source: default view and a "waiting" row until the first pose,
+    /// then the pose as sent (cap 0), and a bad-input failure for a geodetic pose on a dataset
+    /// without geo-reference (the window loop ends the session on it).
+    #[test]
+    fn stream_source_waits_then_follows_then_fails_on_unplaceable_poses() {
+        let ds = flat();
+        let spec = InputSpec {
+            protocol: InputProtocol::Udp(ProtocolChoice::Auto),
+            listen: "127.0.0.1:0".parse().unwrap(),
+            multicast: None,
+            allow: Vec::new(),
+            shm_name: String::new(),
+            cap_s: 0.0,
+            sync_frames: None,
+        };
+        let input = SimInput::open(&spec, GeoMapping::of_dataset(&ds)).unwrap();
+        let to = input.local_addr().unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let csv = dir.path().join("s.csv");
+        let pass = StraightPass::over(&ds, 70.0, -10.0, 150.0, 600.0, 10.0);
+        let mut src = RunPoses::new(
+            Some(input),
+            StraightPassSource {
+                pass,
+                period_s: 10.0,
+            },
+            0.0,
+            Some(StatsWriter::create(&csv, None).unwrap()),
+        );
+        let held = PoseSource::pose(&mut src, 0, 0.0);
+        assert_eq!(held, src.default_view());
+        assert_eq!((src.waiting_frames, src.input_frames), (1, 0));
+        assert!(src.failure().is_none());
+
+        let socket = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+        let local = PosePosition::LocalEnu {
+            x: 1000.0,
+            y: 900.0,
+            z: 1500.0,
+        };
+        socket
+            .send_to(&native::encode(&pose(1, local), 1), to)
+            .unwrap();
+        let mut frame = 1;
+        let got = loop {
+            let p = PoseSource::pose(&mut src, frame, 0.0);
+            frame += 1;
+            if src.input_frames > 0 {
+                break p;
+            }
+            assert!(frame < 2000, "no pose arrived");
+            std::thread::sleep(Duration::from_millis(1));
+        };
+        assert_eq!(got.position, DVec3::new(1000.0, 900.0, 1500.0));
+        assert!((got.attitude.roll.to_degrees() - 7.0).abs() < 1e-12);
+        assert!(src.pose_age_ms().is_some());
+
+        let geodetic = PosePosition::Geodetic {
+            lat_deg: 47.0,
+            lon_deg: 11.0,
+            alt_m: 1500.0,
+        };
+        socket
+            .send_to(&native::encode(&pose(2, geodetic), 2), to)
+            .unwrap();
+        let why = loop {
+            let _ = PoseSource::pose(&mut src, frame, 0.0);
+            frame += 1;
+            if let Some(w) = src.failure() {
+                break w;
+            }
+            assert!(frame < 4000, "the geodetic pose never failed");
+            std::thread::sleep(Duration::from_millis(1));
+        };
+        assert!(
+            why.contains("geodetic") && why.contains("flat: no geo-reference"),
+            "{why}"
+        );
+        assert_eq!(src.fail.as_ref().unwrap().code, 2);
+        src.finish().unwrap();
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let rows: Vec<&str> = text.lines().skip(1).collect();
+        assert!(rows[0].contains(",waiting,"), "{}", rows[0]);
+        assert!(rows.iter().any(|r| r.contains(",1000,900,1500,")), "{text}");
+    }
+}
