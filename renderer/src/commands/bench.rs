@@ -19,6 +19,7 @@
 mod plot;
 mod report;
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
@@ -466,7 +467,19 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
     let mut rows: Vec<FrameRow> = Vec::new();
     let size = (p.width, p.height);
     let n = lanes.len();
+    // indicatif draws nothing when stderr is not a terminal (CI logs, nohup): print a plain
+    // line per ~10 % of the frames there instead.
+    let plain_progress = !std::io::stderr().is_terminal();
+    let started = Instant::now();
+    let every = (total_frames / 10).max(1);
     for k in 0..total_frames {
+        if plain_progress && k > 0 && k % every == 0 {
+            let elapsed = started.elapsed().as_secs_f64();
+            eprintln!(
+                "bench: {k}/{total_frames} frames × {n} configurations, {elapsed:.0} s elapsed, eta {:.0} s",
+                elapsed / k as f64 * (total_frames - k) as f64
+            );
+        }
         let warmup = k < a.warmup;
         bar.set_message(if warmup {
             format!("warm-up {}/{}", k + 1, a.warmup)

@@ -8,8 +8,8 @@ use glam::{DVec2, DVec3};
 
 use super::bake::ErrorBake;
 use super::clipmap::{ring_tiles, ClipmapDesc, LevelPlacement};
-use super::tiles::{outside_frustum, Aabb};
-use crate::camera::Camera;
+use super::tiles::Aabb;
+use crate::camera::{Camera, Frustum};
 
 /// Mean Earth radius used for the curvature drop d²/2R (DESIGN.md "Earth curvature").
 pub const EARTH_RADIUS_M: f64 = 6_371_000.0;
@@ -216,11 +216,26 @@ pub fn tile_aabb(
 /// near plane.
 pub fn min_view_depth(camera: &Camera, aabb: &Aabb) -> f64 {
     let m = camera.world_to_view();
-    aabb.corners()
+    min_depth_of(&aabb.corners().map(|c| m.transform_point3(c)), camera.near)
+}
+
+/// [`min_view_depth`] of corners already in view space.
+fn min_depth_of(corners: &[DVec3; 8], near: f64) -> f64 {
+    corners
         .iter()
-        .map(|&c| m.transform_point3(c).z)
+        .map(|c| c.z)
         .fold(f64::INFINITY, f64::min)
-        .max(camera.near)
+        .max(near)
+}
+
+/// [`super::tiles::outside_frustum`] of corners already in view space.
+fn outside_of(corners: &[DVec3; 8], f: &Frustum, near: f64) -> bool {
+    let all = |outside: &dyn Fn(&DVec3) -> bool| corners.iter().all(outside);
+    all(&|p| p.z < near)
+        || all(&|p| p.x > f.tan_right * p.z)
+        || all(&|p| p.x < f.tan_left * p.z)
+        || all(&|p| -p.y > f.tan_up * p.z)
+        || all(&|p| -p.y < f.tan_down * p.z)
 }
 
 /// The screen factor of a *vertical* error over the part of a box inside the frustum — the `c`
@@ -237,19 +252,26 @@ pub fn min_view_depth(camera: &Camera, aabb: &Aabb) -> f64 {
 /// overstates the vertical error's projection by up to 1.52×. A corner at or behind the eye
 /// plane falls back to the whole frustum's ranges.
 pub fn box_vertical_gain(camera: &Camera, aabb: &Aabb) -> f64 {
-    let f = camera.frustum;
     let m = camera.world_to_view();
     let w = camera.world_to_view_rotation() * DVec3::Z;
+    vertical_gain_of(
+        &aabb.corners().map(|c| m.transform_point3(c)),
+        &camera.frustum,
+        w,
+    )
+}
+
+/// [`box_vertical_gain`] of corners already in view space; `w` is the world vertical there.
+fn vertical_gain_of(corners: &[DVec3; 8], f: &Frustum, w: DVec3) -> f64 {
     let (mut a_lo, mut a_hi, mut b_lo, mut b_hi) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
         f64::INFINITY,
         f64::NEG_INFINITY,
     );
-    for c in aabb.corners() {
-        let v = m.transform_point3(c);
+    for v in corners {
         if v.z <= 1e-9 {
-            return frustum_vertical_gain(camera);
+            return vertical_gain(w, [f.tan_left, f.tan_right], [-f.tan_up, -f.tan_down]);
         }
         let (a, b) = (v.x / v.z, v.y / v.z);
         (a_lo, a_hi) = (a_lo.min(a), a_hi.max(a));
@@ -311,6 +333,10 @@ struct Frame<'a> {
 /// One channel's camera with what the bound needs from it.
 struct ViewCtx<'a> {
     camera: &'a Camera,
+    /// World → view, computed once per frame (not per node: the attitude's trigonometry).
+    to_view: glam::DMat4,
+    /// The world vertical in view space.
+    up: DVec3,
     focal: f64,
     /// [`frustum_vertical_gain`].
     vertical_gain: f64,
@@ -376,13 +402,15 @@ impl Frame<'_> {
         let (mut rho_px, mut rho_norm) = (0.0f64, 0.0f64);
         for v in &self.views {
             let aabb = self.aabb(level, tx, ty, v.camera.position);
-            if cull && outside_frustum(v.camera, &aabb) {
+            let corners = aabb.corners().map(|c| v.to_view.transform_point3(c));
+            let f = &v.camera.frustum;
+            if cull && outside_of(&corners, f, v.camera.near) {
                 continue;
             }
             seen = true;
-            let z_min = min_view_depth(v.camera, &aabb);
+            let z_min = min_depth_of(&corners, v.camera.near);
             let c = if cull {
-                box_vertical_gain(v.camera, &aabb)
+                vertical_gain_of(&corners, f, v.up)
             } else {
                 v.vertical_gain
             };
@@ -510,6 +538,8 @@ pub fn select_tiles_multi(
             let (fx, fy) = v.camera.frustum.focal_px(v.viewport.0, v.viewport.1);
             ViewCtx {
                 camera: v.camera,
+                to_view: v.camera.world_to_view(),
+                up: v.camera.world_to_view_rotation() * DVec3::Z,
                 focal: fx.max(fy),
                 vertical_gain: frustum_vertical_gain(v.camera),
                 tau: v.tau_px,
@@ -835,6 +865,14 @@ mod tests {
                 max: lo + size,
             };
             let g = box_vertical_gain(&cam, &aabb);
+            // The per-frame fast path agrees with the public functions.
+            let corners = aabb
+                .corners()
+                .map(|c| cam.world_to_view().transform_point3(c));
+            assert_eq!(
+                outside_of(&corners, &cam.frustum, cam.near),
+                crate::terrain::tiles::outside_frustum(&cam, &aabb)
+            );
             assert!(g <= box_obliquity_reference(&cam, &aabb) + 1e-12);
             let (fx, fy) = cam.frustum.focal_px(w, h);
             let eps = 1.0 + rnd() * 20.0;
