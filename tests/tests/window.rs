@@ -567,7 +567,7 @@ fn aerie_run_opens_every_channel_of_wall3_or_only_the_named_one() {
         "20".into(),
     ];
     let mut all = base.clone();
-    all.extend(["--json".to_string(), s(&json)]);
+    all.extend(["--json".to_string(), s(&json), "--overlay".into()]);
     let Some(result) = run_command(all) else {
         return;
     };
@@ -602,6 +602,8 @@ fn aerie_run_opens_every_channel_of_wall3_or_only_the_named_one() {
     assert_eq!(names, ["left", "centre", "right"]);
     for c in summary["channels"].as_array().unwrap() {
         assert_eq!(c["presented"], 20, "{c}");
+        // --overlay: the statistics panel on every frame from the start.
+        assert_eq!(c["overlay_frames"], 20, "{c}");
         assert_eq!(c["render_size"], serde_json::json!([160, 90]), "{c}");
     }
     assert!(summary["frame_ms"]["median"].as_f64().unwrap() > 0.0);
@@ -614,6 +616,10 @@ fn aerie_run_opens_every_channel_of_wall3_or_only_the_named_one() {
         .unwrap_or_else(|(c, m)| panic!("{c}: {m}"));
     assert_eq!(summary["channels"].as_array().unwrap().len(), 1);
     assert_eq!(summary["channels"][0]["name"], "centre");
+    assert_eq!(
+        summary["channels"][0]["overlay_frames"], 0,
+        "off by default"
+    );
 
     // An unknown channel name is bad input listing the channels.
     let mut bad = base.clone();
