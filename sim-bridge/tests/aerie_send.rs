@@ -101,6 +101,42 @@ fn every_protocol_delivers_the_scripted_flight() {
             assert_eq!(got.frame, 114, "{proto}");
             assert!((got.sim_time_s - 0.7).abs() < 1e-9, "{proto}");
         }
+        if proto == "fgfs" {
+            // --log: one row per packet with the wire pose, exact (shortest round trip).
+            let log = dir.path().join("fgfs.csv");
+            let (rx2, _r2) = receiver();
+            let to2 = rx2.local_addr().to_string();
+            let out = send(&[
+                "--path",
+                &path,
+                "--protocol",
+                "fgfs",
+                "--to",
+                &to2,
+                "--rate",
+                "20",
+                "--count",
+                "3",
+                "--origin",
+                "47.26,11.35,600",
+                "--as-fast-as-possible",
+                "--quiet",
+                "--log",
+                log.to_str().unwrap(),
+            ]);
+            assert!(out.status.success(), "{out:?}");
+            let text = std::fs::read_to_string(&log).unwrap();
+            let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split(',').collect()).collect();
+            assert_eq!(rows.len(), 4, "{text}");
+            assert_eq!(rows[0][6], "lat_deg");
+            let last = &rows[3];
+            let want = script.sample(0.1);
+            let g = ltp.enu_to_geodetic(glam::DVec3::from_array(want.position));
+            assert_eq!(last[6].parse::<f64>().unwrap(), g.lat_deg, "{text}");
+            assert_eq!(last[7].parse::<f64>().unwrap(), g.lon_deg, "{text}");
+            assert_eq!(last[3].parse::<f64>().unwrap(), want.position[0], "{text}");
+            assert_eq!(last[15], "1");
+        }
         let j: String = std::fs::read_to_string(&json).unwrap();
         assert!(
             j.contains("\"sent\":15") && j.contains("\"last_frame\":114"),

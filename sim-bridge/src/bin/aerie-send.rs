@@ -9,11 +9,11 @@ use std::time::{Duration, Instant};
 
 use aerie_sim_bridge::codec::cigi::StartOfFrame;
 use aerie_sim_bridge::geodesy::{Geodetic, LocalTangentPlane};
-use aerie_sim_bridge::script::{Script, Straight, Waypoints};
+use aerie_sim_bridge::script::{Script, ScriptSample, Straight, Waypoints};
 use aerie_sim_bridge::send::{datagram, packet_count, pose_for, SendProtocol};
 use aerie_sim_bridge::shm::{shm_path, ShmWriter, DEFAULT_SHM_NAME};
 use aerie_sim_bridge::udp::multicast_sender;
-use aerie_sim_bridge::{Protocol, DEFAULT_PORT};
+use aerie_sim_bridge::{Pose, PosePosition, Protocol, DEFAULT_PORT};
 
 const HELP: &str = "\
 aerie-send: send a scripted flight to aerie, as a flight simulator would
@@ -23,7 +23,7 @@ usage: aerie-send (--path <waypoints.csv> | --straight x,y,z,heading,pitch,roll,
                   [--shm-name <name>] [--rate <Hz>] [--seconds <S> | --count <N>]
                   [--origin lat,lon,alt] [--start-frame <n>]
                   [--realtime | --as-fast-as-possible] [--multicast-if <ipv4>]
-                  [--json <file>] [--quiet]
+                  [--json <file>] [--log <file.csv>] [--quiet]
 
   --path         timed waypoints `t_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg` (aerie fly's)
   --straight     level pass along the heading at speed_mps from x,y,z (local ENU metres)
@@ -40,6 +40,7 @@ usage: aerie-send (--path <waypoints.csv> | --straight x,y,z,heading,pitch,roll,
   --start-frame  first sequence number / CIGI host frame (default 1), +1 per packet
   --as-fast-as-possible  do not pace by --rate (the script time still steps by 1/rate)
   --json         also write the summary as JSON to this file
+  --log          one CSV row per packet: the pose sent (script and wire position)
   --quiet        no progress lines
 
 exit status: 0 sent, 1 nothing could be sent, 2 bad arguments or input";
@@ -56,6 +57,7 @@ struct Args {
     start_frame: u32,
     realtime: bool,
     json: Option<PathBuf>,
+    log: Option<PathBuf>,
     quiet: bool,
 }
 
@@ -105,6 +107,7 @@ fn parse_args(argv: &[String]) -> Result<Option<Args>, String> {
     let mut start_frame = 1u32;
     let mut realtime = true;
     let mut json = None;
+    let mut log = None;
     let mut quiet = false;
     let mut it = argv.iter();
     while let Some(flag) = it.next() {
@@ -132,6 +135,7 @@ fn parse_args(argv: &[String]) -> Result<Option<Args>, String> {
             "--realtime" => realtime = true,
             "--as-fast-as-possible" => realtime = false,
             "--json" => json = Some(PathBuf::from(value()?)),
+            "--log" => log = Some(PathBuf::from(value()?)),
             "--quiet" => quiet = true,
             other => return Err(format!("unknown option {other:?} (see --help)")),
         }
@@ -180,6 +184,7 @@ fn parse_args(argv: &[String]) -> Result<Option<Args>, String> {
         start_frame,
         realtime,
         json,
+        log,
         quiet,
     }))
 }
@@ -220,6 +225,30 @@ fn open_sink(a: &Args) -> Result<Sink, String> {
             Ok(Sink::Udp(s))
         }
     }
+}
+
+const LOG_HEADER: &str = "packet,frame,t_s,x_m,y_m,z_m,lat_deg,lon_deg,alt_m,heading_deg,pitch_deg,roll_deg,ve_mps,vn_mps,vu_mps,sent";
+
+/// One `--log` row: the script's local position and the wire pose (lat/lon/alt empty when
+/// local), shortest round-trip notation so the values read back exactly.
+fn log_row(i: u64, s: &ScriptSample, p: &Pose, sent: bool) -> String {
+    let (lat, lon, alt) = match p.position {
+        PosePosition::Geodetic {
+            lat_deg,
+            lon_deg,
+            alt_m,
+        } => (lat_deg.to_string(), lon_deg.to_string(), alt_m.to_string()),
+        PosePosition::LocalEnu { .. } => Default::default(),
+    };
+    let [x, y, z] = s.position;
+    let [h, pi, r] = p.attitude_deg;
+    let [ve, vn, vu] = p.velocity_enu.unwrap_or([0.0; 3]);
+    format!(
+        "{i},{},{},{x},{y},{z},{lat},{lon},{alt},{h},{pi},{r},{ve},{vn},{vu},{}",
+        p.frame,
+        p.sim_time_s,
+        u8::from(sent)
+    )
 }
 
 #[derive(Default)]
@@ -275,6 +304,18 @@ fn main() {
     let start = Instant::now();
     let mut next_progress = 1.0;
     let mut buf = [0u8; 256];
+    let mut log = match a.log.as_ref().map(|p| (p, std::fs::File::create(p))) {
+        None => None,
+        Some((_, Ok(f))) => {
+            let mut w = std::io::BufWriter::new(f);
+            let _ = writeln!(w, "{LOG_HEADER}");
+            Some(w)
+        }
+        Some((p, Err(e))) => {
+            eprintln!("aerie-send: --log {}: {e}", p.display());
+            std::process::exit(2);
+        }
+    };
     for i in 0..a.count {
         let t = i as f64 / a.rate;
         if a.realtime {
@@ -284,7 +325,9 @@ fn main() {
             }
         }
         let frame = a.start_frame.wrapping_add(i as u32);
-        let pose = pose_for(&a.script.sample(t), t, u64::from(frame), ltp.as_ref());
+        let sample = a.script.sample(t);
+        let pose = pose_for(&sample, t, u64::from(frame), ltp.as_ref());
+        let sent_before = sum.sent;
         match (&mut sink, a.protocol) {
             (Sink::Shm(w), _) => {
                 w.write(&pose);
@@ -313,6 +356,9 @@ fn main() {
             (Sink::Udp(_), SendProtocol::Shm) => unreachable!("shm protocol opens a shm sink"),
         }
         sum.last_frame = frame;
+        if let Some(w) = log.as_mut() {
+            let _ = writeln!(w, "{}", log_row(i, &sample, &pose, sum.sent > sent_before));
+        }
         let now = start.elapsed().as_secs_f64();
         if !a.quiet && now >= next_progress {
             next_progress = now.floor() + 1.0;
@@ -326,6 +372,10 @@ fn main() {
         }
     }
     sum.elapsed_s = start.elapsed().as_secs_f64();
+    if let Some(Err(e)) = log.as_mut().map(|w| w.flush()) {
+        eprintln!("aerie-send: --log: {e}");
+        std::process::exit(2);
+    }
     let achieved = if a.count > 1 && sum.elapsed_s > 0.0 {
         (a.count - 1) as f64 / sum.elapsed_s
     } else {
