@@ -107,7 +107,7 @@ const FONT: [[u8; 5]; 95] = [
     [0x38, 0x44, 0x44, 0x48, 0x7F], // d
     [0x38, 0x54, 0x54, 0x54, 0x18], // e
     [0x08, 0x7E, 0x09, 0x01, 0x02], // f
-    [0x0C, 0x52, 0x52, 0x52, 0x3E], // g
+    [0x08, 0x14, 0x54, 0x54, 0x3C], // g
     [0x7F, 0x08, 0x04, 0x04, 0x78], // h
     [0x00, 0x44, 0x7D, 0x40, 0x00], // i
     [0x20, 0x40, 0x44, 0x3D, 0x00], // j
@@ -249,32 +249,41 @@ impl OverlayInfo {
     }
 }
 
-/// The overlay's text: frame time (median over the last frames; "–" before the first), τ, tiles
-/// and late tiles, triangles, pose age ("–" when the pose source gives none).
+/// The overlay's text: frame time (median over the last frames), τ, tiles and late tiles,
+/// triangles, pose age. "–" stands for what is not known yet (before the first frame) or not
+/// given (no pose stream).
 pub fn overlay_lines(
     frame_ms_median: Option<f64>,
-    info: &OverlayInfo,
+    info: Option<&OverlayInfo>,
     pose_age_ms: Option<f64>,
 ) -> Vec<String> {
-    let dash = "–".to_string();
-    let tri = if info.triangles >= 1_000_000 {
-        format!("{:.2}M", info.triangles as f64 / 1e6)
-    } else if info.triangles >= 10_000 {
-        format!("{:.1}k", info.triangles as f64 / 1e3)
-    } else {
-        info.triangles.to_string()
+    let dash = || "–".to_string();
+    let tri = |n: u64| {
+        if n >= 1_000_000 {
+            format!("{:.2}M", n as f64 / 1e6)
+        } else if n >= 10_000 {
+            format!("{:.1}k", n as f64 / 1e3)
+        } else {
+            n.to_string()
+        }
     };
     vec![
         format!(
             "frame {} ms",
-            frame_ms_median.map_or(dash.clone(), |m| format!("{m:.1}"))
+            frame_ms_median.map_or_else(dash, |m| format!("{m:.1}"))
         ),
-        format!("τ {:.2} px", info.tau_px),
-        format!("tiles {} late {}", info.tiles_drawn, info.tiles_late),
-        format!("tris {tri}"),
+        format!(
+            "τ {} px",
+            info.map_or_else(dash, |i| format!("{:.2}", i.tau_px))
+        ),
+        match info {
+            Some(i) => format!("tiles {} late {}", i.tiles_drawn, i.tiles_late),
+            None => "tiles – late –".to_string(),
+        },
+        format!("tris {}", info.map_or_else(dash, |i| tri(i.triangles))),
         format!(
             "pose age {}",
-            pose_age_ms.map_or(dash, |a| format!("{a:.0} ms"))
+            pose_age_ms.map_or_else(dash, |a| format!("{a:.0} ms"))
         ),
     ]
 }
@@ -304,7 +313,7 @@ pub fn scale_for(target_width: u32) -> u32 {
 pub struct OverlayState {
     on: bool,
     frame_ms: VecDeque<f64>,
-    last: OverlayInfo,
+    last: Option<OverlayInfo>,
 }
 
 impl OverlayState {
@@ -312,7 +321,7 @@ impl OverlayState {
         Self {
             on,
             frame_ms: VecDeque::with_capacity(MEDIAN_WINDOW),
-            last: OverlayInfo::default(),
+            last: None,
         }
     }
 
@@ -335,18 +344,18 @@ impl OverlayState {
             self.frame_ms.pop_front();
         }
         self.frame_ms.push_back(frame_ms);
-        self.last = info;
+        self.last = Some(info);
     }
 
     /// Records a frame's numbers without a frame time (the first frame of a session).
     pub fn record_info(&mut self, info: OverlayInfo) {
-        self.last = info;
+        self.last = Some(info);
     }
 
     pub fn lines(&self, pose_age_ms: Option<f64>) -> Vec<String> {
         overlay_lines(
             median(self.frame_ms.iter().copied()),
-            &self.last,
+            self.last.as_ref(),
             pose_age_ms,
         )
     }
@@ -530,7 +539,7 @@ mod tests {
             tiles_late: 2,
             triangles: 1_234_567,
         };
-        let l = overlay_lines(Some(12.34), &info, None);
+        let l = overlay_lines(Some(12.34), Some(&info), None);
         assert_eq!(
             l,
             [
@@ -541,9 +550,23 @@ mod tests {
                 "pose age –"
             ]
         );
-        assert_eq!(overlay_lines(None, &info, Some(17.4))[4], "pose age 17 ms");
-        assert_eq!(overlay_lines(None, &info, None)[0], "frame – ms");
+        assert_eq!(
+            overlay_lines(None, Some(&info), Some(17.4))[4],
+            "pose age 17 ms"
+        );
+        assert_eq!(overlay_lines(None, Some(&info), None)[0], "frame – ms");
+        // Before the first frame nothing is known: dashes, not zeros.
         let mut s = OverlayState::new(false);
+        assert_eq!(
+            s.lines(None),
+            [
+                "frame – ms",
+                "τ – px",
+                "tiles – late –",
+                "tris –",
+                "pose age –"
+            ]
+        );
         assert!(s.panel((320, 180), None).is_none());
         for k in 0..100 {
             // One slow frame among fast ones does not move the median.
