@@ -150,7 +150,7 @@ pub struct Pick {
     /// The wanted host frame: newest − k.
     pub target: u64,
     /// The pose rendered: host frame `target` when it arrived, else the newest one before it
-    /// (a lost packet), else the oldest kept (fewer than k + 1 frames seen yet).
+    /// (a lost packet). Never a frame after the target.
     pub sample: Stamped,
     /// `sample` is host frame `target`.
     pub exact: bool,
@@ -237,7 +237,8 @@ impl FrameHistory {
         Inserted::Kept
     }
 
-    /// The pose to render for `--sync-frames k` (see [`Pick`]); `None` while empty.
+    /// The pose to render for `--sync-frames k` (see [`Pick`]); `None` while no kept frame is
+    /// at or before newest − k (just started: fewer than k + 1 frames seen).
     pub fn pick(&self, k: u32) -> Option<Pick> {
         let newest = self.newest()?;
         let target = newest.wrapping_sub(u64::from(k));
@@ -245,13 +246,8 @@ impl FrameHistory {
         let at = self
             .entries
             .partition_point(|e| frame_diff(e.pose.frame, target) <= 0);
-        let (sample, exact) = match at {
-            0 => (self.entries[0], false),
-            i => {
-                let s = self.entries[i - 1];
-                (s, frame_diff(s.pose.frame, target) == 0)
-            }
-        };
+        let sample = self.entries[at.checked_sub(1)?];
+        let exact = frame_diff(sample.pose.frame, target) == 0;
         Some(Pick {
             target,
             sample,
@@ -285,6 +281,8 @@ pub struct InputSpec {
     pub protocol: InputProtocol,
     pub listen: SocketAddr,
     pub multicast: Option<Ipv4Addr>,
+    /// Interface for the multicast join (0.0.0.0: the kernel chooses).
+    pub multicast_interface: Ipv4Addr,
     pub allow: Vec<IpAddr>,
     pub shm_name: String,
     /// Extrapolation cap, seconds (0: never carried forward).
@@ -392,6 +390,7 @@ impl SimInput {
                     bind: spec.listen,
                     protocol,
                     multicast: spec.multicast,
+                    multicast_interface: spec.multicast_interface,
                     allow: spec.allow.clone(),
                     extrapolation: monitor,
                     ..UdpConfig::default()
@@ -583,9 +582,9 @@ mod tests {
         assert_eq!((p.target, p.sample.pose.frame, p.exact), (14, 14, true));
         let p = h.pick(2).unwrap();
         assert_eq!((p.target, p.sample.pose.frame, p.exact), (12, 12, true));
-        // Fewer than k + 1 frames seen: the oldest, marked inexact.
-        let p = h.pick(9).unwrap();
-        assert_eq!((p.target, p.sample.pose.frame, p.exact), (5, 10, false));
+        // Fewer than k + 1 frames seen: nothing yet (never a frame after the target).
+        assert!(h.pick(5).is_none());
+        assert_eq!(h.pick(4).unwrap().sample.pose.frame, 10);
         assert!(FrameHistory::new(4).pick(0).is_none());
     }
 
@@ -634,9 +633,11 @@ mod tests {
             a.insert(stamped(*fa, 0.0));
             b.insert(stamped(fb, 0.5));
             for k in 0..3 {
-                let (pa, pb) = (a.pick(k).unwrap(), b.pick(k).unwrap());
-                if pa.target == pb.target && pa.exact && pb.exact {
-                    assert_eq!(pa.sample.pose, pb.sample.pose);
+                if let (Some(pa), Some(pb)) = (a.pick(k), b.pick(k)) {
+                    assert!(pa.sample.pose.frame <= pa.target);
+                    if pa.target == pb.target && pa.exact && pb.exact {
+                        assert_eq!(pa.sample.pose, pb.sample.pose);
+                    }
                 }
             }
         }

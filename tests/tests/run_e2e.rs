@@ -401,9 +401,12 @@ fn one_process_per_channel_renders_the_same_host_frame_with_the_same_pose() {
     let dem = demo_dem();
     let (aerie, _) = bins();
     let wall3 = aerie_tests::repo_root().join("config/presets/wall3.toml");
-    let ports = [free_port(), free_port()];
+    // Both processes on one multicast group and port (shared with SO_REUSEADDR), joined on the
+    // loopback interface so no multicast route is needed.
+    let group = std::net::Ipv4Addr::new(239, 255, 47, 90);
+    let port = free_port();
     let mut runs = Vec::new();
-    for (channel, port) in ["left", "centre"].iter().zip(ports) {
+    for channel in ["left", "centre"] {
         let mut a = args(&[
             "run",
             "--headless",
@@ -428,25 +431,28 @@ fn one_process_per_channel_renders_the_same_host_frame_with_the_same_pose() {
             "--dem".into(),
             s(&dem),
             "--listen".into(),
-            format!("127.0.0.1:{port}"),
+            format!("0.0.0.0:{port}"),
+            "--multicast".into(),
+            group.to_string(),
+            "--multicast-if".into(),
+            "127.0.0.1".into(),
             "--stats".into(),
             s(&dir.path().join(format!("{channel}.csv"))),
         ]);
         runs.push(spawn(aerie, &a));
     }
     // One host at 5 Hz, both processes paced at 10 Hz: each host frame is drawn by both most of
-    // the time. Every packet goes to both channel processes (as a multicast would).
+    // the time.
     let done = Arc::new(AtomicBool::new(false));
     let sender = {
         let done = done.clone();
         std::thread::spawn(move || {
-            let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+            let socket =
+                aerie_sim_bridge::udp::multicast_sender(std::net::Ipv4Addr::LOCALHOST).unwrap();
             let mut f = 1u64;
             while !done.load(Ordering::Relaxed) && f < 5 * 120 {
                 let bytes = native::encode(&frame_pose(f), f as u32);
-                for p in ports {
-                    socket.send_to(&bytes, ("127.0.0.1", p)).unwrap();
-                }
+                socket.send_to(&bytes, (group, port)).unwrap();
                 f += 1;
                 std::thread::sleep(Duration::from_millis(200));
             }

@@ -109,6 +109,10 @@ pub struct RunArgs {
     /// Join this IPv4 multicast group (several channel machines on one stream).
     #[arg(long, value_name = "GROUP")]
     pub multicast: Option<Ipv4Addr>,
+    /// With --multicast: local interface address to join on (default: the kernel chooses;
+    /// 127.0.0.1 for processes on one host without a multicast route).
+    #[arg(long, value_name = "IPV4")]
+    pub multicast_if: Option<Ipv4Addr>,
     /// Accept poses only from these source addresses (comma-separated).
     #[arg(long, value_delimiter = ',')]
     pub allow: Vec<IpAddr>,
@@ -171,6 +175,7 @@ impl RunArgs {
                 .listen
                 .unwrap_or(SocketAddr::V4(SocketAddrV4::new(host, DEFAULT_PORT))),
             multicast: self.multicast,
+            multicast_interface: self.multicast_if.unwrap_or(Ipv4Addr::UNSPECIFIED),
             allow: self.allow.clone(),
             shm_name: self
                 .shm_name
@@ -223,6 +228,9 @@ pub struct RunPoses {
     got_first: bool,
     last_age_ms: Option<f64>,
     last_call: Option<Instant>,
+    /// The last pose drawn from the stream: held if the stream has nothing to draw again (a
+    /// frame-locked history restarting after a host restart).
+    last_drawn: Option<AircraftPose>,
     /// Why the run must stop (set in the window path, where a pose source cannot return one).
     pub fail: Option<Failure>,
 }
@@ -248,6 +256,7 @@ impl RunPoses {
             got_first: false,
             last_age_ms: None,
             last_call: None,
+            last_drawn: None,
             fail: None,
         }
     }
@@ -278,6 +287,7 @@ impl RunPoses {
                 self.input_frames += 1;
                 self.extrapolated += u64::from(info.extrapolated);
                 self.exact_sync += u64::from(info.sync_target == Some(info.host_frame));
+                self.last_drawn = Some(pose);
                 Ok((pose, PoseOrigin::Input(info)))
             }
             None => {
@@ -290,7 +300,10 @@ impl RunPoses {
                 }
                 self.last_age_ms = None;
                 self.waiting_frames += 1;
-                Ok((self.default_view(), PoseOrigin::Waiting))
+                Ok((
+                    self.last_drawn.unwrap_or_else(|| self.default_view()),
+                    PoseOrigin::Waiting,
+                ))
             }
         }
     }
@@ -520,6 +533,9 @@ fn check_args(a: &RunArgs) -> Result<(), Failure> {
         parse_size_arg(s).map_err(|e| bad_input(format!("--size: {e}")))?;
     }
     match a.input_spec() {
+        _ if a.multicast_if.is_some() && a.multicast.is_none() => {
+            return Err(bad_input("--multicast-if: only with --multicast"));
+        }
         None if a.sync_frames.is_some() => return Err(bad_input(
             "--sync-frames: needs a pose input (--listen, --protocol, --multicast or --shm-name)",
         )),
@@ -839,6 +855,7 @@ mod tests {
             protocol: InputProtocol::Udp(ProtocolChoice::Auto),
             listen: "127.0.0.1:0".parse().unwrap(),
             multicast: None,
+            multicast_interface: Ipv4Addr::UNSPECIFIED,
             allow: Vec::new(),
             shm_name: String::new(),
             cap_s: 0.0,
