@@ -21,7 +21,8 @@ use crate::terrain::gather::gather;
 use crate::terrain::mesh::skirted_tile_indices;
 use crate::terrain::pool::{RefinedTilePool, Request, TileKey};
 use crate::terrain::select::{
-    select_tiles, select_tiles_multi, DrawItem, SelectParams, Selection, View, MAX_REFINEMENT,
+    neighbour_eps, select_tiles, select_tiles_multi, DrawItem, SelectParams, Selection, View,
+    MAX_REFINEMENT,
 };
 use crate::vk::descriptors::FrameDescriptorPools;
 use crate::vk::frame_context::FrameContexts;
@@ -1344,7 +1345,13 @@ impl TerrainRenderer {
         for g in &mut self.instances {
             g.clear();
         }
-        for &(item, slot) in &self.draw_list {
+        let nodes: Vec<(u32, u32, u32, f32)> = self
+            .draw_list
+            .iter()
+            .map(|(i, _)| (i.node_level, i.node_tx, i.node_ty, i.eps_m))
+            .collect();
+        let reach = neighbour_eps(&nodes);
+        for (&(item, slot), &reach_m) in self.draw_list.iter().zip(&reach) {
             let node = q << item.node_level;
             let origin = [item.node_tx as i64 * node, item.node_ty as i64 * node];
             let r = item.refinement;
@@ -1367,7 +1374,9 @@ impl TerrainRenderer {
                 level: item.level,
                 refinement: r,
                 slot,
-                skirt_m: self.desc.skirt_factor * item.eps_m + self.desc.skirt_min_m,
+                // ε + max(ε, neighbours' ε) at the default factor 2 (see neighbour_eps).
+                skirt_m: 0.5 * self.desc.skirt_factor * (item.eps_m + reach_m)
+                    + self.desc.skirt_min_m,
                 slot_x,
                 slot_y,
                 slot_stride,

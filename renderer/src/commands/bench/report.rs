@@ -410,7 +410,7 @@ fn match_bounded<'a>(summaries: &'a [Summary], base: &Summary) -> Option<(&'a Su
 /// interpolated log-log between the two bounded configurations whose measured errors bracket
 /// it (work falls roughly as a power of the error). None when no pair brackets the target.
 pub(crate) fn bounded_at_error(summaries: &[Summary], target: f64) -> Option<(f64, f64, f64, f64)> {
-    if !(target > 0.0) {
+    if target.is_nan() || target <= 0.0 {
         return None;
     }
     let mut pts: Vec<(f64, f64, f64, f64)> = summaries
