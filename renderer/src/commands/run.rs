@@ -845,6 +845,92 @@ mod tests {
         }
     }
 
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: RunArgs,
+    }
+
+    fn plan_of(extra: &[&str]) -> Result<Plan, Failure> {
+        use clap::Parser;
+        let argv = ["run", "--dem", "x.hgt"].iter().chain(extra);
+        plan(&Cli::try_parse_from(argv).expect("parses").args)
+    }
+
+    #[test]
+    fn bad_input_flag_combinations_stop_before_anything_opens() {
+        for (args, says) in [
+            (
+                &["--sync-frames", "1"][..],
+                "--sync-frames: needs a pose input",
+            ),
+            (
+                &["--headless"],
+                "--headless: give --frames N or --seconds S",
+            ),
+            (&["--size", "160x90"], "--size: only with --headless"),
+            (&["--as-fast-as-possible"], "only with --headless"),
+            (&["--headless", "--frames", "2", "--size", "0x9"], "--size:"),
+            (
+                &["--headless", "--frames", "2", "--windowed"],
+                "exclude each other",
+            ),
+            (&["--max-extrapolation-ms=-1"], "--max-extrapolation-ms: -1"),
+            (&["--fps", "0"], "--fps: 0"),
+            (
+                &["--protocol", "shm", "--listen", "127.0.0.1:9"],
+                "UDP only",
+            ),
+            (
+                &["--protocol", "cigi", "--shm-name", "x"],
+                "--shm-name: only with",
+            ),
+            (
+                &["--multicast-if", "127.0.0.1", "--protocol", "native"],
+                "only with --multicast",
+            ),
+            (
+                &["--stats", "/nonexistent-dir/s.csv"],
+                "--stats /nonexistent-dir/s.csv",
+            ),
+        ] {
+            let Err(f) = plan_of(args) else {
+                panic!("{args:?} accepted")
+            };
+            assert_eq!(f.code, 2, "{args:?}: {}", f.message);
+            assert!(f.message.contains(says), "{args:?}: {}", f.message);
+        }
+        // Input flags: defaults and what turns the input on.
+        let spec = |extra: &[&str]| {
+            use clap::Parser;
+            let argv = ["run", "--dem", "x"].iter().chain(extra);
+            Cli::try_parse_from(argv).unwrap().args.input_spec()
+        };
+        assert!(spec(&[]).is_none());
+        let s = spec(&["--protocol", "cigi"]).unwrap();
+        assert_eq!(s.listen, "127.0.0.1:47800".parse().unwrap());
+        assert_eq!(s.cap_s, 0.1);
+        let s = spec(&["--multicast", "239.1.2.3", "--sync-frames", "2"]).unwrap();
+        assert_eq!(s.listen, "0.0.0.0:47800".parse().unwrap());
+        assert_eq!(s.protocol, InputProtocol::Udp(ProtocolChoice::Auto));
+        assert_eq!(s.sync_frames, Some(2));
+        let s = spec(&["--shm-name", "sim"]).unwrap();
+        assert_eq!(
+            (s.protocol, s.shm_name.as_str()),
+            (InputProtocol::Shm, "sim")
+        );
+        assert!(plan_of(&[
+            "--headless",
+            "--frames",
+            "3",
+            "--size",
+            "160x90",
+            "--protocol",
+            "shm"
+        ])
+        .is_ok());
+    }
+
     /// The window path's pose source: default view and a "waiting" row until the first pose,
     /// then the pose as sent (cap 0), and a bad-input failure for a geodetic pose on a dataset
     /// without geo-reference (the window loop ends the session on it).
