@@ -176,8 +176,9 @@ struct Expected {
     attitude: [f64; 3],
 }
 
-/// Runs `aerie run --headless` on `dem` with `run_args`, then `aerie-send` with `send_args`;
-/// returns the stats rows and the JSON summary.
+/// Runs `aerie run --headless` on `dem` with `run_args`, then `aerie-send` with `send_args`
+/// (flying [`WAYPOINTS`] unless they ask for `--straight`); returns the stats rows and the JSON
+/// summary.
 fn fly(
     dir: &Path,
     dem: &Path,
@@ -196,8 +197,6 @@ fn fly(
         "20",
         "--size",
         "160x90",
-        "--max-extrapolation-ms",
-        "0",
         "--wait-pose-s",
         "30",
     ]);
@@ -211,7 +210,10 @@ fn fly(
     ]);
     a.extend_from_slice(run_args);
     let run = spawn(aerie, &a);
-    let mut b = args(&["--path", &s(&path), "--quiet"]);
+    let mut b = args(&["--quiet"]);
+    if !send_args.iter().any(|a| a == "--straight") {
+        b.extend(["--path".into(), s(&path)]);
+    }
     b.extend_from_slice(send_args);
     let sender = spawn(send, &b);
     let out = wait(run, Duration::from_secs(90), "aerie run");
@@ -231,6 +233,15 @@ fn fly(
 /// Every frame's camera equals `expect(sim time)`; the frames came from the stream, were not
 /// extrapolated, and the aircraft moved during the run.
 fn check_rows(rows: &[Row], summary: &serde_json::Value, expect: impl Fn(f64) -> Expected) {
+    check_rows_as(rows, summary, false, expect)
+}
+
+fn check_rows_as(
+    rows: &[Row],
+    summary: &serde_json::Value,
+    extrapolating: bool,
+    expect: impl Fn(f64) -> Expected,
+) {
     assert_eq!(rows.len(), 20, "one row per frame");
     assert_eq!(summary["frames"], 20);
     assert_eq!(summary["validation"]["enabled"], true);
@@ -242,9 +253,19 @@ fn check_rows(rows: &[Row], summary: &serde_json::Value, expect: impl Fn(f64) ->
     );
     assert_eq!(summary["input"]["dropped_total"], 0, "{summary}");
     let mut times = Vec::new();
+    let ages = &summary["input"]["pose_age_ms"];
+    assert!(ages["max"].as_f64().unwrap() >= ages["median"].as_f64().unwrap());
+    let pct = summary["input"]["extrapolated_pct"].as_f64().unwrap();
+    if !extrapolating {
+        assert_eq!(pct, 0.0);
+    }
+    let mut carried = 0;
     for r in rows {
-        assert_eq!(r["stream"], "live", "{r:?}");
-        assert_eq!(r["extrapolated"], "0", "{r:?}");
+        if !extrapolating {
+            assert_eq!(r["stream"], "live", "{r:?}");
+            assert_eq!(r["extrapolated"], "0", "{r:?}");
+        }
+        carried += usize::from(r["extrapolated"] == "1");
         let t = num(r, "sim_time_s");
         let e = expect(t);
         for (k, want) in ["x_m", "y_m", "z_m"].iter().zip(e.position) {
@@ -267,6 +288,14 @@ fn check_rows(rows: &[Row], summary: &serde_json::Value, expect: impl Fn(f64) ->
             );
         }
         times.push(t);
+    }
+    assert_eq!(pct, 100.0 * carried as f64 / rows.len() as f64);
+    if extrapolating {
+        assert!(
+            carried >= rows.len() / 2,
+            "{carried} of {} extrapolated",
+            rows.len()
+        );
     }
     times.dedup();
     assert!(
@@ -294,7 +323,14 @@ fn native_local_poses_reach_the_camera_exactly() {
     let (rows, summary) = fly(
         dir.path(),
         &demo_dem(),
-        &args(&["--listen", &to, "--protocol", "native"]),
+        &args(&[
+            "--listen",
+            &to,
+            "--protocol",
+            "native",
+            "--max-extrapolation-ms",
+            "0",
+        ]),
         &args(&["--protocol", "native", "--to", &to, "--rate", "60"]),
     );
     let w = Waypoints::parse(WAYPOINTS, "flight.csv").unwrap();
@@ -309,6 +345,44 @@ fn native_local_poses_reach_the_camera_exactly() {
     }
 }
 
+/// With the default cap (100 ms) each frame's pose is carried forward to its display time with
+/// the sent velocity: on a straight pass that is exactly the pass at the reported sim time.
+#[test]
+fn extrapolated_poses_follow_the_flight_to_the_display_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let port = free_port();
+    let to = format!("127.0.0.1:{port}");
+    let (x0, y0, z0, heading, speed) = (30000.0, 20000.0, 3500.0, 60.0f64, 200.0);
+    let (rows, summary) = fly(
+        dir.path(),
+        &demo_dem(),
+        &args(&["--listen", &to, "--protocol", "native"]),
+        &args(&[
+            "--straight",
+            &format!("{x0},{y0},{z0},{heading},-4,2,{speed}"),
+            "--seconds",
+            "60",
+            "--rate",
+            "30",
+            "--to",
+            &to,
+        ]),
+    );
+    check_rows_as(&rows, &summary, true, |t| {
+        let h = heading.to_radians();
+        Expected {
+            position: [x0 + h.sin() * speed * t, y0 + h.cos() * speed * t, z0],
+            attitude: [heading, -4.0, 2.0],
+        }
+    });
+    for r in &rows {
+        // Never carried further than the cap past the packet's own sim time (30 Hz frames).
+        let sent = (num(r, "host_frame") - 1.0) / 30.0;
+        let ahead = num(r, "sim_time_s") - sent;
+        assert!((-1e-9..=0.1 + 1e-9).contains(&ahead), "{r:?}");
+    }
+}
+
 #[test]
 fn cigi_geodetic_poses_land_on_the_dataset_grid() {
     let dir = tempfile::tempdir().unwrap();
@@ -320,7 +394,14 @@ fn cigi_geodetic_poses_land_on_the_dataset_grid() {
     let (rows, summary) = fly(
         dir.path(),
         &dem,
-        &args(&["--listen", &to, "--protocol", "cigi"]),
+        &args(&[
+            "--listen",
+            &to,
+            "--protocol",
+            "cigi",
+            "--max-extrapolation-ms",
+            "0",
+        ]),
         // 50 Hz: script times k/50 s are whole 10 µs CIGI timestamp ticks.
         &args(&[
             "--protocol",
@@ -371,7 +452,14 @@ fn shared_memory_poses_reach_the_camera_exactly() {
     let (rows, summary) = fly(
         dir.path(),
         &demo_dem(),
-        &args(&["--protocol", "shm", "--shm-name", &name]),
+        &args(&[
+            "--protocol",
+            "shm",
+            "--shm-name",
+            &name,
+            "--max-extrapolation-ms",
+            "0",
+        ]),
         &args(&["--protocol", "shm", "--shm-name", &name, "--rate", "60"]),
     );
     let _ = std::fs::remove_file(Path::new("/dev/shm").join(&name));
