@@ -9,6 +9,9 @@
 //! resolution = "1920x1080"      # render size, pixels; default: the window's (or monitor's) size
 //! present_mode = "fifo"         # fifo (default, vsync) | mailbox | immediate
 //! tau_px = 1.0                  # error bound τ for this channel; default: render.tau_px
+//! cigi_view = 0                 # CIGI view ID of this channel, 0..=65535, unique; default: the
+//!                               # channel's index in the file (View Control / View Definition
+//!                               # for this view replace `view`, `eye` and `frustum`)
 //! window = { x = 0, y = 0, width = 1280, height = 720 }   # windowed: rectangle (x, y optional,
 //!                                                          # relative to `monitor` when given)
 //! [channel.view]                # view offset relative to the aircraft, degrees
@@ -58,6 +61,9 @@ pub struct Channel {
     pub view: ViewOffset,
     pub frustum: ChannelFrustum,
     pub eye: EyeOffset,
+    /// CIGI view ID (`cigi_view`, default: the channel's index in the file): the host's View
+    /// Control and View Definition for this view replace `view`, `eye` and `frustum`.
+    pub cigi_view: u16,
 }
 
 impl Channel {
@@ -82,6 +88,7 @@ impl Channel {
                 vfov_deg: None,
             },
             eye: EyeOffset::default(),
+            cigi_view: 0,
         }
     }
 
@@ -216,6 +223,7 @@ pub(crate) struct RawChannel {
     view: Option<RawView>,
     frustum: Option<RawFrustum>,
     eye: Option<RawEye>,
+    cigi_view: Option<i64>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -323,6 +331,7 @@ struct ChannelOut<'a> {
     view: ViewOffset,
     frustum: FrustumOut,
     eye: EyeOffset,
+    cigi_view: u16,
 }
 
 #[derive(Serialize)]
@@ -404,6 +413,7 @@ impl Serialize for Channel {
             view: self.view,
             frustum,
             eye: self.eye,
+            cigi_view: self.cigi_view,
         }
         .serialize(s)
     }
@@ -459,13 +469,23 @@ pub(crate) fn validate(
                 .collect(),
             message,
         };
-        let ch = validate_one(r, render, &at)?;
+        let ch = validate_one(r, render, i, &at)?;
         if let Some(j) = out.iter().position(|c| c.name == ch.name) {
             return Err(at(
                 &["name"],
                 format!(
                     "duplicate channel name {:?} (also channel[{j}].name); names must be unique",
                     ch.name
+                ),
+            ));
+        }
+        if let Some(j) = out.iter().position(|c| c.cigi_view == ch.cigi_view) {
+            // A view ID drives one channel: two channels on one ID would both follow the host.
+            return Err(at(
+                &["cigi_view"],
+                format!(
+                    "CIGI view {} is also channel[{j}]'s (a channel without cigi_view takes its index); view IDs must be unique",
+                    ch.cigi_view
                 ),
             ));
         }
@@ -479,6 +499,7 @@ type At<'a> = &'a dyn Fn(&[&'static str], String) -> ChannelInvalid;
 fn validate_one(
     r: RawChannel,
     render: &RenderSettings,
+    index: usize,
     at: At<'_>,
 ) -> Result<Channel, ChannelInvalid> {
     let name = match r.name {
@@ -597,6 +618,21 @@ fn validate_one(
         }
     }
 
+    let cigi_view = match r.cigi_view {
+        None => u16::try_from(index).map_err(|_| {
+            at(
+                &["cigi_view"],
+                format!("channel index {index} is not a CIGI view ID: give cigi_view (0..=65535)"),
+            )
+        })?,
+        Some(v) => u16::try_from(v).map_err(|_| {
+            at(
+                &["cigi_view"],
+                format!("must be a CIGI view ID 0..=65535, got {v}"),
+            )
+        })?,
+    };
+
     Ok(Channel {
         name,
         monitor: r.monitor,
@@ -607,6 +643,7 @@ fn validate_one(
         view,
         frustum,
         eye,
+        cigi_view,
     })
 }
 

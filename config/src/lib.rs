@@ -18,6 +18,10 @@
 //! staging_budget_mib = 8    # upload budget per frame, MiB, 1..=1024
 //! validation = false        # enable VK_LAYER_KHRONOS_validation
 //! gpu = "RTX"               # optional: pick the first GPU whose name contains this
+//! fps = 60.0                # optional: `aerie run --headless` pacing, frames/s, (0, 1000]
+//!
+//! [input]                   # optional: simulator pose input of `aerie run` (see [`InputSettings`])
+//! protocol = "cigi"
 //!
 //! [dem]
 //! path = "data/dem.tif"     # optional: elevation dataset
@@ -28,6 +32,7 @@
 
 mod channels;
 mod error;
+mod input;
 mod path_de;
 
 use std::collections::BTreeMap;
@@ -40,6 +45,7 @@ pub use channels::{
     MonitorSelector, PresentMode, ViewOffset,
 };
 pub use error::{ConfigError, Location};
+pub use input::{InputProtocolName, InputSettings, MAX_SYNC_FRAMES};
 
 /// Allowed tile sizes `m = 2^j + 1` (vertices per tile side).
 pub const TILE_SIZES: [u32; 8] = [3, 5, 9, 17, 33, 65, 129, 257];
@@ -55,6 +61,9 @@ pub struct RenderConfig {
     pub render: RenderSettings,
     /// The `[dem]` table.
     pub dem: DemSettings,
+    /// The `[input]` table (every key optional: command-line flags and defaults fill the rest).
+    #[serde(skip_serializing_if = "InputSettings::is_empty")]
+    pub input: InputSettings,
     /// The `[[channel]]` tables, in file order (empty: none configured).
     #[serde(rename = "channel", skip_serializing_if = "Vec::is_empty")]
     pub channels: Vec<Channel>,
@@ -80,6 +89,9 @@ pub struct RenderSettings {
     /// Pick the first GPU whose name contains this substring; `None` lets aerie choose.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gpu: Option<String>,
+    /// `aerie run --headless` frame rate, frames/s in (0, 1000]; `None`: the `--fps` default.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fps: Option<f64>,
 }
 
 impl Default for RenderSettings {
@@ -93,6 +105,7 @@ impl Default for RenderSettings {
             staging_budget_mib: 8,
             validation: false,
             gpu: None,
+            fps: None,
         }
     }
 }
@@ -205,6 +218,8 @@ struct RawConfig {
     #[serde(default)]
     dem: RawDem,
     #[serde(default)]
+    input: input::RawInput,
+    #[serde(default)]
     channel: Vec<channels::RawChannel>,
 }
 
@@ -220,6 +235,7 @@ struct RawRender {
     staging_budget_mib: Option<u32>,
     validation: Option<bool>,
     gpu: Option<String>,
+    fps: Option<f64>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -338,6 +354,17 @@ impl RawConfig {
             ));
         }
 
+        if let Some(fps) = r.fps {
+            if !(fps.is_finite() && fps > 0.0 && fps <= 1000.0) {
+                return Err((
+                    "render.fps",
+                    format!("must be greater than 0 and at most 1000 frames per second, got {fps}"),
+                ));
+            }
+        }
+
+        let input = self.input.validate()?;
+
         if self
             .dem
             .path
@@ -357,10 +384,12 @@ impl RawConfig {
                 staging_budget_mib,
                 validation: r.validation.unwrap_or(d.validation),
                 gpu: r.gpu,
+                fps: r.fps,
             },
             dem: DemSettings {
                 path: self.dem.path,
             },
+            input,
             channels: Vec::new(),
         })
     }

@@ -288,6 +288,141 @@ fn location_from_offset_counts_characters() {
     );
 }
 
+#[test]
+fn input_table_parses_and_round_trips() {
+    let text = r#"
+        [render]
+        fps = 30
+
+        [input]
+        protocol = "CIGI"
+        listen = "0.0.0.0:47900"
+        multicast = "239.1.2.3"
+        multicast_if = "127.0.0.1"
+        allow = ["127.0.0.1", "::1"]
+        max_extrapolation_ms = 0
+        sync_frames = 2
+        wait_pose_s = 2.5
+    "#;
+    let cfg = parse(text, FILE).unwrap();
+    let i = &cfg.input;
+    assert_eq!(i.protocol, Some(InputProtocolName::Cigi));
+    assert_eq!(i.listen, Some("0.0.0.0:47900".parse().unwrap()));
+    assert_eq!(i.multicast, Some("239.1.2.3".parse().unwrap()));
+    assert_eq!(i.multicast_if, Some("127.0.0.1".parse().unwrap()));
+    assert_eq!(i.allow.len(), 2);
+    assert_eq!(
+        (i.max_extrapolation_ms, i.sync_frames, i.wait_pose_s),
+        (Some(0.0), Some(2), Some(2.5))
+    );
+    assert_eq!(cfg.render.fps, Some(30.0));
+    assert!(i.wants_input());
+    assert_eq!(parse(&cfg.to_toml().unwrap(), FILE).unwrap(), cfg);
+    // No [input]: nothing set, no input wanted; an [input] of tuning keys only wants none.
+    assert!(parse("", FILE).unwrap().input.is_empty());
+    let tuning = parse("[input]\nmax_extrapolation_ms = 50\n", FILE).unwrap();
+    assert!(!tuning.input.wants_input() && !tuning.input.is_empty());
+    // shm_name alone means shared memory.
+    let shm = parse("[input]\nshm_name = \"sim\"\n", FILE).unwrap();
+    assert_eq!(shm.input.shm_name.as_deref(), Some("sim"));
+}
+
+#[test]
+fn input_errors_name_the_key_line_and_reason() {
+    for (text, key, says) in [
+        (
+            "[input]\nprotocol = \"udp\"\n",
+            "input.protocol",
+            "unknown protocol \"udp\"",
+        ),
+        (
+            "[input]\nlisten = \"localhost\"\n",
+            "input.listen",
+            "expected ADDR:PORT",
+        ),
+        (
+            "[input]\nlisten = \"127.0.0.1:99999\"\n",
+            "input.listen",
+            "99999",
+        ),
+        (
+            "[input]\nmulticast = \"10.0.0.1\"\n",
+            "input.multicast",
+            "not a multicast group",
+        ),
+        (
+            "[input]\nmulticast = \"239.1.2\"\n",
+            "input.multicast",
+            "IPv4 address",
+        ),
+        (
+            "[input]\nallow = [\"10.0.0.300\"]\n",
+            "input.allow",
+            "10.0.0.300",
+        ),
+        (
+            "[input]\nmax_extrapolation_ms = -5\n",
+            "input.max_extrapolation_ms",
+            "≥ 0, got -5",
+        ),
+        (
+            "[input]\nmax_extrapolation_ms = nan\n",
+            "input.max_extrapolation_ms",
+            "got NaN",
+        ),
+        ("[input]\nsync_frames = -1\n", "input.sync_frames", "0..=63"),
+        ("[input]\nsync_frames = 64\n", "input.sync_frames", "got 64"),
+        (
+            "[input]\nwait_pose_s = 0\n",
+            "input.wait_pose_s",
+            "greater than 0",
+        ),
+        (
+            "[input]\nshm_name = \" \"\n",
+            "input.shm_name",
+            "must not be empty",
+        ),
+        (
+            "[input]\nmulticast_if = \"127.0.0.1\"\n",
+            "input.multicast_if",
+            "only with input.multicast",
+        ),
+        (
+            "[input]\nprotocol = \"shm\"\nlisten = \"127.0.0.1:9\"\n",
+            "input.listen",
+            "UDP only",
+        ),
+        (
+            "[input]\nshm_name = \"x\"\nallow = [\"::1\"]\n",
+            "input.allow",
+            "UDP only",
+        ),
+        (
+            "[input]\nprotocol = \"cigi\"\nshm_name = \"x\"\n",
+            "input.shm_name",
+            "only with protocol",
+        ),
+        ("[input]\nport = 5\n", "input", "unknown field `port`"),
+        (
+            "[input]\nsync_frames = \"2\"\n",
+            "input.sync_frames",
+            "invalid type",
+        ),
+        ("[render]\nfps = 0\n", "render.fps", "got 0"),
+        ("[render]\nfps = 5000\n", "render.fps", "at most 1000"),
+    ] {
+        let e = err(text);
+        let msg = assert_names(&e, key);
+        assert!(msg.contains(says), "{text:?}: {msg}");
+        // The value's line (the last line of every case) is named.
+        let line = text.lines().count();
+        assert!(
+            msg.starts_with(&format!("{FILE}:{line}:")),
+            "{text:?}: no line {line}: {msg}"
+        );
+    }
+}
+
 fn arb_config() -> impl Strategy<Value = RenderConfig> {
     (
         (1..=MAX_DIMENSION, 1..=MAX_DIMENSION),
@@ -319,10 +454,12 @@ fn arb_config() -> impl Strategy<Value = RenderConfig> {
                         staging_budget_mib,
                         validation,
                         gpu,
+                        fps: None,
                     },
                     dem: DemSettings {
                         path: path.map(PathBuf::from),
                     },
+                    input: InputSettings::default(),
                     channels: Vec::new(),
                 }
             },

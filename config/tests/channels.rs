@@ -75,6 +75,7 @@ fn minimal_channel_takes_render_defaults() {
                 vfov_deg: None
             },
             eye: EyeOffset::default(),
+            cigi_view: 0,
         }]
     );
     assert_eq!(cfg.channels[0].nominal_size(), Some((800, 600)));
@@ -354,6 +355,18 @@ fn zero_and_negative_sizes_are_refused() {
 fn other_bad_values_name_their_keys() {
     for (text, key, line, reason) in [
         (
+            "[[channel]]\nname = \"x\"\ncigi_view = 70000\n",
+            "channel[0].cigi_view",
+            3,
+            "must be a CIGI view ID 0..=65535, got 70000",
+        ),
+        (
+            "[[channel]]\nname = \"x\"\ncigi_view = 1\n[[channel]]\nname = \"y\"\n",
+            "channel[1].cigi_view",
+            4,
+            "CIGI view 1 is also channel[0]'s",
+        ),
+        (
             "[[channel]]\nname = \"x\"\npresent_mode = \"vsync\"\n",
             "channel[0].present_mode",
             3,
@@ -548,4 +561,17 @@ fn key_location_finds_dotted_keys_with_indices() {
     assert_eq!(at("channel[0].name"), Some((5, 8)));
     assert_eq!(at("channel[0].monitor"), None);
     assert_eq!(at("channel[5].name"), None);
+}
+
+#[test]
+fn cigi_view_defaults_to_the_channel_index() {
+    let cfg = aerie_config::parse(
+        "[[channel]]\nname = \"a\"\n[[channel]]\nname = \"b\"\ncigi_view = 7\n[[channel]]\nname = \"c\"\n",
+        "v.toml",
+    )
+    .unwrap();
+    let ids: Vec<u16> = cfg.channels.iter().map(|c| c.cigi_view).collect();
+    assert_eq!(ids, [0, 7, 2]);
+    let back = aerie_config::parse(&cfg.to_toml().unwrap(), "v.toml").unwrap();
+    assert_eq!(back, cfg);
 }

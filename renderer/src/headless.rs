@@ -15,7 +15,7 @@ use crate::camera::parse_size_arg;
 use crate::channel::{channel_camera, AircraftPose};
 use crate::cli::{bad_input, prepare_terrain, runtime, Failure};
 use crate::commands::run::{
-    open_input, open_stats, percentile, plan, RunArgs, RunPoses, StraightPassSource,
+    open_input, open_stats, percentile, plan, Plan, RunArgs, RunPoses, StraightPassSource,
 };
 use crate::flight::StraightPass;
 use crate::frame::{RendererDesc, TerrainRenderer};
@@ -79,12 +79,12 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
     let (ds, bake) = prepare_terrain(&a.dem, cfg.tile_size)?;
     let period_s = a
         .seconds
-        .or(a.frames.map(|n| n as f64 / a.fps))
+        .or(a.frames.map(|n| n as f64 / plan.settings.fps))
         .unwrap_or(60.0)
         .max(1.0);
     let pass = StraightPass::over(&ds, a.heading, a.pitch, a.speed, a.agl, period_s);
     // The port is bound before the (slow) device creation, so a sender may start right away.
-    let input = open_input(a, &ds)?;
+    let input = open_input(&plan.settings, &ds)?;
     let geo = GeoMapping::of_dataset(&ds).ok();
     let mut poses = RunPoses::new(
         input,
@@ -112,13 +112,13 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
     let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
     let result = (|| {
         let start = match &mut poses.input {
-            Some(input) => wait_first_pose(input, a.wait_pose_s)?,
+            Some(input) => wait_first_pose(input, plan.settings.wait_pose_s)?,
             None => poses.default_view(),
         };
         renderer
             .load_terrain(ds, bake, start.position)
             .map_err(runtime)?;
-        frame_loop(a, &plan.channels, &sizes, &mut renderer, &mut poses)
+        frame_loop(a, &plan, &sizes, &mut renderer, &mut poses)
     })();
     let device = renderer.device_name().to_string();
     let counters = renderer.validation_counters();
@@ -145,7 +145,7 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
         "frames": report.frames,
         "seconds": report.seconds,
         "fps": if report.seconds > 0.0 { report.frames as f64 / report.seconds } else { 0.0 },
-        "paced_fps": (!a.as_fast_as_possible).then_some(a.fps),
+        "paced_fps": (!a.as_fast_as_possible).then_some(plan.settings.fps),
         "frame_ms": {
             "median": percentile(&ms, 0.5),
             "p99": percentile(&ms, 0.99),
@@ -202,13 +202,15 @@ struct LoopReport {
 
 fn frame_loop(
     a: &RunArgs,
-    channels: &[Channel],
+    plan: &Plan,
     sizes: &[(u32, u32)],
     renderer: &mut TerrainRenderer,
     poses: &mut RunPoses,
 ) -> Result<LoopReport, Failure> {
     let tty = std::io::stderr().is_terminal();
-    let period = Duration::from_secs_f64(1.0 / a.fps);
+    let fps = plan.settings.fps;
+    let channels = &plan.channels;
+    let period = Duration::from_secs_f64(1.0 / fps);
     let t0 = Instant::now();
     let mut next_at = t0;
     let mut last_line = t0;
@@ -239,7 +241,7 @@ fn frame_loop(
         }
         let started = Instant::now();
         let t_s = if a.as_fast_as_possible {
-            frame as f64 / a.fps
+            frame as f64 / fps
         } else {
             (started - t0).as_secs_f64()
         };

@@ -17,7 +17,7 @@ use std::net::{IpAddr, Ipv4Addr, SocketAddr, SocketAddrV4};
 use std::path::PathBuf;
 use std::time::Instant;
 
-use aerie_config::{Channel, ChannelDisplay, RenderConfig};
+use aerie_config::{Channel, ChannelDisplay, InputProtocolName, RenderConfig};
 use aerie_sim_bridge::codec::ProtocolChoice;
 use aerie_sim_bridge::shm::DEFAULT_SHM_NAME;
 use aerie_sim_bridge::{DropReason, DEFAULT_PORT};
@@ -117,17 +117,18 @@ pub struct RunArgs {
     #[arg(long, value_delimiter = ',')]
     pub allow: Vec<IpAddr>,
     /// Carry a pose forward to the frame's display time by at most this much, milliseconds
-    /// (0: draw poses as received).
-    #[arg(long, default_value_t = 100.0, value_name = "MS")]
-    pub max_extrapolation_ms: f64,
+    /// (0: draw poses as received). Default: input.max_extrapolation_ms, else 100.
+    #[arg(long, value_name = "MS", allow_hyphen_values = true)]
+    pub max_extrapolation_ms: Option<f64>,
     /// Frame-locked: draw host frame newest − K with its own pose (never extrapolated), so one
     /// process per channel on one stream draws the same host frame. K ≥ 1 absorbs network
     /// jitter between machines at the price of K host frames of latency.
     #[arg(long, value_name = "K")]
     pub sync_frames: Option<u32>,
     /// Headless: how long to wait for the first pose before giving up (exit 1), seconds.
-    #[arg(long, default_value_t = 10.0, value_name = "S")]
-    pub wait_pose_s: f64,
+    /// Default: input.wait_pose_s, else 10.
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    pub wait_pose_s: Option<f64>,
     /// Render offscreen, no window: every channel of the config (or one of --size).
     #[arg(long)]
     pub headless: bool,
@@ -137,9 +138,9 @@ pub struct RunArgs {
     /// Write one CSV row per frame: the pose used, where it came from, frame cost.
     #[arg(long, value_name = "FILE.csv")]
     pub stats: Option<PathBuf>,
-    /// Headless: frame rate to pace at.
-    #[arg(long, default_value_t = 60.0)]
-    pub fps: f64,
+    /// Headless: frame rate to pace at. Default: render.fps, else 60.
+    #[arg(long, allow_hyphen_values = true)]
+    pub fps: Option<f64>,
     /// Headless: do not pace, render frames back to back.
     #[arg(long)]
     pub as_fast_as_possible: bool,
@@ -149,42 +150,121 @@ fn parse_input_protocol(s: &str) -> Result<InputProtocol, String> {
     s.parse()
 }
 
-impl RunArgs {
-    /// The simulator input asked for, if any.
-    pub fn input_spec(&self) -> Option<InputSpec> {
-        let wanted = self.listen.is_some()
-            || self.protocol.is_some()
-            || self.shm_name.is_some()
-            || self.multicast.is_some();
-        if !wanted {
-            return None;
+/// Default `--max-extrapolation-ms` / `input.max_extrapolation_ms`.
+pub const DEFAULT_MAX_EXTRAPOLATION_MS: f64 = 100.0;
+/// Default `--wait-pose-s` / `input.wait_pose_s`.
+pub const DEFAULT_WAIT_POSE_S: f64 = 10.0;
+/// Default `--fps` / `render.fps`.
+pub const DEFAULT_FPS: f64 = 60.0;
+
+/// The run settings in effect: each command-line flag, else the config's key, else the default.
+#[derive(Debug, Clone)]
+pub struct RunSettings {
+    /// The simulator input, if any flag or `[input]` key asks for one.
+    pub input: Option<InputSpec>,
+    pub max_extrapolation_ms: f64,
+    pub wait_pose_s: f64,
+    pub fps: f64,
+}
+
+fn config_protocol(p: InputProtocolName) -> InputProtocol {
+    // The config names are a subset of what --protocol parses.
+    p.as_str().parse().expect("config protocol names parse")
+}
+
+/// Merges the input flags over the config's `[input]` (and `render.fps`): a flag given wins,
+/// a key the file gives comes next, then the defaults. A flag that picks the transport
+/// (`--protocol`, `--shm-name` for shared memory, `--listen`/`--multicast`/`--allow` for UDP)
+/// also drops the config keys of the other transport. Pure: no socket, no file.
+pub fn resolve_settings(a: &RunArgs, config: &RenderConfig) -> Result<RunSettings, Failure> {
+    let c = &config.input;
+    let max_extrapolation_ms = a
+        .max_extrapolation_ms
+        .or(c.max_extrapolation_ms)
+        .unwrap_or(DEFAULT_MAX_EXTRAPOLATION_MS);
+    let wait_pose_s = a
+        .wait_pose_s
+        .or(c.wait_pose_s)
+        .unwrap_or(DEFAULT_WAIT_POSE_S);
+    let fps = a.fps.or(config.render.fps).unwrap_or(DEFAULT_FPS);
+    let sync_frames = a.sync_frames.or(c.sync_frames);
+    let cli_udp = a.listen.is_some() || a.multicast.is_some() || !a.allow.is_empty();
+    let wanted = cli_udp || a.protocol.is_some() || a.shm_name.is_some() || c.wants_input();
+    if let Some(k) = sync_frames.filter(|&k| k > aerie_config::MAX_SYNC_FRAMES) {
+        return Err(bad_input(format!(
+            "--sync-frames: {k} is more than the {} host frames kept (0..={})",
+            aerie_config::MAX_SYNC_FRAMES + 1,
+            aerie_config::MAX_SYNC_FRAMES
+        )));
+    }
+    if !wanted {
+        if sync_frames.is_some() {
+            return Err(bad_input(
+                "--sync-frames: needs a pose input (--listen, --protocol, --multicast or --shm-name, or an [input] protocol in the config)",
+            ));
         }
-        let protocol = match (self.protocol, &self.shm_name) {
-            (Some(p), _) => p,
-            (None, Some(_)) => InputProtocol::Shm,
-            (None, None) => InputProtocol::Udp(ProtocolChoice::Auto),
-        };
-        let host = if self.multicast.is_some() {
-            Ipv4Addr::UNSPECIFIED
-        } else {
-            Ipv4Addr::LOCALHOST
-        };
-        Some(InputSpec {
+        return Ok(RunSettings {
+            input: None,
+            max_extrapolation_ms,
+            wait_pose_s,
+            fps,
+        });
+    }
+    let cli_protocol = a
+        .protocol
+        .or(a.shm_name.is_some().then_some(InputProtocol::Shm));
+    let config_protocol = c
+        .protocol
+        .map(config_protocol)
+        .or(c.shm_name.is_some().then_some(InputProtocol::Shm));
+    let protocol = cli_protocol
+        .or(config_protocol.filter(|p| !(cli_udp && *p == InputProtocol::Shm)))
+        .unwrap_or(InputProtocol::Udp(ProtocolChoice::Auto));
+    let shm = protocol == InputProtocol::Shm;
+    // Keys of the other transport do not apply (the config itself refuses mixing them).
+    let (cfg_listen, cfg_multicast, cfg_if, cfg_allow, cfg_shm) = if shm {
+        (None, None, None, Vec::new(), c.shm_name.clone())
+    } else {
+        (c.listen, c.multicast, c.multicast_if, c.allow.clone(), None)
+    };
+    let multicast = a.multicast.or(cfg_multicast);
+    let multicast_if = a.multicast_if.or(cfg_if);
+    if multicast_if.is_some() && multicast.is_none() {
+        return Err(bad_input(
+            "--multicast-if: only with --multicast (or input.multicast)",
+        ));
+    }
+    let host = if multicast.is_some() {
+        Ipv4Addr::UNSPECIFIED
+    } else {
+        Ipv4Addr::LOCALHOST
+    };
+    Ok(RunSettings {
+        input: Some(InputSpec {
             protocol,
-            listen: self
+            listen: a
                 .listen
+                .or(cfg_listen)
                 .unwrap_or(SocketAddr::V4(SocketAddrV4::new(host, DEFAULT_PORT))),
-            multicast: self.multicast,
-            multicast_interface: self.multicast_if.unwrap_or(Ipv4Addr::UNSPECIFIED),
-            allow: self.allow.clone(),
-            shm_name: self
+            multicast,
+            multicast_interface: multicast_if.unwrap_or(Ipv4Addr::UNSPECIFIED),
+            allow: if a.allow.is_empty() {
+                cfg_allow
+            } else {
+                a.allow.clone()
+            },
+            shm_name: a
                 .shm_name
                 .clone()
+                .or(cfg_shm)
                 .unwrap_or_else(|| DEFAULT_SHM_NAME.to_string()),
-            cap_s: self.max_extrapolation_ms / 1e3,
-            sync_frames: self.sync_frames,
-        })
-    }
+            cap_s: max_extrapolation_ms / 1e3,
+            sync_frames,
+        }),
+        max_extrapolation_ms,
+        wait_pose_s,
+        fps,
+    })
 }
 
 /// The built-in straight pass as a pose source: the pass restarts at its beginning after
@@ -432,19 +512,22 @@ impl PoseSource for RunPoses {
 
 /// Opens the simulator input of the arguments (if any) for dataset `ds`.
 pub fn open_input(
-    a: &RunArgs,
+    settings: &RunSettings,
     ds: &crate::terrain::dataset::Dataset,
 ) -> Result<Option<SimInput>, Failure> {
-    let Some(spec) = a.input_spec() else {
+    let Some(spec) = &settings.input else {
         return Ok(None);
     };
-    let input = SimInput::open(&spec, GeoMapping::of_dataset(ds)).map_err(runtime)?;
+    let input = SimInput::open(spec, GeoMapping::of_dataset(ds)).map_err(runtime)?;
     eprintln!(
         "pose input: {}{}",
         input.what,
         match spec.sync_frames {
             Some(k) => format!(", frame-locked to host frame newest−{k}"),
-            None => format!(", extrapolated at most {} ms", a.max_extrapolation_ms),
+            None => format!(
+                ", extrapolated at most {} ms",
+                settings.max_extrapolation_ms
+            ),
         }
     );
     Ok(Some(input))
@@ -463,6 +546,8 @@ pub(crate) struct Plan {
     pub config: RenderConfig,
     pub source: String,
     pub channels: Vec<Channel>,
+    /// Flags over the config's `[input]` and `render.fps`.
+    pub settings: RunSettings,
 }
 
 fn check_args(a: &RunArgs) -> Result<(), Failure> {
@@ -497,13 +582,15 @@ fn check_args(a: &RunArgs) -> Result<(), Failure> {
     if let Some(p) = &a.stats {
         check_out_folder("--stats", p)?;
     }
-    if !(a.max_extrapolation_ms.is_finite() && a.max_extrapolation_ms >= 0.0) {
-        return Err(bad_input(format!(
-            "--max-extrapolation-ms: {} must be a finite number ≥ 0",
-            a.max_extrapolation_ms
-        )));
+    if let Some(ms) = a.max_extrapolation_ms {
+        if !(ms.is_finite() && ms >= 0.0) {
+            return Err(bad_input(format!(
+                "--max-extrapolation-ms: {ms} must be a finite number ≥ 0"
+            )));
+        }
     }
     for (name, v) in [("--wait-pose-s", a.wait_pose_s), ("--fps", a.fps)] {
+        let Some(v) = v else { continue };
         if !(v.is_finite() && v > 0.0) {
             return Err(bad_input(format!(
                 "{name}: {v} must be a finite positive number"
@@ -532,25 +619,18 @@ fn check_args(a: &RunArgs) -> Result<(), Failure> {
     if let Some(s) = &a.size {
         parse_size_arg(s).map_err(|e| bad_input(format!("--size: {e}")))?;
     }
-    match a.input_spec() {
-        _ if a.multicast_if.is_some() && a.multicast.is_none() => {
-            return Err(bad_input("--multicast-if: only with --multicast"));
-        }
-        None if a.sync_frames.is_some() => return Err(bad_input(
-            "--sync-frames: needs a pose input (--listen, --protocol, --multicast or --shm-name)",
-        )),
-        Some(spec)
-            if spec.protocol == InputProtocol::Shm
-                && (a.listen.is_some() || a.multicast.is_some() || !a.allow.is_empty()) =>
-        {
-            return Err(bad_input(
-                "--protocol shm reads shared memory: --listen, --multicast and --allow apply to UDP only",
-            ));
-        }
-        Some(spec) if spec.protocol != InputProtocol::Shm && a.shm_name.is_some() => {
-            return Err(bad_input("--shm-name: only with --protocol shm"));
-        }
-        _ => {}
+    // Flag combinations that contradict each other (flags over config keys: resolve_settings).
+    let cli_shm = match a.protocol {
+        Some(p) => p == InputProtocol::Shm,
+        None => a.shm_name.is_some(),
+    };
+    if cli_shm && (a.listen.is_some() || a.multicast.is_some() || !a.allow.is_empty()) {
+        return Err(bad_input(
+            "--protocol shm reads shared memory: --listen, --multicast and --allow apply to UDP only",
+        ));
+    }
+    if !cli_shm && a.shm_name.is_some() {
+        return Err(bad_input("--shm-name: only with --protocol shm"));
     }
     Ok(())
 }
@@ -564,6 +644,7 @@ pub(crate) fn plan(a: &RunArgs) -> Result<Plan, Failure> {
         ),
         None => (RenderConfig::default(), "(defaults)".to_owned()),
     };
+    let settings = resolve_settings(a, &config)?;
     let r = &config.render;
     let mut channels = if config.channels.is_empty() {
         vec![Channel::window(
@@ -614,6 +695,7 @@ pub(crate) fn plan(a: &RunArgs) -> Result<Plan, Failure> {
         config,
         source,
         channels,
+        settings,
     })
 }
 
@@ -669,7 +751,7 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
         .unwrap_or(60.0)
         .max(1.0);
     let pass = StraightPass::over(&ds, a.heading, a.pitch, a.speed, a.agl, period_s);
-    let input = open_input(a, &ds)?;
+    let input = open_input(&plan.settings, &ds)?;
     let geo = GeoMapping::of_dataset(&ds).ok();
     // Predicted display: one frame after the frame starts (FIFO, frames in flight).
     let lead_s = 1.0 / 60.0;
@@ -904,7 +986,10 @@ mod tests {
         let spec = |extra: &[&str]| {
             use clap::Parser;
             let argv = ["run", "--dem", "x"].iter().chain(extra);
-            Cli::try_parse_from(argv).unwrap().args.input_spec()
+            let args = Cli::try_parse_from(argv).unwrap().args;
+            resolve_settings(&args, &RenderConfig::default())
+                .unwrap()
+                .input
         };
         assert!(spec(&[]).is_none());
         let s = spec(&["--protocol", "cigi"]).unwrap();
@@ -929,6 +1014,112 @@ mod tests {
             "shm"
         ])
         .is_ok());
+    }
+
+    fn settings_of(config: &str, extra: &[&str]) -> Result<RunSettings, Failure> {
+        use clap::Parser;
+        let cfg = aerie_config::parse(config, "ig.toml").unwrap();
+        let argv = ["run", "--dem", "x"].iter().chain(extra);
+        resolve_settings(&Cli::try_parse_from(argv).unwrap().args, &cfg)
+    }
+
+    /// `[input]` of the config is used; each flag given overrides its key; a flag choosing the
+    /// other transport drops the config's keys of the first.
+    #[test]
+    fn config_input_is_used_and_flags_override_it() {
+        let cfg = "[render]\nfps = 30\n[input]\nprotocol = \"cigi\"\nlisten = \"127.0.0.1:47999\"\nallow = [\"127.0.0.2\"]\nmax_extrapolation_ms = 40\nsync_frames = 2\nwait_pose_s = 3\n";
+        let s = settings_of(cfg, &[]).unwrap();
+        let i = s.input.as_ref().expect("the config turns the input on");
+        assert_eq!(
+            i.protocol,
+            InputProtocol::Udp(ProtocolChoice::Only(
+                aerie_sim_bridge::codec::Protocol::Cigi
+            ))
+        );
+        assert_eq!(i.listen, "127.0.0.1:47999".parse().unwrap());
+        assert_eq!(i.allow, ["127.0.0.2".parse::<IpAddr>().unwrap()]);
+        assert_eq!((i.cap_s, i.sync_frames), (0.04, Some(2)));
+        assert_eq!(
+            (s.max_extrapolation_ms, s.wait_pose_s, s.fps),
+            (40.0, 3.0, 30.0)
+        );
+
+        let s = settings_of(
+            cfg,
+            &[
+                "--protocol",
+                "native",
+                "--listen",
+                "127.0.0.1:5000",
+                "--allow",
+                "127.0.0.3",
+                "--max-extrapolation-ms",
+                "0",
+                "--sync-frames",
+                "0",
+                "--wait-pose-s",
+                "1",
+                "--fps",
+                "90",
+            ],
+        )
+        .unwrap();
+        let i = s.input.as_ref().unwrap();
+        assert_eq!(
+            i.protocol,
+            InputProtocol::Udp(ProtocolChoice::Only(
+                aerie_sim_bridge::codec::Protocol::Aerie
+            ))
+        );
+        assert_eq!(i.listen, "127.0.0.1:5000".parse().unwrap());
+        assert_eq!(i.allow, ["127.0.0.3".parse::<IpAddr>().unwrap()]);
+        assert_eq!((i.cap_s, i.sync_frames), (0.0, Some(0)));
+        assert_eq!(
+            (s.max_extrapolation_ms, s.wait_pose_s, s.fps),
+            (0.0, 1.0, 90.0)
+        );
+
+        // --shm-name switches to shared memory: the config's UDP keys no longer apply.
+        let i = settings_of(cfg, &["--shm-name", "sim"])
+            .unwrap()
+            .input
+            .unwrap();
+        assert_eq!(
+            (i.protocol, i.shm_name.as_str()),
+            (InputProtocol::Shm, "sim")
+        );
+        // A config on shared memory and --listen on the command line: UDP.
+        let i = settings_of(
+            "[input]\nshm_name = \"sim\"\n",
+            &["--listen", "127.0.0.1:7"],
+        )
+        .unwrap()
+        .input
+        .unwrap();
+        assert_eq!(i.protocol, InputProtocol::Udp(ProtocolChoice::Auto));
+        assert_eq!(i.listen, "127.0.0.1:7".parse().unwrap());
+        // Multicast from the config: bound on all interfaces; interface from the flag.
+        let i = settings_of(
+            "[input]\nmulticast = \"239.1.2.3\"\n",
+            &["--multicast-if", "127.0.0.1"],
+        )
+        .unwrap()
+        .input
+        .unwrap();
+        assert_eq!(i.listen, "0.0.0.0:47800".parse().unwrap());
+        assert_eq!(i.multicast_interface, Ipv4Addr::LOCALHOST);
+        // Tuning keys alone do not turn the input on; defaults without anything.
+        let s = settings_of("[input]\nmax_extrapolation_ms = 5\n", &[]).unwrap();
+        assert!(s.input.is_none());
+        assert_eq!(
+            (s.max_extrapolation_ms, s.wait_pose_s, s.fps),
+            (5.0, 10.0, 60.0)
+        );
+        // Sync frames beyond the history, from a flag: refused naming the flag.
+        let f =
+            settings_of("[input]\nprotocol = \"cigi\"\n", &["--sync-frames", "64"]).unwrap_err();
+        assert_eq!(f.code, 2);
+        assert!(f.message.starts_with("--sync-frames: 64"), "{}", f.message);
     }
 
     /// The window path's pose source: default view and a "waiting" row until the first pose,
