@@ -466,11 +466,14 @@ pub(crate) fn comparisons(summaries: &[Summary]) -> Vec<String> {
             ratio(b.gpu_ms.median, base.gpu_ms.median),
         ));
         if let Some((tris, ms, tau_a, tau_b)) = bounded_at_error(summaries, base.error_px()) {
+            let how = if tau_a == tau_b {
+                format!("bounded τ={tau_a} measured exactly")
+            } else {
+                format!("interpolated (log-log between bounded τ={tau_a} and τ={tau_b})")
+            };
             out.push(format!(
-                "vs **{}**, interpolated (log-log between bounded τ={} and τ={}) to exactly its {} px: {:.3}× the triangles ({} vs {}), {:.2}× the median frame time ({:.1} vs {:.1} ms)",
+                "vs **{}**, {how} at its {} px: {:.3}× the triangles ({} vs {}), {:.2}× the median frame time ({:.1} vs {:.1} ms)",
                 base.config.label(),
-                tau_a,
-                tau_b,
                 px(base.error_px()),
                 ratio(tris, base.triangles.median),
                 count(tris),
