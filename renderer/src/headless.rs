@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 use aerie_config::Channel;
 
 use crate::camera::parse_size_arg;
-use crate::channel::{channel_camera, AircraftPose};
+use crate::channel::AircraftPose;
 use crate::cli::{bad_input, prepare_terrain, runtime, Failure};
 use crate::commands::run::{
     open_input, open_stats, percentile, plan, Plan, RunArgs, RunPoses, StraightPassSource,
@@ -20,10 +20,12 @@ use crate::commands::run::{
 use crate::flight::StraightPass;
 use crate::frame::{RendererDesc, TerrainRenderer};
 use crate::output::write_text;
+use crate::overlay::{OverlayInfo, OverlayState};
 use crate::pose_input::{counters_text, GeoMapping, SimInput};
 use crate::stats_csv::FrameRow;
 use crate::terrain::select::SelectParams;
 use crate::vk::DeviceDesc;
+use crate::window::PoseSource;
 
 /// How often the input is polled while a paced loop waits for the next frame: often enough that
 /// frame-locked mode sees (nearly) every host frame of a 60-120 Hz host.
@@ -152,6 +154,7 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
             "max": percentile(&ms, 1.0),
         },
         "triangles": {"median": percentile(&tri, 0.5), "max": percentile(&tri, 1.0)},
+        "overlay_frames": report.overlay_frames,
         "channels": channels,
         "input": poses.summary_json(),
         "stats": a.stats.as_ref().map(|p| p.display().to_string()),
@@ -198,6 +201,8 @@ struct LoopReport {
     seconds: f64,
     frame_ms: Vec<f64>,
     triangles: Vec<f64>,
+    /// Channel frames drawn with the statistics overlay.
+    overlay_frames: u64,
 }
 
 fn frame_loop(
@@ -218,6 +223,12 @@ fn frame_loop(
     let mut triangles = Vec::new();
     let mut frame = 0u64;
     let base = renderer.desc().select;
+    // --overlay: the statistics panel drawn into every channel's frame (as `aerie fly` does).
+    let mut overlays: Vec<OverlayState> = channels
+        .iter()
+        .map(|_| OverlayState::new(a.overlay))
+        .collect();
+    let mut overlay_frames = 0u64;
     loop {
         if a.frames.is_some_and(|n| frame >= n)
             || a.seconds.is_some_and(|s| t0.elapsed().as_secs_f64() >= s)
@@ -246,12 +257,14 @@ fn frame_loop(
             (started - t0).as_secs_f64()
         };
         let (pose, origin) = poses.next(frame, t_s)?;
-        let views: Vec<_> = channels
+        // The host's CIGI views replace the channels' view, eye and frustum before selection.
+        let views: Vec<_> = poses
+            .live_channels(channels)
             .iter()
             .zip(sizes)
-            .map(|(ch, &(w, h))| {
-                let cam = channel_camera((pose.position, pose.attitude), ch, w as f64 / h as f64);
-                (cam, (w, h), ch.tau_px)
+            .map(|(live, &(w, h))| {
+                let cam = live.camera(&pose, w as f64 / h as f64);
+                (cam, (w, h), live.channel.tau_px)
             })
             .collect();
         // One selection for all channels, as in the window path.
@@ -261,7 +274,7 @@ fn frame_loop(
             Vec::new()
         });
         let mut tri = 0u64;
-        for (camera, (w, h), tau) in &views {
+        for (k, (camera, (w, h), tau)) in views.iter().enumerate() {
             renderer.resize(*w, *h).map_err(runtime)?;
             if renderer.desc().select.tau_px != *tau {
                 renderer.set_select_params(SelectParams {
@@ -269,9 +282,18 @@ fn frame_loop(
                     ..base
                 });
             }
+            let panel = overlays[k].panel((*w, *h), poses.pose_age_ms());
+            overlay_frames += u64::from(panel.is_some());
+            renderer.set_overlay(panel);
+            let channel_wall = Instant::now();
             let stats = renderer.render(camera).map_err(runtime)?;
+            overlays[k].record(
+                channel_wall.elapsed().as_secs_f64() * 1e3,
+                OverlayInfo::from_stats(&stats, *tau),
+            );
             tri += stats.triangles;
         }
+        renderer.set_overlay(None);
         let ms = started.elapsed().as_secs_f64() * 1e3;
         frame_ms.push(ms);
         triangles.push(tri as f64);
@@ -313,6 +335,7 @@ fn frame_loop(
         seconds: t0.elapsed().as_secs_f64(),
         frame_ms,
         triangles,
+        overlay_frames,
     })
 }
 

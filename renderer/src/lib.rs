@@ -11,6 +11,7 @@ pub mod flight;
 pub mod frame;
 pub mod gpu;
 pub mod headless;
+pub mod host_view;
 pub mod image_error;
 pub mod output;
 pub mod overlay;

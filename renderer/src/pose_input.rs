@@ -505,6 +505,11 @@ impl SimInput {
         self.sync_frames
     }
 
+    /// The host's latest CIGI views (View Control / View Definition), empty for other protocols.
+    pub fn views(&mut self) -> &aerie_sim_bridge::codec::cigi::ViewTable {
+        self.reader.views()
+    }
+
     /// Counters now.
     pub fn stats(&self) -> StatsSnapshot {
         self.reader.stats()

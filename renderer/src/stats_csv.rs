@@ -17,7 +17,7 @@
 //! | `pose_age_ms` | predicted display time − arrival of the pose's packet |
 //! | `extrapolated` | 1 when the pose was carried forward from the received one |
 //! | `stream` | `live`, `lost`, `waiting` (default view, no pose yet) or `builtin` (no input) |
-//! | `triangles` | triangles drawn over all channels (headless; empty in windows) |
+//! | `triangles` | triangles drawn over all channels (empty when the frame drew none) |
 //! | `frame_ms` | wall time of the frame (headless: its rendering; windows: since the last frame) |
 //!
 //! Floating-point values are written with Rust's shortest round-trip formatting, so a reader

@@ -41,8 +41,9 @@ use winit::monitor::{MonitorHandle, VideoModeHandle};
 use winit::platform::run_on_demand::EventLoopExtRunOnDemand;
 use winit::window::{Fullscreen, Window, WindowId};
 
-use crate::channel::{channel_camera, AircraftPose};
+use crate::channel::AircraftPose;
 use crate::frame::{FrameStats, TerrainRenderer};
+use crate::host_view::LiveChannel;
 use crate::overlay::{OverlayInfo, OverlayState};
 use crate::vk::swapchain::{choose_present_mode, Acquire, Presented, Surface, Swapchain};
 use crate::vk::{Device, Instance, VkError};
@@ -97,6 +98,17 @@ pub trait PoseSource {
     fn failure(&mut self) -> Option<String> {
         None
     }
+
+    /// The channels to draw this frame, called once per frame after [`PoseSource::pose`] and
+    /// before selection: the configured ones, with the host's CIGI views applied when the
+    /// source has any ([`crate::host_view`]).
+    fn channels(&mut self, configured: &[Channel]) -> Vec<LiveChannel> {
+        configured.iter().map(LiveChannel::configured).collect()
+    }
+
+    /// The frame just drawn: the statistics of every channel drawn (empty when none was), so
+    /// the source can complete its per-frame records (e.g. the `--stats` triangles).
+    fn frame_drawn(&mut self, _frame: u64, _stats: &[FrameStats]) {}
 }
 
 impl<F: FnMut(u64, f64) -> AircraftPose> PoseSource for F {
@@ -350,6 +362,7 @@ pub fn run_channels(
             .iter()
             .map(|_| OverlayState::new(opts.overlay))
             .collect(),
+        live: channels.iter().map(LiveChannel::configured).collect(),
     };
     let loop_result = event_loop.run_app_on_demand(&mut app);
     app.teardown();
@@ -412,6 +425,8 @@ struct App<'a> {
     next_action: usize,
     /// Per channel: overlay on/off (toggled together) and its recent numbers.
     overlays: Vec<OverlayState>,
+    /// Per channel: as drawn this frame (host views applied), from the pose source.
+    live: Vec<LiveChannel>,
 }
 
 impl App<'_> {
@@ -532,7 +547,8 @@ impl App<'_> {
             .zip(drawable)
             .filter(|(_, &d)| d)
             .map(|(w, _)| {
-                let ch = &self.channels[w.channel];
+                let live = &self.live[w.channel];
+                let ch = &live.channel;
                 let size = match (&w.swapchain, w.stale) {
                     (Some(sc), false) => (sc.extent.width, sc.extent.height),
                     _ => {
@@ -541,8 +557,7 @@ impl App<'_> {
                     }
                 };
                 let (rw, rh) = ch.resolution.unwrap_or(size);
-                let camera =
-                    channel_camera((pose.position, pose.attitude), ch, rw as f64 / rh as f64);
+                let camera = live.camera(pose, rw as f64 / rh as f64);
                 (camera, (rw, rh), ch.tau_px)
             })
             .collect();
@@ -578,10 +593,12 @@ impl App<'_> {
         if let Some(why) = self.pose.failure() {
             return Err(WindowError::System(why));
         }
+        self.live = self.pose.channels(self.channels);
         self.share_selection(&drawable, &pose);
         let pose_age_ms = self.pose.pose_age_ms();
         // Frame time as seen by the pilot: between the starts of consecutive frames.
         let frame_ms = self.frame_ms.last().copied();
+        let mut drawn = Vec::new();
         for (k, ok) in drawable.into_iter().enumerate() {
             let i = self.windows[k].channel;
             if !ok {
@@ -591,7 +608,7 @@ impl App<'_> {
             let stats = draw_channel(
                 self.renderer,
                 &mut self.windows[k],
-                &self.channels[i],
+                &self.live[i],
                 &mut self.reports[i],
                 &pose,
                 (&self.overlays[i], pose_age_ms),
@@ -602,8 +619,10 @@ impl App<'_> {
                     Some(ms) => self.overlays[i].record(ms, info),
                     None => self.overlays[i].record_info(info),
                 }
+                drawn.push(stats);
             }
         }
+        self.pose.frame_drawn(self.frames, &drawn);
         self.frames += 1;
         if self.opts.max_frames.is_some_and(|n| self.frames >= n) {
             self.finish(event_loop, Some(ExitReason::Frames));
@@ -842,7 +861,7 @@ pub fn is_overlay_toggle(key: &Key, state: ElementState, repeat: bool) -> bool {
 fn draw_channel(
     renderer: &mut TerrainRenderer,
     w: &mut ChannelWindow,
-    ch: &Channel,
+    live: &LiveChannel,
     report: &mut ChannelReport,
     pose: &AircraftPose,
     (overlay, pose_age_ms): (&OverlayState, Option<f64>),
@@ -876,6 +895,7 @@ fn draw_channel(
         report.skipped += 1;
         return Ok(None);
     };
+    let ch = &live.channel;
     let extent = image.target.extent;
     let (rw, rh) = ch.resolution.unwrap_or((extent.width, extent.height));
     renderer.resize(rw, rh)?;
@@ -884,7 +904,7 @@ fn draw_channel(
         params.tau_px = ch.tau_px;
         renderer.set_select_params(params);
     }
-    let camera = channel_camera((pose.position, pose.attitude), ch, rw as f64 / rh as f64);
+    let camera = live.camera(pose, rw as f64 / rh as f64);
     let panel = overlay.panel((rw, rh), pose_age_ms);
     let with_overlay = panel.is_some();
     renderer.set_overlay(panel);

@@ -697,3 +697,180 @@ fn bad_streams_stop_with_a_clear_message() {
         "{err}"
     );
 }
+
+/// CIGI View Control (16) and View Definition (21) drive the channels (issue 6 item 3, issue 7):
+/// the host's view 5 (channel "front" by `cigi_view = 5`) gets a view and eye offset, view 1
+/// (channel "side" by its index) an asymmetric frustum and near clip, and a bad definition of
+/// view 9 (left ≥ right) is counted and ignored. The config's `[input]` picks the protocol and
+/// the extrapolation cap; `--listen` on the command line adds the port. `--overlay` draws the
+/// panel into every headless channel frame.
+#[test]
+fn cigi_views_replace_channel_view_offsets_and_frusta() {
+    use aerie_sim_bridge::codec::cigi::{ViewControl, ViewDefinition};
+    use aerie_sim_bridge::send::{cigi_message, CIGI_ORDER};
+    let dir = tempfile::tempdir().unwrap();
+    let dem = demo_dem();
+    let (aerie, _) = bins();
+    let config = dir.path().join("ig.toml");
+    std::fs::write(
+        &config,
+        "[render]\nsize = \"160x90\"\n\n[input]\nprotocol = \"cigi\"\nmax_extrapolation_ms = 0\nwait_pose_s = 30\n\n\
+         [[channel]]\nname = \"front\"\ncigi_view = 5\nframes = 0\n",
+    )
+    .unwrap();
+    // An unknown key is refused naming the file, line, column and key, before anything opens.
+    let out = Command::new(aerie)
+        .args(["run", "--headless", "--frames", "1", "--config"])
+        .arg(&config)
+        .arg("--dem")
+        .arg(&dem)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("ig.toml:12:1: channel[0].frames: unknown field `frames`"),
+        "{err}"
+    );
+    std::fs::write(
+        &config,
+        "[render]\nsize = \"160x90\"\n\n[input]\nprotocol = \"cigi\"\nmax_extrapolation_ms = 0\nwait_pose_s = 30\n\n\
+         [[channel]]\nname = \"front\"\ncigi_view = 5\nfrustum = { hfov = 60.0 }\n\n\
+         [[channel]]\nname = \"side\"\nview = { heading = 60.0 }\nfrustum = { hfov = 60.0 }\n",
+    )
+    .unwrap();
+    let port = free_port();
+    let json = dir.path().join("run.json");
+    let stats = dir.path().join("stats.csv");
+    let mut a = args(&[
+        "run",
+        "--headless",
+        "--frames",
+        "6",
+        "--fps",
+        "10",
+        "--overlay",
+    ]);
+    a.extend([
+        "--config".into(),
+        s(&config),
+        "--dem".into(),
+        s(&dem),
+        "--listen".into(),
+        format!("127.0.0.1:{port}"),
+        "--json".into(),
+        s(&json),
+        "--stats".into(),
+        s(&stats),
+    ]);
+    let run = spawn(aerie, &a);
+    let done = Arc::new(AtomicBool::new(false));
+    let sender = {
+        let done = done.clone();
+        std::thread::spawn(move || {
+            let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+            let mut f = 1u32;
+            while !done.load(Ordering::Relaxed) && f < 20 * 90 {
+                let pose = Pose {
+                    position: PosePosition::Geodetic {
+                        lat_deg: 47.3,
+                        lon_deg: 11.4,
+                        alt_m: 3500.0,
+                    },
+                    attitude_deg: [70.0, -5.0, 0.0],
+                    sim_time_s: f as f64 / 20.0,
+                    frame: f.into(),
+                    velocity_enu: None,
+                    angular_rates_deg_s: None,
+                };
+                let mut m = cigi_message(&pose, f).unwrap();
+                m.extend(
+                    ViewControl {
+                        view_id: 5,
+                        enable: 0x3F,
+                        entity_id: 0,
+                        offset_m: [1.5, -0.5, -2.0],
+                        roll_pitch_yaw_deg: [1.25, -4.5, 33.25],
+                        ..ViewControl::default()
+                    }
+                    .encode(CIGI_ORDER),
+                );
+                let def = |view_id, [left, right, top, bottom]: [f32; 4]| ViewDefinition {
+                    view_id,
+                    enable: 0x3F,
+                    near_m: 2.0,
+                    far_m: 50_000.0,
+                    left_deg: left,
+                    right_deg: right,
+                    top_deg: top,
+                    bottom_deg: bottom,
+                    ..ViewDefinition::default()
+                };
+                m.extend(def(1, [-20.0, 25.0, 15.0, -10.0]).encode(CIGI_ORDER));
+                m.extend(def(9, [30.0, 20.0, 15.0, -10.0]).encode(CIGI_ORDER));
+                socket.send_to(&m, ("127.0.0.1", port)).unwrap();
+                f += 1;
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        })
+    };
+    let out = wait(run, Duration::from_secs(90), "aerie run (CIGI views)");
+    done.store(true, Ordering::Relaxed);
+    sender.join().unwrap();
+    assert!(
+        out.status.success(),
+        "exit {:?}\nstdout:\n{}\nstderr:\n{}",
+        out.status.code(),
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let views = &summary["input"]["views"];
+    let close = |v: &serde_json::Value, want: f64| (v.as_f64().unwrap() - want).abs() < DEG;
+    let front = &views["channels"][0];
+    assert_eq!(front["name"], "front");
+    assert_eq!(front["host_view"], true, "{views:#}");
+    assert!(close(&front["view"]["heading"], 33.25), "{front}");
+    assert!(close(&front["view"]["pitch"], -4.5), "{front}");
+    assert!(close(&front["view"]["roll"], 1.25), "{front}");
+    // CIGI's body frame is forward, right, down; the eye's up is −z.
+    for (k, want) in [("forward", 1.5), ("right", -0.5), ("up", 2.0)] {
+        assert!(
+            (front["eye"][k].as_f64().unwrap() - want).abs() < MM,
+            "{front}"
+        );
+    }
+    assert_eq!(front["frustum"]["hfov"], 60.0, "{front}");
+    let side = &views["channels"][1];
+    assert_eq!(
+        (side["cigi_view"].as_u64(), side["host_view"].as_bool()),
+        (Some(1), Some(false))
+    );
+    assert_eq!(side["host_frustum"], true, "{side}");
+    assert!(close(&side["view"]["heading"], 60.0), "{side}");
+    for (k, want) in [
+        ("left", -20.0),
+        ("right", 25.0),
+        ("up", 15.0),
+        ("down", -10.0),
+    ] {
+        assert!(close(&side["frustum"][k], want), "{side}");
+    }
+    assert_eq!(side["near_m"], 2.0);
+    assert_eq!(views["rejected"], 1, "{views:#}");
+    assert!(
+        views["last_rejection"]
+            .as_str()
+            .unwrap()
+            .contains("view 9: left half-angle 30° must be less than right"),
+        "{views:#}"
+    );
+    assert!(text(&out.stderr).contains("CIGI view 9: left half-angle"));
+    // The config's cap 0 was used: nothing extrapolated.
+    assert_eq!(summary["input"]["extrapolated_pct"], 0.0);
+    assert_eq!(summary["overlay_frames"], 12);
+    let rows = read_csv(&stats);
+    assert_eq!(rows.len(), 6);
+    assert!(rows.iter().all(|r| num(r, "triangles") > 0.0));
+}

@@ -29,7 +29,8 @@ use crate::camera::parse_size_arg;
 use crate::channel::AircraftPose;
 use crate::cli::{bad_input, prepare_terrain, runtime, Failure};
 use crate::flight::StraightPass;
-use crate::frame::{RendererDesc, TerrainRenderer};
+use crate::frame::{FrameStats, RendererDesc, TerrainRenderer};
+use crate::host_view::{HostViews, LiveChannel};
 use crate::output::write_text;
 use crate::pose_input::{counters_text, GeoMapping, InputProtocol, InputSpec, SimInput};
 use crate::stats_csv::{FrameRow, PoseOrigin, StatsWriter};
@@ -313,6 +314,10 @@ pub struct RunPoses {
     last_drawn: Option<AircraftPose>,
     /// Why the run must stop (set in the window path, where a pose source cannot return one).
     pub fail: Option<Failure>,
+    /// The host's CIGI views over the channels (made on the first frame).
+    pub views: Option<HostViews>,
+    /// Window path: this frame's `--stats` row, written once the frame's triangles are known.
+    pending: Option<FrameRow>,
 }
 
 impl RunPoses {
@@ -338,6 +343,27 @@ impl RunPoses {
             last_call: None,
             last_drawn: None,
             fail: None,
+            views: None,
+            pending: None,
+        }
+    }
+
+    /// The channels as drawn this frame: `configured` with the host's latest CIGI views
+    /// applied (as configured without an input or without views).
+    pub fn live_channels(&mut self, configured: &[Channel]) -> &[LiveChannel] {
+        let views = self.views.get_or_insert_with(|| HostViews::new(configured));
+        match &mut self.input {
+            Some(input) => views.update(input.views()),
+            None => views.live(),
+        }
+    }
+
+    /// Writes the window path's pending `--stats` row (without triangles if the frame was
+    /// never reported drawn).
+    fn flush_pending(&mut self) -> Result<(), Failure> {
+        match self.pending.take() {
+            Some(row) => self.record(&row),
+            None => Ok(()),
         }
     }
 
@@ -401,6 +427,7 @@ impl RunPoses {
         if let Some(i) = &mut self.input {
             i.stop();
         }
+        self.flush_pending()?;
         match &mut self.stats {
             Some(w) => w.flush().map_err(runtime),
             None => Ok(()),
@@ -436,6 +463,7 @@ impl RunPoses {
             "extrapolated_pct": pct(self.extrapolated, self.input_frames),
             "sync_frames": input_sync(input),
             "sync_exact_pct": input_sync(input).map(|_| pct(self.exact_sync, self.input_frames)),
+            "views": self.views.as_ref().map(HostViews::to_json),
         })
     }
 
@@ -481,16 +509,20 @@ impl PoseSource for RunPoses {
         let now = Instant::now();
         let frame_ms = self.last_call.map(|l| (now - l).as_secs_f64() * 1e3);
         self.last_call = Some(now);
-        let got = self.next(frame, t_s).and_then(|(pose, origin)| {
-            self.record(&FrameRow {
-                frame,
-                wall_s: t_s,
-                pose,
-                origin,
-                triangles: None,
-                frame_ms,
+        // The row waits for frame_drawn (the triangles); a frame never reported drawn is
+        // written without them when the next one starts.
+        let got = self.flush_pending().and_then(|_| {
+            self.next(frame, t_s).map(|(pose, origin)| {
+                self.pending = Some(FrameRow {
+                    frame,
+                    wall_s: t_s,
+                    pose,
+                    origin,
+                    triangles: None,
+                    frame_ms,
+                });
+                pose
             })
-            .map(|_| pose)
         });
         match got {
             Ok(pose) => pose,
@@ -507,6 +539,19 @@ impl PoseSource for RunPoses {
 
     fn failure(&mut self) -> Option<String> {
         self.fail.as_ref().map(|f| f.message.clone())
+    }
+
+    fn channels(&mut self, configured: &[Channel]) -> Vec<LiveChannel> {
+        self.live_channels(configured).to_vec()
+    }
+
+    fn frame_drawn(&mut self, frame: u64, stats: &[FrameStats]) {
+        if let Some(row) = self.pending.as_mut().filter(|r| r.frame == frame) {
+            row.triangles = Some(stats.iter().map(|s| s.triangles).sum());
+        }
+        if let Err(f) = self.flush_pending() {
+            self.fail.get_or_insert(f);
+        }
     }
 }
 
