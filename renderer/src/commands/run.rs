@@ -1167,6 +1167,47 @@ mod tests {
         assert!(f.message.starts_with("--sync-frames: 64"), "{}", f.message);
     }
 
+    /// Window path: a frame's `--stats` row waits for the frame's statistics (the triangles of
+    /// every channel drawn, summed); a frame never reported drawn keeps the column empty.
+    #[test]
+    fn window_frames_get_their_triangles_in_the_stats_rows() {
+        let ds = flat();
+        let dir = tempfile::tempdir().unwrap();
+        let csv = dir.path().join("s.csv");
+        let pass = StraightPass::over(&ds, 70.0, -10.0, 150.0, 600.0, 10.0);
+        let mut src = RunPoses::new(
+            None,
+            StraightPassSource {
+                pass,
+                period_s: 10.0,
+            },
+            0.0,
+            Some(StatsWriter::create(&csv, None).unwrap()),
+        );
+        let stats = |triangles| FrameStats {
+            triangles,
+            ..FrameStats::default()
+        };
+        let _ = PoseSource::pose(&mut src, 0, 0.0);
+        src.frame_drawn(0, &[stats(1200), stats(34)]);
+        let _ = PoseSource::pose(&mut src, 1, 0.1);
+        // Frame 1 is never reported drawn (e.g. every window minimised).
+        let _ = PoseSource::pose(&mut src, 2, 0.2);
+        src.frame_drawn(2, &[stats(7)]);
+        src.finish().unwrap();
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let col = crate::stats_csv::HEADER
+            .split(',')
+            .position(|h| h == "triangles")
+            .unwrap();
+        let tri: Vec<String> = text
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(col).unwrap().to_string())
+            .collect();
+        assert_eq!(tri, ["1234", "", "7"]);
+    }
+
     /// The window path's pose source: default view and a "waiting" row until the first pose,
     /// then the pose as sent (cap 0), and a bad-input failure for a geodetic pose on a dataset
     /// without geo-reference (the window loop ends the session on it).
