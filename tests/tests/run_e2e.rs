@@ -698,59 +698,135 @@ fn bad_streams_stop_with_a_clear_message() {
     );
 }
 
-/// CIGI View Control (16) and View Definition (21) drive the channels (issue 6 item 3, issue 7):
-/// the host's view 5 (channel "front" by `cigi_view = 5`) gets a view and eye offset, view 1
-/// (channel "side" by its index) an asymmetric frustum and near clip, and a bad definition of
-/// view 9 (left ≥ right) is counted and ignored. The config's `[input]` picks the protocol and
-/// the extrapolation cap; `--listen` on the command line adds the port. `--overlay` draws the
-/// panel into every headless channel frame.
-#[test]
-fn cigi_views_replace_channel_view_offsets_and_frusta() {
+/// A private Xvfb for the windowed run: its display number, or why there is none.
+struct Xvfb {
+    child: Child,
+    display: u32,
+}
+
+impl Xvfb {
+    fn start() -> Result<Self, String> {
+        let mut child = Command::new("Xvfb")
+            .args([
+                "-displayfd",
+                "1",
+                "-screen",
+                "0",
+                "1280x1024x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .map_err(|e| format!("cannot run Xvfb: {e}"))?;
+        let stdout = child.stdout.take().expect("piped");
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            use std::io::BufRead;
+            let mut line = String::new();
+            let _ = std::io::BufReader::new(stdout).read_line(&mut line);
+            let _ = tx.send(line);
+        });
+        match rx
+            .recv_timeout(Duration::from_secs(20))
+            .ok()
+            .and_then(|l| l.trim().parse().ok())
+        {
+            Some(display) => Ok(Self { child, display }),
+            None => {
+                stop(child);
+                Err("Xvfb did not report a display".into())
+            }
+        }
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The CIGI host of the view tests: the ownship pose over the Inn valley, View Control for
+/// view 5, a good View Definition for view 1 and a bad one (left ≥ right) for view 9, every
+/// 50 ms in one datagram, until `done`.
+fn cigi_view_host(port: u16, done: Arc<AtomicBool>) -> std::thread::JoinHandle<()> {
     use aerie_sim_bridge::codec::cigi::{ViewControl, ViewDefinition};
     use aerie_sim_bridge::send::{cigi_message, CIGI_ORDER};
+    std::thread::spawn(move || {
+        let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+        let mut f = 1u32;
+        while !done.load(Ordering::Relaxed) && f < 20 * 90 {
+            let pose = Pose {
+                position: PosePosition::Geodetic {
+                    lat_deg: 47.3,
+                    lon_deg: 11.4,
+                    alt_m: 3500.0,
+                },
+                attitude_deg: [70.0, -5.0, 0.0],
+                sim_time_s: f as f64 / 20.0,
+                frame: f.into(),
+                velocity_enu: None,
+                angular_rates_deg_s: None,
+            };
+            let mut m = cigi_message(&pose, f).unwrap();
+            m.extend(
+                ViewControl {
+                    view_id: 5,
+                    enable: 0x3F,
+                    entity_id: 0,
+                    offset_m: [1.5, -0.5, -2.0],
+                    roll_pitch_yaw_deg: [1.25, -4.5, 33.25],
+                    ..ViewControl::default()
+                }
+                .encode(CIGI_ORDER),
+            );
+            let def = |view_id, [left, right, top, bottom]: [f32; 4]| ViewDefinition {
+                view_id,
+                enable: 0x3F,
+                near_m: 2.0,
+                far_m: 50_000.0,
+                left_deg: left,
+                right_deg: right,
+                top_deg: top,
+                bottom_deg: bottom,
+                ..ViewDefinition::default()
+            };
+            m.extend(def(1, [-20.0, 25.0, 15.0, -10.0]).encode(CIGI_ORDER));
+            m.extend(def(9, [30.0, 20.0, 15.0, -10.0]).encode(CIGI_ORDER));
+            socket.send_to(&m, ("127.0.0.1", port)).unwrap();
+            f += 1;
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    })
+}
+
+/// The view-test config: channel "front" is CIGI view 5 by `cigi_view`, "side" view 1 by its
+/// index; `[input]` picks the protocol and the extrapolation cap.
+const VIEWS_CONFIG: &str = "[render]\nsize = \"160x90\"\n\n\
+    [input]\nprotocol = \"cigi\"\nmax_extrapolation_ms = 0\nwait_pose_s = 30\n\n\
+    [[channel]]\nname = \"front\"\ncigi_view = 5\nframes = 0\nfrustum = { hfov = 60.0 }\n\n\
+    [[channel]]\nname = \"side\"\nview = { heading = 60.0 }\nfrustum = { hfov = 60.0 }\n";
+
+/// Runs `aerie run` with [`VIEWS_CONFIG`] (`--listen` on the command line adds the port) and
+/// `mode` args, fed by [`cigi_view_host`]; checks that every channel was drawn with the host's
+/// view (within 0.001° / 1 mm) and returns the summary, the stats rows and stderr.
+fn run_with_cigi_views(
+    mode: &[&str],
+    display: Option<u32>,
+) -> (serde_json::Value, Vec<Row>, String) {
     let dir = tempfile::tempdir().unwrap();
     let dem = demo_dem();
     let (aerie, _) = bins();
     let config = dir.path().join("ig.toml");
-    std::fs::write(
-        &config,
-        "[render]\nsize = \"160x90\"\n\n[input]\nprotocol = \"cigi\"\nmax_extrapolation_ms = 0\nwait_pose_s = 30\n\n\
-         [[channel]]\nname = \"front\"\ncigi_view = 5\nframes = 0\n",
-    )
-    .unwrap();
-    // An unknown key is refused naming the file, line, column and key, before anything opens.
-    let out = Command::new(aerie)
-        .args(["run", "--headless", "--frames", "1", "--config"])
-        .arg(&config)
-        .arg("--dem")
-        .arg(&dem)
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
-    let err = text(&out.stderr);
-    assert!(
-        err.contains("ig.toml:12:1: channel[0].frames: unknown field `frames`"),
-        "{err}"
-    );
-    std::fs::write(
-        &config,
-        "[render]\nsize = \"160x90\"\n\n[input]\nprotocol = \"cigi\"\nmax_extrapolation_ms = 0\nwait_pose_s = 30\n\n\
-         [[channel]]\nname = \"front\"\ncigi_view = 5\nfrustum = { hfov = 60.0 }\n\n\
-         [[channel]]\nname = \"side\"\nview = { heading = 60.0 }\nfrustum = { hfov = 60.0 }\n",
-    )
-    .unwrap();
     let port = free_port();
     let json = dir.path().join("run.json");
     let stats = dir.path().join("stats.csv");
-    let mut a = args(&[
-        "run",
-        "--headless",
-        "--frames",
-        "6",
-        "--fps",
-        "10",
-        "--overlay",
-    ]);
+    let mut a = args(&["run"]);
+    a.extend(args(mode));
     a.extend([
         "--config".into(),
         s(&config),
@@ -763,57 +839,32 @@ fn cigi_views_replace_channel_view_offsets_and_frusta() {
         "--stats".into(),
         s(&stats),
     ]);
-    let run = spawn(aerie, &a);
-    let done = Arc::new(AtomicBool::new(false));
-    let sender = {
-        let done = done.clone();
-        std::thread::spawn(move || {
-            let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
-            let mut f = 1u32;
-            while !done.load(Ordering::Relaxed) && f < 20 * 90 {
-                let pose = Pose {
-                    position: PosePosition::Geodetic {
-                        lat_deg: 47.3,
-                        lon_deg: 11.4,
-                        alt_m: 3500.0,
-                    },
-                    attitude_deg: [70.0, -5.0, 0.0],
-                    sim_time_s: f as f64 / 20.0,
-                    frame: f.into(),
-                    velocity_enu: None,
-                    angular_rates_deg_s: None,
-                };
-                let mut m = cigi_message(&pose, f).unwrap();
-                m.extend(
-                    ViewControl {
-                        view_id: 5,
-                        enable: 0x3F,
-                        entity_id: 0,
-                        offset_m: [1.5, -0.5, -2.0],
-                        roll_pitch_yaw_deg: [1.25, -4.5, 33.25],
-                        ..ViewControl::default()
-                    }
-                    .encode(CIGI_ORDER),
-                );
-                let def = |view_id, [left, right, top, bottom]: [f32; 4]| ViewDefinition {
-                    view_id,
-                    enable: 0x3F,
-                    near_m: 2.0,
-                    far_m: 50_000.0,
-                    left_deg: left,
-                    right_deg: right,
-                    top_deg: top,
-                    bottom_deg: bottom,
-                    ..ViewDefinition::default()
-                };
-                m.extend(def(1, [-20.0, 25.0, 15.0, -10.0]).encode(CIGI_ORDER));
-                m.extend(def(9, [30.0, 20.0, 15.0, -10.0]).encode(CIGI_ORDER));
-                socket.send_to(&m, ("127.0.0.1", port)).unwrap();
-                f += 1;
-                std::thread::sleep(Duration::from_millis(50));
-            }
-        })
+    let command = |a: &[String]| {
+        let mut c = Command::new(aerie);
+        c.args(a).stdin(Stdio::null());
+        if let Some(d) = display {
+            c.env("DISPLAY", format!(":{d}"))
+                .env_remove("WAYLAND_DISPLAY");
+        }
+        c
     };
+    // An unknown key is refused naming the file, line, column and key, before anything opens.
+    std::fs::write(&config, VIEWS_CONFIG).unwrap();
+    let out = command(&a).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("ig.toml:12:1: channel[0].frames: unknown field `frames`"),
+        "{err}"
+    );
+    std::fs::write(&config, VIEWS_CONFIG.replace("frames = 0\n", "")).unwrap();
+    let run = command(&a)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let done = Arc::new(AtomicBool::new(false));
+    let sender = cigi_view_host(port, done.clone());
     let out = wait(run, Duration::from_secs(90), "aerie run (CIGI views)");
     done.store(true, Ordering::Relaxed);
     sender.join().unwrap();
@@ -866,11 +917,46 @@ fn cigi_views_replace_channel_view_offsets_and_frusta() {
             .contains("view 9: left half-angle 30° must be less than right"),
         "{views:#}"
     );
-    assert!(text(&out.stderr).contains("CIGI view 9: left half-angle"));
+    let err = text(&out.stderr);
+    assert!(err.contains("CIGI view 9: left half-angle"), "{err}");
     // The config's cap 0 was used: nothing extrapolated.
     assert_eq!(summary["input"]["extrapolated_pct"], 0.0);
+    (summary, read_csv(&stats), err)
+}
+
+/// CIGI View Control (16) and View Definition (21) drive the channels (issue 6 item 3, issue 7),
+/// headless: the host's view 5 (channel "front" by `cigi_view = 5`) gets a view and eye offset,
+/// view 1 (channel "side" by its index) an asymmetric frustum and near clip, and a bad definition
+/// of view 9 (left ≥ right) is counted and ignored. `--overlay` draws the panel into every
+/// headless channel frame.
+#[test]
+fn cigi_views_replace_channel_view_offsets_and_frusta() {
+    let (summary, rows, _) = run_with_cigi_views(
+        &["--headless", "--frames", "6", "--fps", "10", "--overlay"],
+        None,
+    );
     assert_eq!(summary["overlay_frames"], 12);
-    let rows = read_csv(&stats);
     assert_eq!(rows.len(), 6);
     assert!(rows.iter().all(|r| num(r, "triangles") > 0.0));
+}
+
+/// The same in windows (private Xvfb): the window path applies the host's views too, and its
+/// `--stats` rows carry the triangles of the frame.
+#[test]
+fn cigi_views_drive_windowed_channels_and_stats_count_triangles() {
+    let xvfb = match Xvfb::start() {
+        Ok(x) => x,
+        Err(why) => {
+            eprintln!("SKIPPED: {why}");
+            return;
+        }
+    };
+    let (summary, rows, _) =
+        run_with_cigi_views(&["--frames", "10", "--windowed"], Some(xvfb.display));
+    assert_eq!(summary["frames"], 10);
+    assert_eq!(rows.len(), 10);
+    let from_stream: Vec<&Row> = rows.iter().filter(|r| r["stream"] != "waiting").collect();
+    assert!(!from_stream.is_empty(), "no frame drew a received pose");
+    assert!(rows.iter().all(|r| num(r, "triangles") > 0.0), "{rows:?}");
+    drop(xvfb);
 }
