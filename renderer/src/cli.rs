@@ -258,7 +258,7 @@ fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
             max_refinement: if mode == LodMode::Full {
                 MAX_REFINEMENT
             } else {
-                4
+                SelectParams::default().max_refinement
             },
             ..SelectParams::default()
         },

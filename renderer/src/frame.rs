@@ -71,8 +71,9 @@ pub struct RendererDesc {
     pub select: SelectParams,
     /// Colour tiles by level and refinement (the seed's figure 3).
     pub debug_tiles: bool,
-    /// Skirt depth = factor × ε drawn + minimum (metres); the factor must be ≥ 1 (DESIGN.md:
-    /// "depth ≥ the tile's ε"); 2 also covers a neighbour with the same ε.
+    /// Skirt depth = factor × ½(ε + the largest of ε and its edge neighbours' ε) + minimum
+    /// (metres): at the default 2, ε + max(ε, neighbours' ε), which closes the cracks a
+    /// neighbour drawn at another level can open (`select::neighbour_eps`). Must be ≥ 1.
     pub skirt_factor: f32,
     pub skirt_min_m: f32,
     /// Prefetch looks this many frames ahead along the eye's motion.
@@ -91,7 +92,7 @@ impl Default for RendererDesc {
             tile_size: DEFAULT_TILE_SIZE,
             patch_tiles: 8,
             margin_tiles: 2,
-            pool_capacity: [256, 128, 48, 32, 0, 0],
+            pool_capacity: [256, 128, 48, 32, 16, 0],
             select: SelectParams::default(),
             debug_tiles: false,
             skirt_factor: 2.0,

@@ -304,7 +304,11 @@ fn renderer_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> RendererDesc {
             mode: config.mode,
             tau_px: config.tau_px.unwrap_or(1.0),
             curvature: !a.no_curvature,
-            max_refinement: if full { MAX_REFINEMENT } else { 4 },
+            max_refinement: if full {
+                MAX_REFINEMENT
+            } else {
+                SelectParams::default().max_refinement
+            },
             ..SelectParams::default()
         },
         ..defaults

@@ -58,7 +58,7 @@ impl Default for SelectParams {
             mode: LodMode::Bounded,
             tau_px: 1.0,
             curvature: true,
-            max_refinement: 4,
+            max_refinement: 5,
             coarsen: true,
             distance_factor: 3.0,
         }
