@@ -4,7 +4,10 @@
 
 use glam::DVec3;
 
-use crate::codec::cigi::{EntityControl, IgControl, IG_MODE_OPERATE, MINOR_VERSION};
+use crate::codec::cigi::{
+    fov_enable, view_enable, EntityControl, IgControl, ViewControl, ViewDefinition,
+    IG_MODE_OPERATE, MINOR_VERSION,
+};
 use crate::codec::{fgfs, native, xplane, ByteOrder, Protocol};
 use crate::geodesy::{Geodetic, LocalTangentPlane};
 use crate::pose::{Pose, PosePosition};
@@ -152,6 +155,80 @@ pub fn cigi_message(pose: &Pose, frame: u32) -> Option<Vec<u8>> {
     Some(b)
 }
 
+fn numbers(flag: &str, v: &str, form: &str, counts: &[usize]) -> Result<Vec<f64>, String> {
+    let bad = || format!("{flag} {v:?}: expected {form}");
+    let n: Vec<f64> = v
+        .split(',')
+        .map(|s| s.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or_else(bad)?;
+    if !counts.contains(&n.len()) {
+        return Err(bad());
+    }
+    Ok(n)
+}
+
+fn view_id(flag: &str, v: &str, id: f64) -> Result<u16, String> {
+    if id.fract() == 0.0 && (0.0..=65535.0).contains(&id) {
+        Ok(id as u16)
+    } else {
+        Err(format!("{flag} {v:?}: view ID {id} is not 0..=65535"))
+    }
+}
+
+/// `aerie-send --view id,heading,pitch,roll[,x,y,z]`: a CIGI View Control for view `id` of the
+/// ownship (yaw = heading, degrees; x forward, y right, z down, metres; the offset fields are
+/// enabled only when given). Values are sent as given: range checks are the IG's business.
+pub fn parse_view_control(v: &str) -> Result<ViewControl, String> {
+    const FORM: &str = "view_id,heading,pitch,roll[,x,y,z]";
+    let n = numbers("--view", v, FORM, &[4, 7])?;
+    let offset = n.get(4..7).map(|o| [o[0], o[1], o[2]]);
+    Ok(ViewControl {
+        view_id: view_id("--view", v, n[0])?,
+        enable: view_enable::ROLL
+            | view_enable::PITCH
+            | view_enable::YAW
+            | if offset.is_some() {
+                view_enable::X | view_enable::Y | view_enable::Z
+            } else {
+                0
+            },
+        entity_id: crate::codec::cigi::OWNSHIP,
+        offset_m: offset.unwrap_or_default().map(|x| x as f32),
+        roll_pitch_yaw_deg: [n[3] as f32, n[2] as f32, n[1] as f32],
+        ..ViewControl::default()
+    })
+}
+
+/// `aerie-send --view-frustum id,left,right,bottom,top[,near,far]`: a CIGI View Definition for
+/// view `id` (half-angles in degrees from the view axis, right and up positive; near/far in
+/// metres enabled only when given).
+pub fn parse_view_definition(v: &str) -> Result<ViewDefinition, String> {
+    const FORM: &str = "view_id,left,right,bottom,top[,near,far]";
+    let n = numbers("--view-frustum", v, FORM, &[5, 7])?;
+    let near_far = n.get(5..7).map(|o| [o[0], o[1]]);
+    let [near, far] = near_far.unwrap_or_default();
+    Ok(ViewDefinition {
+        view_id: view_id("--view-frustum", v, n[0])?,
+        enable: fov_enable::LEFT
+            | fov_enable::RIGHT
+            | fov_enable::TOP
+            | fov_enable::BOTTOM
+            | if near_far.is_some() {
+                fov_enable::NEAR | fov_enable::FAR
+            } else {
+                0
+            },
+        left_deg: n[1] as f32,
+        right_deg: n[2] as f32,
+        bottom_deg: n[3] as f32,
+        top_deg: n[4] as f32,
+        near_m: near as f32,
+        far_m: far as f32,
+        ..ViewDefinition::default()
+    })
+}
+
 /// The datagram for `pose` in a UDP `protocol`, with sequence / frame counter `sequence`
 /// (native sequence, CIGI host frame; RPOS and FGNetFDM carry none). `None` when the protocol
 /// cannot carry the pose (a local pose in a geodetic-only protocol).
@@ -278,6 +355,44 @@ mod tests {
         // Convergence ≈ Δlon · sin(lat) ≈ 1.3° · 0.73 ≈ 0.96°.
         let angle = v[1].atan2(v[0]).to_degrees();
         assert!(angle.abs() > 0.5 && angle.abs() < 1.5, "{angle}");
+    }
+
+    #[test]
+    fn view_flags_become_view_packets_the_ig_decodes() {
+        let c = parse_view_control("5,33.25,-4.5,1.25,1.5,-0.5,-2").unwrap();
+        let d = parse_view_definition("1,-20,25,-10,15,2,50000").unwrap();
+        let mut m = cigi_message(&pose_for(&sample(), 0.0, 3, Some(&ltp())), 3).unwrap();
+        m.extend(c.encode(CIGI_ORDER));
+        m.extend(d.encode(CIGI_ORDER));
+        let mut t = crate::codec::cigi::ViewTable::default();
+        assert!(t.apply(&crate::codec::cigi::decode(&m).unwrap()));
+        let v = t.get(5).unwrap();
+        assert_eq!(v.roll_pitch_yaw_deg, [Some(1.25), Some(-4.5), Some(33.25)]);
+        assert_eq!(v.offset_m, [Some(1.5), Some(-0.5), Some(-2.0)]);
+        let f = t.get(1).unwrap();
+        assert_eq!(f.half_angles_deg(), Some([-20.0, 25.0, 15.0, -10.0]));
+        assert_eq!((f.near_m(), f.far_m()), (Some(2.0), Some(50000.0)));
+        // Without the optional fields, they stay disabled.
+        let c = parse_view_control("0,10,0,0").unwrap();
+        assert_eq!(c.enable & 0x07, 0);
+        let d = parse_view_definition("0,-1,1,-1,1").unwrap();
+        assert_eq!(d.enable & 0x03, 0);
+        for bad in [
+            "5,1,2",
+            "x,1,2,3",
+            "5,1,2,3,4",
+            "70000,1,2,3",
+            "1.5,1,2,3",
+            "5,nan,0,0",
+        ] {
+            let e = parse_view_control(bad).unwrap_err();
+            assert!(e.starts_with("--view "), "{e}");
+        }
+        let e = parse_view_definition("1,2,3").unwrap_err();
+        assert!(
+            e.contains("view_id,left,right,bottom,top[,near,far]"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -812,15 +812,17 @@ const VIEWS_CONFIG: &str = "[render]\nsize = \"160x90\"\n\n\
     [[channel]]\nname = \"side\"\nview = { heading = 60.0 }\nfrustum = { hfov = 60.0 }\n";
 
 /// Runs `aerie run` with [`VIEWS_CONFIG`] (`--listen` on the command line adds the port) and
-/// `mode` args, fed by [`cigi_view_host`]; checks that every channel was drawn with the host's
+/// `mode` args, fed by [`cigi_view_host`] (or the same views from `aerie-send --view
+/// --view-frustum` with `use_aerie_send`); checks that every channel was drawn with the host's
 /// view (within 0.001° / 1 mm) and returns the summary, the stats rows and stderr.
 fn run_with_cigi_views(
     mode: &[&str],
     display: Option<u32>,
+    use_aerie_send: bool,
 ) -> (serde_json::Value, Vec<Row>, String) {
     let dir = tempfile::tempdir().unwrap();
     let dem = demo_dem();
-    let (aerie, _) = bins();
+    let (aerie, send) = bins();
     let config = dir.path().join("ig.toml");
     let port = free_port();
     let json = dir.path().join("run.json");
@@ -863,11 +865,43 @@ fn run_with_cigi_views(
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let done = Arc::new(AtomicBool::new(false));
-    let sender = cigi_view_host(port, done.clone());
-    let out = wait(run, Duration::from_secs(90), "aerie run (CIGI views)");
-    done.store(true, Ordering::Relaxed);
-    sender.join().unwrap();
+    let out = if use_aerie_send {
+        let to = format!("127.0.0.1:{port}");
+        let sender = spawn(
+            send,
+            &args(&[
+                "--quiet",
+                "--protocol",
+                "cigi",
+                "--to",
+                &to,
+                "--origin",
+                "47.3,11.4,0",
+                "--straight",
+                "0,0,3500,70,-5,0,0",
+                "--rate",
+                "20",
+                "--seconds",
+                "90",
+                "--view",
+                "5,33.25,-4.5,1.25,1.5,-0.5,-2",
+                "--view-frustum",
+                "1,-20,25,-10,15,2,50000",
+                "--view-frustum",
+                "9,30,20,-10,15,2,50000",
+            ]),
+        );
+        let out = wait(run, Duration::from_secs(90), "aerie run (CIGI views)");
+        stop(sender);
+        out
+    } else {
+        let done = Arc::new(AtomicBool::new(false));
+        let sender = cigi_view_host(port, done.clone());
+        let out = wait(run, Duration::from_secs(90), "aerie run (CIGI views)");
+        done.store(true, Ordering::Relaxed);
+        sender.join().unwrap();
+        out
+    };
     assert!(
         out.status.success(),
         "exit {:?}\nstdout:\n{}\nstderr:\n{}",
@@ -934,14 +968,16 @@ fn cigi_views_replace_channel_view_offsets_and_frusta() {
     let (summary, rows, _) = run_with_cigi_views(
         &["--headless", "--frames", "6", "--fps", "10", "--overlay"],
         None,
+        false,
     );
     assert_eq!(summary["overlay_frames"], 12);
     assert_eq!(rows.len(), 6);
     assert!(rows.iter().all(|r| num(r, "triangles") > 0.0));
 }
 
-/// The same in windows (private Xvfb): the window path applies the host's views too, and its
-/// `--stats` rows carry the triangles of the frame.
+/// The same in windows (private Xvfb), the views sent by `aerie-send --view --view-frustum`: the
+/// window path applies the host's views too, and its `--stats` rows carry the triangles of the
+/// frame.
 #[test]
 fn cigi_views_drive_windowed_channels_and_stats_count_triangles() {
     let xvfb = match Xvfb::start() {
@@ -952,7 +988,7 @@ fn cigi_views_drive_windowed_channels_and_stats_count_triangles() {
         }
     };
     let (summary, rows, _) =
-        run_with_cigi_views(&["--frames", "10", "--windowed"], Some(xvfb.display));
+        run_with_cigi_views(&["--frames", "10", "--windowed"], Some(xvfb.display), true);
     assert_eq!(summary["frames"], 10);
     assert_eq!(rows.len(), 10);
     let from_stream: Vec<&Row> = rows.iter().filter(|r| r["stream"] != "waiting").collect();

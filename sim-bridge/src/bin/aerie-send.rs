@@ -10,7 +10,10 @@ use std::time::{Duration, Instant};
 use aerie_sim_bridge::codec::cigi::StartOfFrame;
 use aerie_sim_bridge::geodesy::{Geodetic, LocalTangentPlane};
 use aerie_sim_bridge::script::{Script, ScriptSample, Straight, Waypoints};
-use aerie_sim_bridge::send::{datagram, packet_count, pose_for, SendProtocol};
+use aerie_sim_bridge::send::{
+    datagram, packet_count, parse_view_control, parse_view_definition, pose_for, SendProtocol,
+    CIGI_ORDER,
+};
 use aerie_sim_bridge::shm::{shm_path, ShmWriter, DEFAULT_SHM_NAME};
 use aerie_sim_bridge::udp::multicast_sender;
 use aerie_sim_bridge::{Pose, PosePosition, Protocol, DEFAULT_PORT};
@@ -24,6 +27,7 @@ usage: aerie-send (--path <waypoints.csv> | --straight x,y,z,heading,pitch,roll,
                   [--origin lat,lon,alt] [--start-frame <n>]
                   [--realtime | --as-fast-as-possible] [--multicast-if <ipv4>]
                   [--json <file>] [--log <file.csv>] [--quiet]
+                  [--view id,heading,pitch,roll[,x,y,z]]... [--view-frustum id,l,r,b,t[,near,far]]...
 
   --path         timed waypoints `t_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg` (aerie fly's)
   --straight     level pass along the heading at speed_mps from x,y,z (local ENU metres)
@@ -42,6 +46,10 @@ usage: aerie-send (--path <waypoints.csv> | --straight x,y,z,heading,pitch,roll,
   --json         also write the summary as JSON to this file
   --log          one CSV row per packet: the pose sent (script and wire position)
   --quiet        no progress lines
+  --view         cigi: a View Control in every message: view id's offset from the ownship,
+                 degrees (and eye offset x forward, y right, z down, metres); repeatable
+  --view-frustum cigi: a View Definition in every message: view id's left, right, bottom, top
+                 half-angles, degrees (and near, far clip, metres); repeatable
 
 exit status: 0 sent, 1 nothing could be sent, 2 bad arguments or input";
 
@@ -59,6 +67,8 @@ struct Args {
     json: Option<PathBuf>,
     log: Option<PathBuf>,
     quiet: bool,
+    /// CIGI View Control / View Definition packets appended to every message.
+    view_packets: Vec<u8>,
 }
 
 fn number<T: std::str::FromStr>(flag: &str, v: &str) -> Result<T, String>
@@ -109,6 +119,7 @@ fn parse_args(argv: &[String]) -> Result<Option<Args>, String> {
     let mut json = None;
     let mut log = None;
     let mut quiet = false;
+    let mut view_packets = Vec::new();
     let mut it = argv.iter();
     while let Some(flag) = it.next() {
         let mut value = || {
@@ -137,6 +148,10 @@ fn parse_args(argv: &[String]) -> Result<Option<Args>, String> {
             "--json" => json = Some(PathBuf::from(value()?)),
             "--log" => log = Some(PathBuf::from(value()?)),
             "--quiet" => quiet = true,
+            "--view" => view_packets.extend(parse_view_control(&value()?)?.encode(CIGI_ORDER)),
+            "--view-frustum" => {
+                view_packets.extend(parse_view_definition(&value()?)?.encode(CIGI_ORDER))
+            }
             other => return Err(format!("unknown option {other:?} (see --help)")),
         }
     }
@@ -168,6 +183,9 @@ fn parse_args(argv: &[String]) -> Result<Option<Args>, String> {
             protocol.name()
         ));
     }
+    if !view_packets.is_empty() && protocol != SendProtocol::Udp(Protocol::Cigi) {
+        return Err("--view and --view-frustum: only with --protocol cigi".into());
+    }
     let to = match protocol {
         SendProtocol::Udp(_) => resolve(&to)?,
         SendProtocol::Shm => SocketAddr::from(([127, 0, 0, 1], DEFAULT_PORT)),
@@ -186,6 +204,7 @@ fn parse_args(argv: &[String]) -> Result<Option<Args>, String> {
         json,
         log,
         quiet,
+        view_packets,
     }))
 }
 
@@ -335,9 +354,10 @@ fn main() {
             }
             (Sink::Udp(s), SendProtocol::Udp(p)) => {
                 // Geodetic-only protocols always have an origin here (checked in parse_args).
-                let Some(bytes) = datagram(p, &pose, frame) else {
+                let Some(mut bytes) = datagram(p, &pose, frame) else {
                     unreachable!("{p} without --origin")
                 };
+                bytes.extend_from_slice(&a.view_packets);
                 match s.send_to(&bytes, a.to) {
                     Ok(_) => sum.sent += 1,
                     Err(e) => {
