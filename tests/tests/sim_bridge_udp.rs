@@ -65,8 +65,14 @@ fn wait_for(what: &str, mut cond: impl FnMut() -> bool) {
     }
 }
 
+/// Waits until `n` datagrams were received *and* decided (accepted, no pose, or dropped): the
+/// receiver counts a datagram on arrival and its verdict a moment later, and the tests read
+/// the verdict counters next.
 fn wait_received(rx: &UdpReceiver, n: u64) {
-    wait_for(&format!("{n} datagrams"), || rx.stats().received >= n);
+    wait_for(&format!("{n} datagrams"), || {
+        let s = rx.stats();
+        s.received >= n && s.accepted + s.no_pose + s.dropped_total() >= n
+    });
 }
 
 #[test]
