@@ -335,16 +335,7 @@ pub fn prepare_terrain(
 }
 
 fn check_validation(r: &TerrainRenderer) -> Result<(), Failure> {
-    let c = r.validation_counters();
-    if c.errors() + c.warnings() > 0 {
-        return Err(runtime(format!(
-            "validation reported {} errors and {} warnings; first: {}",
-            c.errors(),
-            c.warnings(),
-            c.messages().first().cloned().unwrap_or_default()
-        )));
-    }
-    Ok(())
+    r.validation_counters().verdict().map_err(runtime)
 }
 
 fn cmd_render(a: RenderArgs) -> Result<(), Failure> {

@@ -581,14 +581,8 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
     for lane in &mut lanes {
         let counters = lane.renderer.validation_counters();
         lane.renderer.destroy();
-        if counters.errors() + counters.warnings() > 0 {
-            validation.push(format!(
-                "{}: validation reported {} errors and {} warnings; first: {}",
-                lane.config.label(),
-                counters.errors(),
-                counters.warnings(),
-                counters.messages().first().cloned().unwrap_or_default()
-            ));
+        if let Err(e) = counters.verdict() {
+            validation.push(format!("{}: {e}", lane.config.label()));
         }
     }
     if let Some(first) = validation.first() {

@@ -223,14 +223,7 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
     let counters = r.validation_counters();
     let validation = r.desc().validation;
     r.destroy();
-    if counters.errors() + counters.warnings() > 0 {
-        return Err(runtime(format!(
-            "validation reported {} errors and {} warnings; first: {}",
-            counters.errors(),
-            counters.warnings(),
-            counters.messages().first().cloned().unwrap_or_default()
-        )));
-    }
+    counters.verdict().map_err(runtime)?;
     write_text(&a.out.join("frames.csv"), &csv).map_err(runtime)?;
     frame_ms.sort_by(f64::total_cmp);
     let channels_json: Vec<serde_json::Value> = chans

@@ -858,14 +858,7 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
     if let Some(path) = &a.json {
         write_text(path, &format!("{summary:#}\n")).map_err(runtime)?;
     }
-    if counters.errors() + counters.warnings() > 0 {
-        return Err(runtime(format!(
-            "validation reported {} errors and {} warnings; first: {}",
-            counters.errors(),
-            counters.warnings(),
-            counters.messages().first().cloned().unwrap_or_default()
-        )));
-    }
+    counters.verdict().map_err(runtime)?;
     Ok(summary)
 }
 

@@ -30,6 +30,19 @@ impl ValidationCounters {
     pub fn messages(&self) -> Vec<String> {
         self.messages.lock().map(|m| m.clone()).unwrap_or_default()
     }
+    /// Err naming the counts and the first message when anything was reported: every command
+    /// fails on a validation error or warning.
+    pub fn verdict(&self) -> Result<(), String> {
+        if self.errors() + self.warnings() == 0 {
+            return Ok(());
+        }
+        Err(format!(
+            "validation reported {} errors and {} warnings; first: {}",
+            self.errors(),
+            self.warnings(),
+            self.messages().first().cloned().unwrap_or_default()
+        ))
+    }
 }
 
 pub struct Instance {
