@@ -1,23 +1,16 @@
 //! aerie: a Vulkan-native, error-bounded terrain renderer for flight simulators.
 //!
-//! Pure-CPU parts (terrain data, camera math, GPU struct layouts) need no Vulkan device;
-//! `vk` is the thin Vulkan plumbing; `render` draws one frame in the order of DESIGN.md's data flow.
+//! Layers, each importing only downwards (see ARCHITECTURE.md): the pure terrain decisions live
+//! in the crate `aerie-terrain` (re-exported here as [`terrain`] and [`camera`]); [`vk`] is the
+//! thin Vulkan plumbing; [`render`] draws one frame in the order of DESIGN.md's data flow;
+//! [`sim`] is the simulator glue (pose input, host views, channels, flights); [`tools`] are
+//! image error, panorama, overlay text and output files; [`app`] is the command line on top.
 
-pub mod camera;
-pub mod channel;
-pub mod cli;
-pub mod commands;
-pub mod flight;
-pub mod frame;
-pub mod gpu;
-pub mod headless;
-pub mod host_view;
-pub mod image_error;
-pub mod output;
-pub mod overlay;
-pub mod panorama;
-pub mod pose_input;
-pub mod stats_csv;
-pub mod terrain;
+pub mod app;
+pub mod render;
+pub mod sim;
+pub mod tools;
 pub mod vk;
-pub mod window;
+
+pub use aerie_terrain as terrain;
+pub use aerie_terrain::camera;

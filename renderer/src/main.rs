@@ -8,8 +8,8 @@ fn main() {
         )
         .with_writer(std::io::stderr)
         .init();
-    let cli = aerie::cli::Cli::parse();
-    if let Err(f) = aerie::cli::run(cli) {
+    let cli = aerie::app::cli::Cli::parse();
+    if let Err(f) = aerie::app::cli::run(cli) {
         eprintln!("aerie: {}", f.message);
         std::process::exit(f.code);
     }

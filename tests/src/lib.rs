@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use aerie::camera::Camera;
-use aerie::frame::{FrameStats, RendererDesc, TerrainRenderer};
+use aerie::render::frame::{FrameStats, RendererDesc, TerrainRenderer};
 use aerie::terrain::bake::{bake, BakeParams, ErrorBake};
 use aerie::terrain::dataset::Dataset;
 use aerie::terrain::Heightfield;
@@ -176,10 +176,10 @@ pub fn check_golden(name: &str, img: &Rendered, tol: GoldenTolerance) {
     let golden_path = repo_root().join("tests/golden").join(format!("{name}.png"));
     let out = test_output_dir();
     let actual_path = out.join(format!("{name}.actual.png"));
-    aerie::output::write_png(&actual_path, img.width, img.height, &img.rgba).unwrap();
+    aerie::tools::output::write_png(&actual_path, img.width, img.height, &img.rgba).unwrap();
     if std::env::var_os("AERIE_UPDATE_GOLDEN").is_some() {
         std::fs::create_dir_all(golden_path.parent().unwrap()).unwrap();
-        aerie::output::write_png(&golden_path, img.width, img.height, &img.rgba).unwrap();
+        aerie::tools::output::write_png(&golden_path, img.width, img.height, &img.rgba).unwrap();
         eprintln!("updated golden {}", golden_path.display());
         return;
     }
@@ -194,7 +194,7 @@ pub fn check_golden(name: &str, img: &Rendered, tol: GoldenTolerance) {
     let d = diff_images(&img.rgba, golden.as_raw(), tol.tolerance);
     if d.fraction_over > tol.max_fraction_over || d.mean > tol.max_mean {
         let diff_path = out.join(format!("{name}.diff.png"));
-        aerie::output::write_png(
+        aerie::tools::output::write_png(
             &diff_path,
             img.width,
             img.height,

@@ -536,12 +536,12 @@ fn bake_path_next_to_file_and_folder() {
 // The commands
 // ---------------------------------------------------------------------------------------------
 
-fn aerie(args: &[&str]) -> Result<(), aerie::cli::Failure> {
+fn aerie(args: &[&str]) -> Result<(), aerie::app::cli::Failure> {
     use clap::Parser as _;
     let mut v = vec!["aerie"];
     v.extend_from_slice(args);
-    let cli = aerie::cli::Cli::try_parse_from(v).expect("arguments parse");
-    aerie::cli::run(cli)
+    let cli = aerie::app::cli::Cli::try_parse_from(v).expect("arguments parse");
+    aerie::app::cli::run(cli)
 }
 
 fn gen(dir: &Path, name: &str, kind: &str, seed: u64, size: usize) -> PathBuf {

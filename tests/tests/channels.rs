@@ -3,7 +3,7 @@
 //! adjacent channels of a three-channel wall shows the same terrain.
 
 use aerie::camera::{Attitude, Camera, Frustum};
-use aerie::frame::TerrainRenderer;
+use aerie::render::frame::TerrainRenderer;
 use aerie::terrain::clipmap::{place_levels, ClipmapDesc};
 use aerie::terrain::load_dem;
 use aerie::terrain::select::{select_tiles_multi, SelectParams, Selection, View};

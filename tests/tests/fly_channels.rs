@@ -5,9 +5,9 @@
 
 use std::path::{Path, PathBuf};
 
-use aerie::cli::{run, Cli};
-use aerie::commands::fly::plan_channels;
-use aerie::panorama::{canvas_for, PanoramaChannel, PanoramaMap, MAX_CANVAS, NO_CHANNEL};
+use aerie::app::cli::{run, Cli};
+use aerie::app::commands::fly::plan_channels;
+use aerie::tools::panorama::{canvas_for, PanoramaChannel, PanoramaMap, MAX_CANVAS, NO_CHANNEL};
 use clap::Parser;
 
 /// wall3's 1920×1080 channels at 1/12: 160×90.

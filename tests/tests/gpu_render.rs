@@ -3,7 +3,7 @@
 //! and uploads split across submissions by the staging budget.
 
 use aerie::camera::{Attitude, Camera, Frustum};
-use aerie::frame::{RendererDesc, TerrainRenderer, SKY_LINEAR};
+use aerie::render::frame::{RendererDesc, TerrainRenderer, SKY_LINEAR};
 use aerie::terrain::load_dem;
 use aerie::terrain::select::{LodMode, SelectParams};
 use aerie_tests::*;
@@ -107,7 +107,7 @@ fn bounded_at_half_pixel_looks_like_brute_force() {
     let d_plain = diff_images(&p.rgba, &f.rgba, 16);
     let out = test_output_dir();
     for (name, img) in [("full", f), ("bounded", b), ("clipmap", p)] {
-        aerie::output::write_png(&out.join(format!("tau_half_{name}.png")), W, H, &img.rgba)
+        aerie::tools::output::write_png(&out.join(format!("tau_half_{name}.png")), W, H, &img.rgba)
             .unwrap();
     }
     assert!(

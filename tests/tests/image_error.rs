@@ -1,15 +1,15 @@
-//! The image-space error measurement (`aerie::image_error`) on real GPU frames: it recovers a
+//! The image-space error measurement (`aerie::tools::image_error`) on real GPU frames: it recovers a
 //! known vertical offset from the read-back depth pixel by pixel, measures (almost) nothing on
 //! brute-force frames, keeps `bounded` within DESIGN.md's target τ + 0.5 px, tells plain
 //! clipmaps apart, and agrees with the CPU oracle of the selection.
 
 use aerie::camera::{Attitude, Camera, Frustum};
-use aerie::frame::RendererDesc;
-use aerie::image_error::{measure, oracle_selection, MeasureParams};
+use aerie::render::frame::RendererDesc;
 use aerie::terrain::clipmap::{place_levels, ClipmapDesc};
 use aerie::terrain::dataset::Dataset;
 use aerie::terrain::load_dem;
 use aerie::terrain::select::{select_tiles, LodMode, SelectParams, Selection};
+use aerie::tools::image_error::{measure, oracle_selection, MeasureParams};
 use aerie_tests::*;
 use glam::DVec3;
 

@@ -4,8 +4,8 @@
 //! validation layer on (image layouts and usage flags checked).
 
 use aerie::camera::{Attitude, Camera, Frustum};
-use aerie::frame::TerrainRenderer;
-use aerie::overlay::{OverlayInfo, OverlayState};
+use aerie::render::frame::TerrainRenderer;
+use aerie::tools::overlay::{OverlayInfo, OverlayState};
 use aerie_tests::{assert_validation_clean, prepare, synthetic, test_desc};
 use glam::DVec3;
 

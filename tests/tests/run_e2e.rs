@@ -16,7 +16,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
 
-use aerie::flight::Waypoints;
+use aerie::sim::flight::Waypoints;
 use aerie_sim_bridge::codec::native;
 use aerie_sim_bridge::{Geodetic, LocalTangentPlane, Pose, PosePosition};
 

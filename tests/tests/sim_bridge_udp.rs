@@ -7,8 +7,8 @@ use std::net::{Ipv4Addr, SocketAddr, UdpSocket};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use aerie::commands::listen::{self, ListenArgs};
-use aerie::commands::replay::{self, ReplayArgs};
+use aerie::app::commands::listen::{self, ListenArgs};
+use aerie::app::commands::replay::{self, ReplayArgs};
 use aerie_sim_bridge::codec::cigi::{
     EntityControl, IgControl, StartOfFrame, ViewControl, ViewDefinition,
 };

@@ -18,8 +18,7 @@
 use std::sync::{Arc, OnceLock};
 
 use aerie::camera::{Attitude, Camera, Frustum};
-use aerie::frame::TerrainRenderer;
-use aerie::image_error::TrueSurface;
+use aerie::render::frame::TerrainRenderer;
 use aerie::terrain::bake::{bake, BakeParams, ErrorBake};
 use aerie::terrain::clipmap::{place_levels, update_cache, CacheRegion, ClipmapDesc};
 use aerie::terrain::dataset::Dataset;
@@ -27,6 +26,7 @@ use aerie::terrain::gen::{generate, DemKind, GenParams, FLAT_HEIGHT};
 use aerie::terrain::pool::{RefinedTilePool, Request, TileKey};
 use aerie::terrain::select::{select_tiles, LodMode, SelectParams, Selection, EARTH_RADIUS_M};
 use aerie::terrain::Heightfield;
+use aerie::tools::image_error::TrueSurface;
 use aerie_tests::*;
 use glam::{DVec2, DVec3, Mat4, Vec2, Vec3};
 

@@ -19,14 +19,14 @@ use std::sync::mpsc;
 use std::sync::{Mutex, OnceLock};
 use std::time::Duration;
 
-use aerie::camera::Attitude;
-use aerie::channel::AircraftPose;
-use aerie::frame::{RendererDesc, TerrainRenderer};
-use aerie::vk::DeviceDesc;
-use aerie::window::{
+use aerie::app::window::{
     new_event_loop, required_instance_extensions, run_channels, Action, EventLoop, ExitReason,
     RunOptions, RunReport, ScheduledAction, WindowError,
 };
+use aerie::camera::Attitude;
+use aerie::render::frame::{RendererDesc, TerrainRenderer};
+use aerie::sim::channel::AircraftPose;
+use aerie::vk::DeviceDesc;
 use aerie_config::{
     Channel, ChannelDisplay, ChannelFrustum, FullscreenMode, MonitorSelector, PresentMode,
     ViewOffset,
@@ -536,7 +536,7 @@ fn raw_dem(dir: &Path) -> PathBuf {
 #[derive(clap::Parser)]
 struct RunCli {
     #[command(flatten)]
-    args: aerie::commands::run::RunArgs,
+    args: aerie::app::commands::run::RunArgs,
 }
 
 fn run_command(args: Vec<String>) -> Option<Result<serde_json::Value, (i32, String)>> {
@@ -544,7 +544,7 @@ fn run_command(args: Vec<String>) -> Option<Result<serde_json::Value, (i32, Stri
     on_ui(move |el| {
         let cli = RunCli::try_parse_from(std::iter::once("run".to_string()).chain(args))
             .expect("arguments parse");
-        aerie::commands::run::run_on(el, &cli.args).map_err(|f| (f.code, f.message))
+        aerie::app::commands::run::run_on(el, &cli.args).map_err(|f| (f.code, f.message))
     })
 }
 

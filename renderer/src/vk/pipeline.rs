@@ -15,7 +15,7 @@ pub const BINDING_INSTANCES: u32 = 1;
 pub const BINDING_CLIPMAP: u32 = 2;
 pub const BINDING_POOLS: u32 = 3;
 /// Refined-tile pools bound as an array (r = 1..=POOL_BINDINGS).
-pub const POOL_BINDINGS: u32 = crate::terrain::select::MAX_REFINEMENT;
+pub const POOL_BINDINGS: u32 = aerie_terrain::select::MAX_REFINEMENT;
 
 pub struct TerrainPipeline {
     pub set_layout: vk::DescriptorSetLayout,

@@ -15,7 +15,7 @@ use ash::{khr, vk};
 use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
 
 use super::{Device, Instance, VkError, VkResultExt, FRAMES_IN_FLIGHT};
-use crate::frame::PresentTarget;
+use crate::render::frame::PresentTarget;
 
 /// A window's Vulkan surface. Destroy it after its swapchain and before the instance.
 pub struct Surface {

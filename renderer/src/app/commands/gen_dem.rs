@@ -1,0 +1,158 @@
+//! `aerie gen-dem`: writes a deterministic synthetic terrain ([`aerie_terrain::gen`]) as raw
+//! little-endian f32 plus the JSON sidecar the raw loader reads (`<out>.json`), so the result
+//! loads with `--dem <out>` / `aerie bake <out>` like any other DEM. Rows are south first
+//! (`"north_up": false`). The file is filled through a memory map by all cores and renamed into
+//! place when complete.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::Args;
+
+use super::{check_out_folder, human_bytes, progress_bar};
+use crate::app::cli::{bad_input, runtime, Failure};
+use aerie_terrain::gen::{generate_into, DemKind, GenParams};
+
+/// Largest side accepted (32769² f32 = 4.3 GB).
+const MAX_SIZE: usize = 32769;
+
+#[derive(Debug, Args)]
+pub struct GenDemArgs {
+    /// Samples per side of the square grid (16385 = 2^14 + 1 is Puget-Sound size).
+    #[arg(long, default_value_t = 4097)]
+    pub size: usize,
+    /// Metres between samples.
+    #[arg(long, default_value_t = 10.0)]
+    pub spacing: f64,
+    /// ridged (mountains), cliffs (terraces with vertical walls), spikes (single-sample
+    /// needles), flat, or mixed (one quadrant of each).
+    #[arg(long, default_value = "mixed", value_parser = ["ridged", "cliffs", "spikes", "flat", "mixed"])]
+    pub kind: String,
+    /// Seed: the same seed (and size, spacing, kind) always gives the same bytes.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output raw f32 file (.f32, .r32 or .raw); the sidecar `<out>.json` is written next to it.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// The sidecar path the raw loader looks for.
+fn sidecar(out: &Path) -> PathBuf {
+    let mut s = out.as_os_str().to_owned();
+    s.push(".json");
+    PathBuf::from(s)
+}
+
+pub fn run(a: GenDemArgs) -> Result<(), Failure> {
+    let kind = DemKind::parse(&a.kind).ok_or_else(|| {
+        bad_input(format!(
+            "--kind: `{}` is not one of ridged, cliffs, spikes, flat, mixed",
+            a.kind
+        ))
+    })?;
+    if !(2..=MAX_SIZE).contains(&a.size) {
+        return Err(bad_input(format!(
+            "--size: {} is outside 2..={MAX_SIZE} samples per side",
+            a.size
+        )));
+    }
+    if !(a.spacing.is_finite() && a.spacing > 0.0) {
+        return Err(bad_input(format!(
+            "--spacing: {} must be a finite number of metres > 0",
+            a.spacing
+        )));
+    }
+    let name = a
+        .out
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if ![".f32", ".r32", ".raw"].iter().any(|e| name.ends_with(e)) {
+        return Err(bad_input(format!(
+            "--out {}: use a .f32, .r32 or .raw name (raw little-endian f32 with a JSON sidecar)",
+            a.out.display()
+        )));
+    }
+    check_out_folder("--out", &a.out)?;
+    let p = GenParams {
+        size: a.size,
+        spacing: a.spacing,
+        kind,
+        seed: a.seed,
+    };
+    let n = a.size;
+    let samples = (n * n) as u64;
+    let bytes = samples * 4;
+    let t = Instant::now();
+    let bar = progress_bar(samples, &format!("generating {} {n}×{n}", kind.name()));
+    let mut tmp_name = a.out.file_name().map(|n| n.to_owned()).unwrap_or_default();
+    tmp_name.push(format!(".tmp{}", std::process::id()));
+    let tmp = a.out.with_file_name(tmp_name);
+    let wfail =
+        |e: &dyn std::fmt::Display| runtime(format!("{}: cannot write: {e}", tmp.display()));
+    let result = (|| -> Result<(f32, f32), Failure> {
+        let f = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(&tmp)
+            .map_err(|e| wfail(&e))?;
+        f.set_len(bytes).map_err(|e| wfail(&e))?;
+        // SAFETY: a file this process just created under a private name, not resized while mapped.
+        let mut map = unsafe { memmap2::MmapMut::map_mut(&f) }.map_err(|e| wfail(&e))?;
+        let heights: &mut [f32] = bytemuck::cast_slice_mut(&mut map[..]);
+        generate_into(&p, 0, heights, &|rows| bar.set_position(rows * n as u64));
+        let (lo, hi) = heights
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &v| {
+                (l.min(v), h.max(v))
+            });
+        if cfg!(target_endian = "big") {
+            for v in heights.iter_mut() {
+                *v = f32::from_bits(v.to_bits().to_le());
+            }
+        }
+        map.flush().map_err(|e| wfail(&e))?;
+        drop(map);
+        std::fs::rename(&tmp, &a.out)
+            .map_err(|e| runtime(format!("{}: cannot write: {e}", a.out.display())))?;
+        Ok((lo, hi))
+    })();
+    bar.finish_and_clear();
+    let (lo, hi) = match result {
+        Ok(r) => r,
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(e);
+        }
+    };
+    let json = serde_json::json!({
+        "width": n,
+        "height": n,
+        "format": "f32le",
+        "spacing_x": a.spacing,
+        "spacing_y": a.spacing,
+        "north_up": false,
+        "generator": {
+            "program": format!("aerie {}", env!("CARGO_PKG_VERSION")),
+            "kind": kind.name(),
+            "seed": a.seed,
+        },
+    });
+    let side = sidecar(&a.out);
+    std::fs::write(&side, format!("{json:#}\n"))
+        .map_err(|e| runtime(format!("{}: cannot write: {e}", side.display())))?;
+    let secs = t.elapsed().as_secs_f64();
+    println!(
+        "generated {}: {n}×{n} {} (seed {}), {} m spacing, {lo:.1}..{hi:.1} m, {} in {secs:.2} s ({:.1} M samples/s); sidecar {}",
+        a.out.display(),
+        kind.name(),
+        a.seed,
+        a.spacing,
+        human_bytes(bytes),
+        samples as f64 / secs / 1e6,
+        side.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,335 @@
+//! `aerie listen`: receive aircraft poses the way the image generator does (UDP on a port, or
+//! shared memory) without rendering — to check a simulator's output, measure its pose rate and
+//! losses, and record datagrams for `aerie replay`. Prints a progress line (stderr) and a
+//! summary (stdout; `--json` writes it as JSON too).
+
+use std::collections::BTreeMap;
+use std::io::IsTerminal;
+use std::net::{IpAddr, Ipv4Addr, SocketAddr};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use aerie_sim_bridge::codec::ProtocolChoice;
+use aerie_sim_bridge::shm::{shm_path, ShmConfig, ShmSource};
+use aerie_sim_bridge::timing::{monotonic_s, ExtrapolationParams, StreamState};
+use aerie_sim_bridge::udp::{CigiReply, RposRequest, UdpConfig, UdpReceiver};
+use aerie_sim_bridge::{DropReason, PosePosition, PoseReader, StatsSnapshot};
+use clap::Args;
+
+use super::check_out_folder;
+use crate::app::cli::{bad_input, runtime, Failure};
+use crate::tools::output::write_text;
+
+fn parse_protocol(s: &str) -> Result<ProtocolChoice, String> {
+    s.parse()
+}
+
+#[derive(Debug, Args)]
+pub struct ListenArgs {
+    /// Local address to listen on (0.0.0.0:47800 for every interface; needed for multicast).
+    #[arg(long, default_value = "127.0.0.1:47800")]
+    pub bind: SocketAddr,
+    /// Protocol: auto (detected per datagram), aerie, cigi, xplane or fgfs.
+    #[arg(long, default_value = "auto", value_parser = parse_protocol)]
+    pub protocol: ProtocolChoice,
+    /// Join this IPv4 multicast group (bind 0.0.0.0:<port>).
+    #[arg(long)]
+    pub multicast: Option<Ipv4Addr>,
+    /// Accept datagrams only from these source addresses (comma-separated); others are
+    /// dropped and counted.
+    #[arg(long, value_delimiter = ',')]
+    pub allow: Vec<IpAddr>,
+    /// Read shared memory instead of UDP: a name in /dev/shm (e.g. aerie-pose) or a path.
+    #[arg(long)]
+    pub shm: Option<String>,
+    /// Record every received datagram with its arrival time (for `aerie replay`).
+    #[arg(long)]
+    pub record: Option<PathBuf>,
+    /// Stop after this many seconds and print the summary (default: until interrupted).
+    #[arg(long)]
+    pub seconds: Option<f64>,
+    /// Also write the summary as JSON to this file.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Do not answer CIGI hosts with Start of Frame.
+    #[arg(long)]
+    pub no_cigi_reply: bool,
+    /// Ask the X-Plane at this address (its UDP port, usually 49000) to stream RPOS here.
+    #[arg(long)]
+    pub xplane: Option<SocketAddr>,
+    /// RPOS rate to ask X-Plane for, positions per second.
+    #[arg(long, default_value_t = 60)]
+    pub xplane_rate: u32,
+    /// Extrapolation cap and lost-stream threshold, milliseconds.
+    #[arg(long, default_value_t = 100.0)]
+    pub cap_ms: f64,
+}
+
+enum Source {
+    Udp(UdpReceiver),
+    Shm(ShmSource),
+}
+
+fn state_name(s: StreamState) -> &'static str {
+    match s {
+        StreamState::Waiting => "waiting",
+        StreamState::Live => "live",
+        StreamState::Lost => "lost",
+    }
+}
+
+fn position_text(p: &PosePosition) -> String {
+    match *p {
+        PosePosition::Geodetic {
+            lat_deg,
+            lon_deg,
+            alt_m,
+        } => format!("lat {lat_deg:.6} lon {lon_deg:.6} alt {alt_m:.1} m"),
+        PosePosition::LocalEnu { x, y, z } => format!("x {x:.2} y {y:.2} z {z:.2} m"),
+    }
+}
+
+fn dropped_text(s: &StatsSnapshot) -> String {
+    let parts: Vec<String> = s
+        .dropped_by_reason()
+        .into_iter()
+        .map(|(r, n)| format!("{r} {n}"))
+        .collect();
+    if parts.is_empty() {
+        "0 dropped".into()
+    } else {
+        format!("{} dropped ({})", s.dropped_total(), parts.join(", "))
+    }
+}
+
+fn progress_line(elapsed: f64, s: &StatsSnapshot, reader: &mut PoseReader) -> String {
+    let last = match reader.latest() {
+        Some(p) => format!(
+            "last {} hdg {:.1} (age {:.0} ms)",
+            position_text(&p.latest.pose.position),
+            p.latest.pose.attitude_deg[0],
+            (monotonic_s() - p.latest.arrival_s) * 1e3
+        ),
+        None => "no pose yet".into(),
+    };
+    format!(
+        "{elapsed:.1} s: {} packets, {} accepted, {}, {} gaps, {:.1} poses/s, {}; {last}",
+        s.received,
+        s.accepted,
+        dropped_text(s),
+        s.gaps,
+        s.pose_rate_hz().unwrap_or(0.0),
+        state_name(reader.state()),
+    )
+}
+
+pub fn run(a: ListenArgs) -> Result<(), Failure> {
+    if let Some(s) = a.seconds {
+        if !(s.is_finite() && s > 0.0) {
+            return Err(bad_input(format!(
+                "--seconds: {s} must be a positive number"
+            )));
+        }
+    }
+    if !(a.cap_ms.is_finite() && a.cap_ms > 0.0) {
+        return Err(bad_input(format!(
+            "--cap-ms: {} must be a positive number of milliseconds",
+            a.cap_ms
+        )));
+    }
+    if let Some(j) = &a.json {
+        check_out_folder("--json", j)?;
+    }
+    if let Some(r) = &a.record {
+        check_out_folder("--record", r)?;
+    }
+    if a.shm.is_some()
+        && (a.record.is_some()
+            || a.multicast.is_some()
+            || a.xplane.is_some()
+            || !a.allow.is_empty()
+            || a.protocol != ProtocolChoice::Auto)
+    {
+        return Err(bad_input(
+            "--shm reads shared memory: --record, --multicast, --allow, --xplane and --protocol apply to UDP only",
+        ));
+    }
+    let extrapolation = ExtrapolationParams {
+        cap_s: a.cap_ms / 1e3,
+        ..ExtrapolationParams::default()
+    };
+    let (source, mut reader, what) = match &a.shm {
+        Some(name) => {
+            let path = shm_path(name);
+            let (src, reader) = ShmSource::spawn(ShmConfig {
+                path: path.clone(),
+                extrapolation,
+                ..ShmConfig::default()
+            })
+            .map_err(runtime)?;
+            (
+                Source::Shm(src),
+                reader,
+                format!("shared memory {}", path.display()),
+            )
+        }
+        None => {
+            let (rx, reader) = UdpReceiver::spawn(UdpConfig {
+                bind: a.bind,
+                protocol: a.protocol,
+                multicast: a.multicast,
+                allow: a.allow.clone(),
+                cigi_reply: if a.no_cigi_reply {
+                    CigiReply::Off
+                } else {
+                    CigiReply::ToSender
+                },
+                record: a.record.clone(),
+                xplane_rpos: a.xplane.map(|xplane| RposRequest {
+                    xplane,
+                    rate_hz: a.xplane_rate,
+                }),
+                extrapolation,
+                ..UdpConfig::default()
+            })
+            .map_err(runtime)?;
+            let protocol = match a.protocol {
+                ProtocolChoice::Auto => "auto".to_string(),
+                ProtocolChoice::Only(p) => p.to_string(),
+            };
+            let what = format!("udp {} ({protocol})", rx.local_addr());
+            (Source::Udp(rx), reader, what)
+        }
+    };
+    eprintln!(
+        "listening on {what}{}",
+        match a.seconds {
+            Some(s) => format!(" for {s} s"),
+            None => " (Ctrl-C to stop; --seconds N prints a summary)".into(),
+        }
+    );
+
+    let tty = std::io::stderr().is_terminal();
+    let start = Instant::now();
+    let deadline = a.seconds.map(|s| start + Duration::from_secs_f64(s));
+    let mut last_line = Instant::now();
+    loop {
+        let now = Instant::now();
+        if deadline.is_some_and(|d| now >= d) {
+            break;
+        }
+        let step = Duration::from_millis(50);
+        std::thread::sleep(deadline.map_or(step, |d| step.min(d.saturating_duration_since(now))));
+        // Drives the lost/regained detection (logged) exactly as a frame loop would.
+        let _ = reader.pose_now();
+        let every = if tty { 200 } else { 2000 };
+        if last_line.elapsed() >= Duration::from_millis(every) {
+            last_line = Instant::now();
+            let line = progress_line(start.elapsed().as_secs_f64(), &reader.stats(), &mut reader);
+            if tty {
+                eprint!("\r{line}\x1b[K");
+            } else {
+                eprintln!("{line}");
+            }
+        }
+    }
+    if tty {
+        eprintln!();
+    }
+    let listened_s = start.elapsed().as_secs_f64();
+    let final_frame = reader.pose_now();
+    let stats = reader.stats();
+    let record_error = match source {
+        Source::Udp(rx) => rx.stop().err(),
+        Source::Shm(src) => {
+            src.stop();
+            None
+        }
+    };
+    let latest = reader.latest();
+
+    let mut dropped = BTreeMap::new();
+    for r in DropReason::ALL {
+        dropped.insert(r.name(), stats.dropped(r));
+    }
+    let last_pose = latest.map(|s| {
+        let p = s.latest.pose;
+        let position = match p.position {
+            PosePosition::Geodetic {
+                lat_deg,
+                lon_deg,
+                alt_m,
+            } => serde_json::json!({"lat_deg": lat_deg, "lon_deg": lon_deg, "alt_m": alt_m}),
+            PosePosition::LocalEnu { x, y, z } => serde_json::json!({"x_m": x, "y_m": y, "z_m": z}),
+        };
+        serde_json::json!({
+            "position": position,
+            "heading_deg": p.attitude_deg[0],
+            "pitch_deg": p.attitude_deg[1],
+            "roll_deg": p.attitude_deg[2],
+            "frame": p.frame,
+            "sim_time_s": p.sim_time_s,
+            "velocity_enu": p.velocity_enu,
+            "rates_deg_s": p.angular_rates_deg_s,
+            "sample": s.latest.sample,
+            "age_ms": final_frame.map(|f| f.age_s * 1e3),
+        })
+    });
+    let summary = serde_json::json!({
+        "source": what,
+        "seconds": listened_s,
+        "packets": stats.received,
+        "accepted": stats.accepted,
+        "no_pose": stats.no_pose,
+        "dropped_total": stats.dropped_total(),
+        "dropped": dropped,
+        "gaps": stats.gaps,
+        "missed": stats.missed,
+        "resyncs": stats.resyncs,
+        "cigi_replies": stats.replies,
+        "shm_torn_retries": stats.retries,
+        "shm_busy": stats.busy,
+        "pose_rate_hz": stats.pose_rate_hz(),
+        "stream": state_name(reader.state()),
+        "last_pose": last_pose,
+        "record": a.record.as_ref().map(|p| p.display().to_string()),
+    });
+    let last = match latest {
+        Some(s) => {
+            let p = s.latest.pose;
+            format!(
+                "last pose {}, heading {:.2} pitch {:.2} roll {:.2}, frame {}",
+                position_text(&p.position),
+                p.attitude_deg[0],
+                p.attitude_deg[1],
+                p.attitude_deg[2],
+                p.frame
+            )
+        }
+        None => "no pose received".into(),
+    };
+    println!(
+        "listened {listened_s:.1} s on {what}: {} packets, {} accepted, {} without pose, {}, {} gaps ({} missed), {}; stream {}; {last}",
+        stats.received,
+        stats.accepted,
+        stats.no_pose,
+        dropped_text(&stats),
+        stats.gaps,
+        stats.missed,
+        match stats.pose_rate_hz() {
+            Some(hz) => format!("{hz:.1} poses/s"),
+            None => "pose rate n/a".into(),
+        },
+        state_name(reader.state()),
+    );
+    if let Some(j) = &a.json {
+        write_text(j, &format!("{summary:#}\n")).map_err(runtime)?;
+    }
+    if let Some(e) = record_error {
+        return Err(runtime(format!("--record: {e}")));
+    }
+    if let Some(r) = &a.record {
+        eprintln!("recorded {} datagrams to {}", stats.received, r.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,6 @@
+//! The application: the command line and one module per command.
+
+pub mod cli;
+pub mod commands;
+pub mod headless;
+pub mod window;

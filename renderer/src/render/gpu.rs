@@ -1,0 +1,184 @@
+//! One `#[repr(C)]` + bytemuck definition per GPU struct, mirroring `shaders/gpu_types.glsl`.
+//! The test below parses that GLSL file and checks every offset and size against the
+//! std140 / std430 rules, so the two sides cannot drift apart.
+
+use bytemuck::{Pod, Zeroable};
+
+/// Uniform block (std140), one per frame.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct FrameUniforms {
+    pub relative_world_to_clip: [[f32; 4]; 4],
+    pub sun_dir: [f32; 4],
+    pub sky_colour: [f32; 4],
+    pub grid_spacing: [f32; 4],
+    pub grid_size: [i32; 4],
+    pub clipmap: [i32; 4],
+}
+
+/// Storage buffer element (std430), one per drawn tile.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct TileInstance {
+    pub origin_rel: [f32; 2],
+    pub origin_sample: [i32; 2],
+    pub step: u32,
+    pub level: u32,
+    pub refinement: u32,
+    pub slot: u32,
+    pub skirt_m: f32,
+    pub slot_x: u32,
+    pub slot_y: u32,
+    pub slot_stride: u32,
+}
+
+/// `VkDrawIndexedIndirectCommand`, as the device reads it (a Pod twin of ash's struct).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq, Eq, Default)]
+pub struct DrawIndexedIndirect {
+    pub index_count: u32,
+    pub instance_count: u32,
+    pub first_index: u32,
+    pub vertex_offset: i32,
+    pub first_instance: u32,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::mem::{offset_of, size_of};
+
+    #[derive(Clone, Copy, PartialEq)]
+    enum Rules {
+        Std140,
+        Std430,
+    }
+
+    /// (size, base alignment) of a GLSL type under the given rules.
+    fn type_layout(ty: &str, rules: Rules) -> (usize, usize) {
+        let (size, align) = match ty {
+            "float" | "int" | "uint" => (4, 4),
+            "vec2" | "ivec2" | "uvec2" => (8, 8),
+            "vec3" | "ivec3" | "uvec3" => (12, 16),
+            "vec4" | "ivec4" | "uvec4" => (16, 16),
+            // Column-major: 4 columns of vec4.
+            "mat4" => (64, 16),
+            other => panic!("type {other} not handled by the layout test"),
+        };
+        let _ = rules; // no arrays or nested structs yet: both rules agree on these types
+        (size, align)
+    }
+
+    /// Offsets of each field and the struct size, per the GLSL rules, from the GLSL source.
+    fn glsl_struct(name: &str, rules: Rules) -> (Vec<(String, usize)>, usize) {
+        let src = include_str!("../../../shaders/gpu_types.glsl");
+        let start = src
+            .find(&format!("struct {name} {{"))
+            .unwrap_or_else(|| panic!("struct {name} not in gpu_types.glsl"));
+        let body = &src[start..];
+        let body = &body[body.find('{').unwrap() + 1..body.find("};").unwrap()];
+        let mut offset: usize = 0;
+        let mut max_align = 4;
+        let mut fields = Vec::new();
+        for line in body.lines() {
+            let code = line.split("//").next().unwrap().trim();
+            if code.is_empty() {
+                continue;
+            }
+            let code = code.trim_end_matches(';');
+            let mut parts = code.split_whitespace();
+            let (ty, field) = (parts.next().unwrap(), parts.next().unwrap());
+            let (size, align) = type_layout(ty, rules);
+            offset = offset.div_ceil(align) * align;
+            fields.push((field.to_string(), offset));
+            offset += size;
+            max_align = max_align.max(align);
+        }
+        // std140 rounds a struct's alignment up to 16; std430 does not.
+        if rules == Rules::Std140 {
+            max_align = max_align.max(16);
+        }
+        (fields, offset.div_ceil(max_align) * max_align)
+    }
+
+    macro_rules! check {
+        ($ty:ident, $rules:expr, [$($field:ident),*]) => {{
+            let (fields, size) = glsl_struct(stringify!($ty), $rules);
+            let rust: Vec<(String, usize)> = vec![$((stringify!($field).to_string(), offset_of!($ty, $field))),*];
+            assert_eq!(fields, rust, "field names/offsets of {}", stringify!($ty));
+            assert_eq!(size, size_of::<$ty>(), "size of {}", stringify!($ty));
+        }};
+    }
+
+    #[test]
+    fn frame_uniforms_match_glsl_std140() {
+        check!(
+            FrameUniforms,
+            Rules::Std140,
+            [
+                relative_world_to_clip,
+                sun_dir,
+                sky_colour,
+                grid_spacing,
+                grid_size,
+                clipmap
+            ]
+        );
+    }
+
+    #[test]
+    fn tile_instance_matches_glsl_std430() {
+        check!(
+            TileInstance,
+            Rules::Std430,
+            [
+                origin_rel,
+                origin_sample,
+                step,
+                level,
+                refinement,
+                slot,
+                skirt_m,
+                slot_x,
+                slot_y,
+                slot_stride
+            ]
+        );
+    }
+
+    #[test]
+    fn layout_rules_catch_misplaced_fields() {
+        // The checker itself: a vec3 followed by a float packs into 16 bytes, a vec2 after a
+        // float is pushed to offset 8, and std140 rounds the struct to 16.
+        assert_eq!(type_layout("vec3", Rules::Std430), (12, 16));
+        let (fields, size) = glsl_struct("TileInstance", Rules::Std140);
+        assert_eq!(fields[1], ("origin_sample".to_string(), 8));
+        assert_eq!(size % 16, 0);
+    }
+
+    #[test]
+    fn indirect_command_matches_vulkan() {
+        use ash::vk::DrawIndexedIndirectCommand as Vk;
+        assert_eq!(size_of::<DrawIndexedIndirect>(), size_of::<Vk>());
+        assert_eq!(
+            offset_of!(DrawIndexedIndirect, index_count),
+            offset_of!(Vk, index_count)
+        );
+        assert_eq!(
+            offset_of!(DrawIndexedIndirect, instance_count),
+            offset_of!(Vk, instance_count)
+        );
+        assert_eq!(
+            offset_of!(DrawIndexedIndirect, first_index),
+            offset_of!(Vk, first_index)
+        );
+        assert_eq!(
+            offset_of!(DrawIndexedIndirect, vertex_offset),
+            offset_of!(Vk, vertex_offset)
+        );
+        assert_eq!(
+            offset_of!(DrawIndexedIndirect, first_instance),
+            offset_of!(Vk, first_instance)
+        );
+    }
+}

@@ -1,0 +1,8 @@
+//! Tools around the renderer: image-space error, the review panorama, the overlay text,
+//! statistics CSV and output files.
+
+pub mod image_error;
+pub mod output;
+pub mod overlay;
+pub mod panorama;
+pub mod stats_csv;

@@ -1,0 +1,19 @@
+//! aerie's terrain decisions, pure CPU (no Vulkan, no windowing: Cargo enforces it): the
+//! heightfield model and its loaders, the exact error bake, clipmap placement, tile selection,
+//! the refined-tile pools, the tile mesh and the camera math they are all computed from.
+
+pub mod bake;
+pub mod camera;
+pub mod clipmap;
+pub mod dataset;
+pub mod gather;
+pub mod gen;
+pub mod heightfield;
+pub mod load;
+pub mod mesh;
+pub mod pool;
+pub mod select;
+pub mod tiles;
+
+pub use heightfield::{GeoReference, Heightfield};
+pub use load::{load_dem, DemError};
