@@ -536,7 +536,7 @@ fn bake_path_next_to_file_and_folder() {
 // The commands
 // ---------------------------------------------------------------------------------------------
 
-fn aerie(args: &[&str]) -> Result<(), aerie::app::cli::Failure> {
+fn aerie(args: &[&str]) -> Result<(), aerie::app::failure::Failure> {
     use clap::Parser as _;
     let mut v = vec!["aerie"];
     v.extend_from_slice(args);

@@ -11,10 +11,11 @@ use std::time::{Duration, Instant};
 
 use aerie_config::Channel;
 
-use crate::app::cli::{bad_input, prepare_terrain, runtime, Failure};
 use crate::app::commands::run::{
     open_input, open_stats, percentile, plan, Plan, RunArgs, RunPoses, StraightPassSource,
 };
+use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::prepare::prepare_terrain;
 use crate::app::window::PoseSource;
 use crate::render::frame::{RendererDesc, TerrainRenderer};
 use crate::sim::channel::AircraftPose;

@@ -2,5 +2,7 @@
 
 pub mod cli;
 pub mod commands;
+pub mod failure;
 pub mod headless;
+pub mod prepare;
 pub mod window;

@@ -18,6 +18,7 @@ use crate::vk::pipeline::{
     TerrainPipeline, BINDING_CLIPMAP, BINDING_FRAME, BINDING_INSTANCES, BINDING_POOLS,
 };
 use crate::vk::staging::StagingRing;
+use crate::vk::swapchain::PresentTarget;
 use crate::vk::target::{OffscreenTarget, DEPTH_CLEAR};
 use crate::vk::timestamps::{GpuTimer, Pass};
 use crate::vk::{
@@ -231,17 +232,6 @@ fn selection_digest(sel: &Selection) -> u64 {
         }
     }
     h
-}
-
-/// A swapchain image to present a frame in (see [`TerrainRenderer::render_frame`]).
-#[derive(Debug, Clone, Copy)]
-pub struct PresentTarget {
-    pub image: vk::Image,
-    pub extent: vk::Extent2D,
-    /// Signaled by the presentation engine when the image is acquired; waited before the copy.
-    pub acquired: vk::Semaphore,
-    /// Signaled when the copy is done; the present waits for it.
-    pub rendered: vk::Semaphore,
 }
 
 /// One region of a texture to fill from the dataset: texel rectangle in `layer`, and the

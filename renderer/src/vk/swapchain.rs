@@ -15,7 +15,6 @@ use ash::{khr, vk};
 use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
 
 use super::{Device, Instance, VkError, VkResultExt, FRAMES_IN_FLIGHT};
-use crate::render::frame::PresentTarget;
 
 /// A window's Vulkan surface. Destroy it after its swapchain and before the instance.
 pub struct Surface {
@@ -467,6 +466,17 @@ impl Swapchain {
         }
         self.images.clear();
     }
+}
+
+/// A swapchain image to present a frame in (the renderer records a copy into it; see `render::frame`).
+#[derive(Debug, Clone, Copy)]
+pub struct PresentTarget {
+    pub image: vk::Image,
+    pub extent: vk::Extent2D,
+    /// Signaled by the presentation engine when the image is acquired; waited before the copy.
+    pub acquired: vk::Semaphore,
+    /// Signaled when the copy is done; the present waits for it.
+    pub rendered: vk::Semaphore,
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@ use std::time::Instant;
 use clap::Args;
 
 use super::{check_out_folder, human_bytes, progress_bar};
-use crate::app::cli::{bad_input, runtime, Failure};
+use crate::app::failure::{bad_input, runtime, Failure};
 use aerie_terrain::bake::{
     bake, bake_path_for, check_existing, report_csv, write_bake, BakeError, BakeParams, ErrorBake,
     Existing,

@@ -27,7 +27,8 @@ use std::time::Instant;
 use clap::Args;
 use glam::DVec3;
 
-use crate::app::cli::{bad_input, prepare_terrain, runtime, Failure};
+use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::prepare::prepare_terrain;
 use crate::render::frame::{FrameStats, RendererDesc, TerrainRenderer};
 use crate::sim::flight::{StraightPass, Waypoints};
 use crate::tools::image_error::{

@@ -10,7 +10,8 @@ use std::time::Instant;
 use aerie_config::{Channel, RenderConfig};
 use glam::DVec3;
 
-use crate::app::cli::{bad_input, frames_csv_header, runtime, Failure, FlyArgs};
+use crate::app::cli::{frames_csv_header, FlyArgs};
+use crate::app::failure::{bad_input, runtime, Failure};
 use crate::render::frame::{FrameStats, TerrainRenderer};
 use crate::sim::channel::channel_camera;
 use crate::tools::output::{write_png, write_text};

@@ -10,7 +10,7 @@ use std::time::Instant;
 use clap::Args;
 
 use super::{check_out_folder, human_bytes, progress_bar};
-use crate::app::cli::{bad_input, runtime, Failure};
+use crate::app::failure::{bad_input, runtime, Failure};
 use aerie_terrain::gen::{generate_into, DemKind, GenParams};
 
 /// Largest side accepted (32769² f32 = 4.3 GB).

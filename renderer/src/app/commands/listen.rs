@@ -17,7 +17,7 @@ use aerie_sim_bridge::{DropReason, PosePosition, PoseReader, StatsSnapshot};
 use clap::Args;
 
 use super::check_out_folder;
-use crate::app::cli::{bad_input, runtime, Failure};
+use crate::app::failure::{bad_input, runtime, Failure};
 use crate::tools::output::write_text;
 
 fn parse_protocol(s: &str) -> Result<ProtocolChoice, String> {

@@ -1,5 +1,5 @@
 //! Offline data commands: `aerie gen-dem` (synthetic terrains) and `aerie bake` (the error bake).
-//! Each returns the CLI's [`Failure`](crate::app::cli::Failure): exit 2 for bad input, 1 at run time.
+//! Each returns the CLI's [`Failure`](crate::app::failure::Failure): exit 2 for bad input, 1 at run time.
 
 pub mod bake;
 pub mod bench;
@@ -40,11 +40,11 @@ pub(crate) fn human_bytes(n: u64) -> String {
 pub(crate) fn check_out_folder(
     flag: &str,
     out: &std::path::Path,
-) -> Result<(), crate::app::cli::Failure> {
+) -> Result<(), crate::app::failure::Failure> {
     let parent = out.parent().filter(|p| !p.as_os_str().is_empty());
     if let Some(p) = parent {
         if !p.is_dir() {
-            return Err(crate::app::cli::bad_input(format!(
+            return Err(crate::app::failure::bad_input(format!(
                 "{flag} {}: folder {} does not exist",
                 out.display(),
                 p.display()
@@ -52,7 +52,7 @@ pub(crate) fn check_out_folder(
         }
     }
     if out.is_dir() {
-        return Err(crate::app::cli::bad_input(format!(
+        return Err(crate::app::failure::bad_input(format!(
             "{flag} {}: is a folder, expected a file name",
             out.display()
         )));

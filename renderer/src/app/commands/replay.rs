@@ -9,7 +9,7 @@ use aerie_sim_bridge::record::{read_recording, replay, ReplayTiming};
 use clap::Args;
 
 use super::human_bytes;
-use crate::app::cli::{bad_input, runtime, Failure};
+use crate::app::failure::{bad_input, runtime, Failure};
 
 #[derive(Debug, Args)]
 pub struct ReplayArgs {

@@ -25,7 +25,8 @@ use clap::Args;
 use winit::event_loop::EventLoop;
 
 use super::check_out_folder;
-use crate::app::cli::{bad_input, prepare_terrain, runtime, Failure};
+use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::prepare::prepare_terrain;
 use crate::app::window::{
     new_event_loop, required_instance_extensions, run_channels, PoseSource, RunOptions, RunReport,
     WindowError,

@@ -1,0 +1,72 @@
+//! Terrain preparation shared by every command that draws: the dataset and its error bake.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+use aerie_terrain::bake::{bake, bake_path_for, load_or_bake, BakeOutcome, BakeParams, ErrorBake};
+use aerie_terrain::dataset::{load_dataset, Dataset};
+
+use crate::app::failure::{bad_input, Failure};
+
+/// Loads the dataset (file or folder) and its error bake: reads `<name>.aerie-bake` when it is a
+/// valid bake of this data, else bakes and writes it; when it cannot be written (read-only
+/// folder, or a file that is not ours) the bake is kept in memory and the reason printed.
+pub fn prepare_terrain(
+    path: &Path,
+    tile_size: u32,
+) -> Result<(Arc<Dataset>, Arc<ErrorBake>), Failure> {
+    let t = Instant::now();
+    let ds = load_dataset(path).map_err(bad_input)?;
+    let hf = &ds.hf;
+    let (lo, hi) = hf.min_max();
+    eprintln!(
+        "loaded {}: {}x{} samples (padded to {}x{}), {:.0}..{:.0} m, {} voids filled, {} ({:.2} s)",
+        path.display(),
+        ds.valid_width,
+        ds.valid_height,
+        hf.width,
+        hf.height,
+        lo,
+        hi,
+        hf.voids_filled,
+        hf.spacing_note,
+        t.elapsed().as_secs_f64()
+    );
+    let params = BakeParams {
+        tile_size,
+        levels: 0,
+    };
+    params
+        .resolve_levels(&ds)
+        .map_err(|e| bad_input(format!("{}: {e}", path.display())))?;
+    let bake_path = bake_path_for(path);
+    let t = Instant::now();
+    let quiet = |_: u64, _: u64| {};
+    let b = match load_or_bake(&ds, &bake_path, params, false, &quiet) {
+        Ok((b, outcome)) => {
+            let what = match outcome {
+                BakeOutcome::UpToDate => "read".to_string(),
+                BakeOutcome::Baked => "baked and wrote".to_string(),
+                BakeOutcome::Replaced(why) => format!("re-baked ({why}) and wrote"),
+            };
+            eprintln!(
+                "{what} {} ({} levels, {:.2} s)",
+                bake_path.display(),
+                b.levels.len(),
+                t.elapsed().as_secs_f64()
+            );
+            b
+        }
+        Err(e) => {
+            let b = bake(&ds, params, &quiet);
+            eprintln!(
+                "baked in memory ({} levels, {:.2} s); not saved: {e}",
+                b.levels.len(),
+                t.elapsed().as_secs_f64()
+            );
+            b
+        }
+    };
+    Ok((Arc::new(ds), Arc::new(b)))
+}
