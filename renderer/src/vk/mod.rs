@@ -1,7 +1,9 @@
 //! Thin, explicit Vulkan plumbing: each struct owns one Vulkan object or one coherent group,
 //! is created in one function and destroyed by an explicit `destroy` in reverse order.
 
+pub mod access;
 pub mod buffer;
+pub mod conv;
 pub mod descriptors;
 pub mod device;
 pub mod error;
