@@ -12,6 +12,7 @@ use crate::app::prepare::prepare_terrain;
 use crate::render::frame::{FrameStats, RendererDesc, TerrainRenderer};
 use crate::sim::flight::{StraightPass, Waypoints};
 use crate::tools::output::{write_png, write_text};
+use crate::tools::percentile::percentile;
 use crate::vk::DeviceDesc;
 use aerie_terrain::camera::{parse_camera_arg, parse_size_arg, Attitude, Camera, Frustum};
 use aerie_terrain::select::{LodMode, SelectParams, MAX_REFINEMENT};
@@ -326,14 +327,6 @@ pub fn frames_csv_header() -> String {
         "time_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg,{}\n",
         FrameStats::CSV_HEADER
     )
-}
-
-fn percentile(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return 0.0;
-    }
-    let k = ((sorted.len() - 1) as f64 * p).round() as usize;
-    sorted[k]
 }
 
 fn cmd_fly(a: FlyArgs) -> Result<(), Failure> {

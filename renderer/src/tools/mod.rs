@@ -5,4 +5,5 @@ pub mod image_error;
 pub mod output;
 pub mod overlay;
 pub mod panorama;
+pub mod percentile;
 pub mod stats_csv;

@@ -17,6 +17,7 @@ use crate::sim::channel::channel_camera;
 use crate::tools::output::{write_png, write_text};
 use crate::tools::overlay::{OverlayInfo, OverlayState};
 use crate::tools::panorama::{canvas_for, PanoramaChannel, PanoramaMap, MAX_CANVAS};
+use crate::tools::percentile::percentile;
 use aerie_terrain::camera::{Attitude, Camera};
 
 /// One channel as flown: its config, render size and output folder name.
@@ -87,13 +88,6 @@ pub fn plan_channels(path: &Path, scale: f64) -> Result<(RenderConfig, Vec<FlyCh
         });
     }
     Ok((cfg, out))
-}
-
-fn percentile(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return 0.0;
-    }
-    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
 }
 
 /// Everything `fly_channels` needs besides the renderer.

@@ -37,6 +37,7 @@ use crate::sim::flight::StraightPass;
 use crate::sim::host_view::{HostViews, LiveChannel};
 use crate::sim::pose_input::{counters_text, GeoMapping, InputProtocol, InputSpec, SimInput};
 use crate::tools::output::write_text;
+use crate::tools::percentile::percentile;
 use crate::tools::stats_csv::{FrameRow, PoseOrigin, StatsWriter};
 use crate::vk::DeviceDesc;
 use aerie_terrain::camera::parse_size_arg;
@@ -754,13 +755,6 @@ pub fn run(a: RunArgs) -> Result<(), Failure> {
     }
     let mut event_loop = new_event_loop(false).map_err(runtime)?;
     run_on(&mut event_loop, &a).map(|_| ())
-}
-
-pub(crate) fn percentile(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return 0.0;
-    }
-    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
 }
 
 /// [`run`] on an existing event loop (winit allows one per process; tests run several
