@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 use aerie_config::Channel;
 
 use crate::app::commands::run::{
-    open_input, open_stats, percentile, plan, Plan, RunArgs, RunPoses, StraightPassSource,
+    open_input, open_stats, plan, Plan, RunArgs, RunPoses, StraightPassSource,
 };
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::prepare::prepare_terrain;
@@ -23,6 +23,7 @@ use crate::sim::flight::StraightPass;
 use crate::sim::pose_input::{counters_text, GeoMapping, SimInput};
 use crate::tools::output::write_text;
 use crate::tools::overlay::{OverlayInfo, OverlayState};
+use crate::tools::percentile::percentile;
 use crate::tools::stats_csv::FrameRow;
 use crate::vk::DeviceDesc;
 use aerie_terrain::camera::parse_size_arg;
