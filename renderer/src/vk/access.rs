@@ -4,7 +4,7 @@
 
 use ash::vk;
 
-use super::conv::{map_barrier, subresource_range};
+use super::conv::{map_barrier, map_memory_barrier, subresource_range};
 use super::device::Device;
 
 pub use super::access_type::Access;
@@ -54,7 +54,7 @@ pub fn image_barrier(
 /// Records a global memory barrier from the `prev` uses to the `next` uses (buffers: uploads
 /// before draws, copies before host reads). `cmd` as for [`image_barrier`].
 pub fn memory_barrier(device: &Device, cmd: vk::CommandBuffer, prev: &[Access], next: &[Access]) {
-    let b = map_barrier(prev, next, false);
+    let b = map_memory_barrier(prev, next);
     let barrier = vk::MemoryBarrier::default()
         .src_access_mask(b.src_access)
         .dst_access_mask(b.dst_access);

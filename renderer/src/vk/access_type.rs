@@ -9,7 +9,7 @@ pub enum Access {
     Nothing,
     /// A swapchain image just acquired: the presentation engine's use of it ends at the acquire
     /// semaphore, which the frame's submission waits at the transfer stage (see
-    /// [`super::swapchain::ACQUIRE_WAIT_STAGE`]); a barrier after this use chains to that wait.
+    /// `vk::swapchain::ACQUIRE_WAIT_STAGE`); a barrier after this use chains to that wait.
     SwapchainAcquired,
     /// Source of a copy or blit.
     TransferRead,

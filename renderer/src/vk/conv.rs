@@ -143,6 +143,16 @@ pub fn map_barrier(prev: &[Access], next: &[Access], discard: bool) -> BarrierIn
     }
 }
 
+/// The global memory barrier from the `prev` uses to the `next` uses: as [`map_barrier`], with
+/// no layouts (both `UNDEFINED`).
+pub fn map_memory_barrier(prev: &[Access], next: &[Access]) -> BarrierInfo {
+    BarrierInfo {
+        old_layout: vk::ImageLayout::UNDEFINED,
+        new_layout: vk::ImageLayout::UNDEFINED,
+        ..map_barrier(prev, next, false)
+    }
+}
+
 /// Mip 0 and every array layer of an image (aerie's images have one mip level).
 pub fn subresource_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
     vk::ImageSubresourceRange {

@@ -147,7 +147,7 @@ fn copies_out_of_the_target_wait_for_its_writes() {
         (L::DEPTH_ATTACHMENT_OPTIMAL, L::TRANSFER_SRC_OPTIMAL)
     );
     assert_eq!(
-        map_barrier(&[Access::TransferWrite], &[Access::HostRead], false),
+        map_memory_barrier(&[Access::TransferWrite], &[Access::HostRead]),
         triplets(
             (L::UNDEFINED, S::TRANSFER, A::TRANSFER_WRITE),
             (L::UNDEFINED, S::HOST, A::HOST_READ),
