@@ -1,6 +1,6 @@
 //! The vocabulary of barriers: one way the GPU (or the host, or the presentation engine) uses a
-//! buffer or an image. Its own file so that [`super::conv`] (which maps it to Vulkan flags) and
-//! [`super::access`] (which records barriers with it) both depend on it and not on each other.
+//! buffer or an image. Its own file so that `conv.rs` (which maps it to Vulkan flags) and
+//! `access.rs` (which records barriers with it) both depend on it and not on each other.
 
 /// One way the GPU uses a buffer or an image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

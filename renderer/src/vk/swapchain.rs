@@ -155,6 +155,9 @@ pub struct Swapchain {
     /// n − FRAMES_IN_FLIGHT before recording frame n).
     acquire: Vec<vk::Semaphore>,
     next_acquire: usize,
+    /// A recreate found the window without area: the images no longer match it, so
+    /// [`Swapchain::acquire`] answers `OutOfDate` until a recreate succeeds.
+    needs_recreate: bool,
 }
 
 /// Semaphores created so far are destroyed if a later one fails.
@@ -251,6 +254,7 @@ impl Swapchain {
             rendered,
             acquire,
             next_acquire: 0,
+            needs_recreate: false,
         }))
     }
 
@@ -344,13 +348,17 @@ impl Swapchain {
 
     /// Recreates the swapchain for a new window size (after a resize, out-of-date or
     /// suboptimal). Waits for the device first. Returns false when the extent is zero
-    /// (minimised): the swapchain is then left as it was and should not be used.
+    /// (minimised): the swapchain is then left as it was, and [`Self::acquire`] answers
+    /// `OutOfDate` until a later recreate succeeds.
     pub fn recreate(
         &mut self,
         device: &Device,
         surface: &Surface,
         window: (u32, u32),
     ) -> Result<bool, VkError> {
+        if self.acquire.is_empty() {
+            return Err(VkError::Other("recreate of a destroyed swapchain".into()));
+        }
         device.wait_idle();
         let Some((raw, format, extent, images)) = Self::create_raw(
             &self.instance,
@@ -362,8 +370,10 @@ impl Swapchain {
             Some(self.raw),
         )?
         else {
+            self.needs_recreate = true;
             return Ok(false);
         };
+        self.needs_recreate = false;
         // SAFETY: the device is idle (waited above), so no frame still uses the old swapchain's
         // images or presents it; it was retired by `create_raw` and is destroyed once.
         unsafe { self.loader.destroy_swapchain(self.raw, None) };
@@ -380,9 +390,12 @@ impl Swapchain {
 
     /// Acquires the next image (waits for one to be available).
     pub fn acquire(&mut self) -> Result<Acquire, VkError> {
+        if self.needs_recreate || self.images.is_empty() {
+            return Ok(Acquire::OutOfDate);
+        }
         let semaphore = self.acquire[self.next_acquire];
-        // SAFETY: the swapchain is live (not destroyed: `destroy` empties `images`, and acquiring
-        // needs one); `semaphore` is unsignaled with no pending wait: the ring is one longer
+        // SAFETY: the swapchain is live (not destroyed: `destroy` empties `images`, checked
+        // above); `semaphore` is unsignaled with no pending wait: the ring is one longer
         // than the frames in flight and the renderer waits for frame n − FRAMES_IN_FLIGHT
         // (which consumed it) before acquiring for frame n.
         let result = unsafe {

@@ -265,7 +265,10 @@ impl OffscreenTarget {
         );
     }
 
-    /// RGBA8 (sRGB-encoded) pixels, rows top to bottom. Valid after the frame's fence.
+    /// RGBA8 (sRGB-encoded) pixels, rows top to bottom: what the last completed
+    /// [`Self::record_readback`] copied, read from persistently mapped memory; the frame's
+    /// fence (waited by the renderer before reading) orders the copy before this read, and the
+    /// memory barrier in `record_readback` makes it visible to the host.
     pub fn colour_rgba(&self) -> Vec<u8> {
         self.readback
             .mapped()
@@ -273,7 +276,8 @@ impl OffscreenTarget {
             .unwrap_or_default()
     }
 
-    /// Reversed-Z depth per pixel (1 = near plane, 0 = infinitely far / sky).
+    /// Reversed-Z depth per pixel (1 = near plane, 0 = infinitely far / sky), from the same
+    /// copy as [`Self::colour_rgba`].
     pub fn depth(&self) -> Vec<f32> {
         self.depth_readback
             .mapped()
@@ -281,6 +285,8 @@ impl OffscreenTarget {
             .unwrap_or_default()
     }
 
+    /// Reverse of creation. Idempotent (each part is). The frame that used the target must have
+    /// completed (the renderer waits for the device first).
     pub fn destroy(&mut self, device: &Device) {
         self.depth_readback.destroy(device);
         self.readback.destroy(device);
