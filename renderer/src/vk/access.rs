@@ -1,60 +1,21 @@
 //! Barriers named by use (kajiya's `AccessType` idea): a barrier says what the resource was last
-//! used for and what it is used for next; [`super::conv::map_access`] turns each use into its
-//! stages, accesses and layout. No hand-written (layout, stage, access) triplets elsewhere.
+//! used for and what it is used for next; [`super::conv::map_barrier`] turns the uses into
+//! stages, accesses and layouts. No hand-written (layout, stage, access) triplets elsewhere.
 
 use ash::vk;
 
-use super::conv::map_accesses;
-use super::image::subresource_range;
-use super::Device;
+use super::conv::{map_barrier, map_memory_barrier, subresource_range};
+use super::device::Device;
 
-/// One way the GPU uses a buffer or an image.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Access {
-    /// No use (before the first, or contents not needed).
-    Nothing,
-    /// Source of a copy or blit.
-    TransferRead,
-    /// Destination of a copy, blit or clear.
-    TransferWrite,
-    /// Written as a colour attachment.
-    ColourAttachmentWrite,
-    /// Depth-tested and written as a depth attachment.
-    DepthAttachmentReadWrite,
-    /// Sampled in the vertex shader (the height textures).
-    VertexShaderReadSampledImage,
-    /// Sampled in the fragment shader.
-    FragmentShaderReadSampledImage,
-    /// Read as a storage buffer in the vertex shader (tile instances).
-    VertexShaderReadStorageBuffer,
-    /// Read as a uniform buffer by the vertex and fragment shaders.
-    AnyShaderReadUniformBuffer,
-    /// Read as indirect draw commands.
-    IndirectBuffer,
-    /// Read as an index buffer.
-    IndexBuffer,
-    /// Read by the host after the fence.
-    HostRead,
-    /// Handed to the presentation engine.
-    Present,
-}
-
-impl Access {
-    /// Whether this use writes memory (a barrier after it must make the writes available).
-    pub fn is_write(self) -> bool {
-        matches!(
-            self,
-            Access::TransferWrite
-                | Access::ColourAttachmentWrite
-                | Access::DepthAttachmentReadWrite
-        )
-    }
-}
+pub use super::access_type::Access;
 
 /// Records an image barrier from the `prev` uses to the `next` uses of the whole image (mip 0,
-/// every array layer: see [`subresource_range`]). With `discard` the
-/// old contents are not kept (old layout `UNDEFINED`), but the execution dependency on `prev`
-/// still holds, so a later write cannot overtake an earlier read (write-after-read).
+/// every array layer: see [`subresource_range`]). With `discard` the old contents are not kept
+/// (old layout `UNDEFINED`), but the execution dependency on `prev` still holds, so a later
+/// write cannot overtake an earlier read (write-after-read).
+///
+/// `cmd` must be a command buffer of `device` in the recording state and `image` a live image
+/// of `device`; both are checked by the validation layer, and neither is dereferenced here.
 pub fn image_barrier(
     device: &Device,
     cmd: vk::CommandBuffer,
@@ -64,30 +25,24 @@ pub fn image_barrier(
     next: &[Access],
     discard: bool,
 ) {
-    let from = map_accesses(prev);
-    let to = map_accesses(next);
-    let old_layout = if discard {
-        vk::ImageLayout::UNDEFINED
-    } else {
-        from.layout
-    };
+    let b = map_barrier(prev, next, discard);
     let barrier = vk::ImageMemoryBarrier::default()
-        .old_layout(old_layout)
-        .new_layout(to.layout)
-        .src_access_mask(from.access)
-        .dst_access_mask(to.access)
+        .old_layout(b.old_layout)
+        .new_layout(b.new_layout)
+        .src_access_mask(b.src_access)
+        .dst_access_mask(b.dst_access)
         .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .image(image)
         .subresource_range(subresource_range(aspect));
-    // SAFETY: `cmd` is in the recording state (callers record between begin and end of their
-    // frame's command buffer) and `image` is a live image of `device`; the barrier's layouts
-    // are valid for the uses named.
+    // SAFETY: `device.raw` is a live device (a `Device` is usable until its `destroy`); `cmd` is
+    // recording on it and `image` is one of its images (this function's contract above). The
+    // barrier struct and the slice outlive the call, and the layouts come from the named uses.
     unsafe {
         device.raw.cmd_pipeline_barrier(
             cmd,
-            from.stage,
-            to.stage,
+            b.src_stage,
+            b.dst_stage,
             vk::DependencyFlags::empty(),
             &[],
             &[],
@@ -97,20 +52,19 @@ pub fn image_barrier(
 }
 
 /// Records a global memory barrier from the `prev` uses to the `next` uses (buffers: uploads
-/// before draws, copies before host reads).
+/// before draws, copies before host reads). `cmd` as for [`image_barrier`].
 pub fn memory_barrier(device: &Device, cmd: vk::CommandBuffer, prev: &[Access], next: &[Access]) {
-    let from = map_accesses(prev);
-    let to = map_accesses(next);
+    let b = map_memory_barrier(prev, next);
     let barrier = vk::MemoryBarrier::default()
-        .src_access_mask(from.access)
-        .dst_access_mask(to.access);
-    // SAFETY: `cmd` is in the recording state (see `image_barrier`); a global memory barrier
-    // names no resource.
+        .src_access_mask(b.src_access)
+        .dst_access_mask(b.dst_access);
+    // SAFETY: as in `image_barrier`: the device is live and `cmd` is recording on it; a global
+    // memory barrier names no resource.
     unsafe {
         device.raw.cmd_pipeline_barrier(
             cmd,
-            from.stage,
-            to.stage,
+            b.src_stage,
+            b.dst_stage,
             vk::DependencyFlags::empty(),
             &[barrier],
             &[],

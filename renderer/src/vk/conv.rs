@@ -1,9 +1,17 @@
-//! Pure mappings from our plain vocabulary to Vulkan flags (wgpu-hal's `conv.rs` idea): no
-//! device, no command buffer, unit-tested. Recording lives next to the objects it records on.
+//! Pure mappings from our plain vocabulary to Vulkan values, and the vk layer's pure choices
+//! (wgpu-hal's `conv.rs` idea): no device, no command buffer, plain data in and out,
+//! unit-tested in `conv_tests.rs`. Recording and object creation live next to the objects.
 
 use ash::vk;
 
-use super::access::Access;
+use super::access_type::Access;
+
+/// The offscreen colour format: 8-bit sRGB (the PNGs and the swapchain blit keep it exact).
+pub const COLOUR_FORMAT: vk::Format = vk::Format::R8G8B8A8_SRGB;
+/// The depth format; devices without it as an optimal-tiling depth attachment are unsuitable.
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+// ----------------------------------------------------------------------------- barriers
 
 /// What one [`Access`] means to a barrier: the stages that do it, the memory accesses they make,
 /// and the image layout it needs (`UNDEFINED` for accesses that are not to an image).
@@ -22,6 +30,9 @@ pub fn map_access(a: Access) -> AccessInfo {
     use vk::PipelineStageFlags as S;
     let (stage, access, layout) = match a {
         Access::Nothing => (S::TOP_OF_PIPE, A::empty(), L::UNDEFINED),
+        // The acquire semaphore is waited at TRANSFER: the barrier's first scope must be that
+        // stage for the two to chain (a TOP_OF_PIPE source would race the presentation engine).
+        Access::SwapchainAcquired => (S::TRANSFER, A::empty(), L::UNDEFINED),
         Access::TransferRead => (S::TRANSFER, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL),
         Access::TransferWrite => (S::TRANSFER, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL),
         Access::ColourAttachmentWrite => (
@@ -64,7 +75,7 @@ pub fn map_access(a: Access) -> AccessInfo {
 
 /// The union of several uses that happen together (e.g. the uniform, storage and indirect reads
 /// of one draw). The layout is the one they share; image uses of different layouts cannot
-/// happen at once, which [`super::access`] checks in debug builds.
+/// happen at once, which is checked in debug builds.
 pub fn map_accesses(uses: &[Access]) -> AccessInfo {
     let mut out = AccessInfo {
         stage: vk::PipelineStageFlags::empty(),
@@ -90,87 +101,308 @@ pub fn map_accesses(uses: &[Access]) -> AccessInfo {
     out
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+/// Access flags that write memory: only these need making available before a later use (reads
+/// in a source access mask have no effect, so they are left out).
+const WRITE_ACCESSES: vk::AccessFlags = vk::AccessFlags::from_raw(
+    vk::AccessFlags::TRANSFER_WRITE.as_raw()
+        | vk::AccessFlags::COLOR_ATTACHMENT_WRITE.as_raw()
+        | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE.as_raw()
+        | vk::AccessFlags::SHADER_WRITE.as_raw()
+        | vk::AccessFlags::HOST_WRITE.as_raw()
+        | vk::AccessFlags::MEMORY_WRITE.as_raw(),
+);
 
-    const ALL: [Access; 13] = [
-        Access::Nothing,
-        Access::TransferRead,
-        Access::TransferWrite,
-        Access::ColourAttachmentWrite,
-        Access::DepthAttachmentReadWrite,
-        Access::VertexShaderReadSampledImage,
-        Access::FragmentShaderReadSampledImage,
-        Access::VertexShaderReadStorageBuffer,
-        Access::AnyShaderReadUniformBuffer,
-        Access::IndirectBuffer,
-        Access::IndexBuffer,
-        Access::HostRead,
-        Access::Present,
-    ];
+/// Every field of one pipeline barrier (for a memory barrier both layouts are `UNDEFINED`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BarrierInfo {
+    pub src_stage: vk::PipelineStageFlags,
+    pub dst_stage: vk::PipelineStageFlags,
+    pub src_access: vk::AccessFlags,
+    pub dst_access: vk::AccessFlags,
+    pub old_layout: vk::ImageLayout,
+    pub new_layout: vk::ImageLayout,
+}
 
-    #[test]
-    fn every_access_names_a_stage_and_only_writes_what_it_says() {
-        for a in ALL {
-            let i = map_access(a);
-            assert!(!i.stage.is_empty(), "{a:?} has no stage");
-            let writes = vk::AccessFlags::TRANSFER_WRITE
-                | vk::AccessFlags::COLOR_ATTACHMENT_WRITE
-                | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE;
-            assert_eq!(
-                i.access.intersects(writes),
-                a.is_write(),
-                "{a:?}: write flags {:?} disagree with is_write",
-                i.access
-            );
-        }
-    }
-
-    #[test]
-    fn image_uses_have_their_layout_and_buffer_uses_none() {
-        assert_eq!(
-            map_access(Access::TransferWrite).layout,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL
-        );
-        assert_eq!(
-            map_access(Access::VertexShaderReadSampledImage).layout,
-            vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL
-        );
-        assert_eq!(
-            map_access(Access::Present).layout,
-            vk::ImageLayout::PRESENT_SRC_KHR
-        );
-        for a in [
-            Access::IndirectBuffer,
-            Access::IndexBuffer,
-            Access::AnyShaderReadUniformBuffer,
-            Access::VertexShaderReadStorageBuffer,
-            Access::HostRead,
-        ] {
-            assert_eq!(map_access(a).layout, vk::ImageLayout::UNDEFINED, "{a:?}");
-        }
-    }
-
-    #[test]
-    fn a_union_ors_stages_and_accesses() {
-        let u = map_accesses(&[
-            Access::AnyShaderReadUniformBuffer,
-            Access::VertexShaderReadStorageBuffer,
-            Access::IndirectBuffer,
-        ]);
-        assert_eq!(
-            u.stage,
-            vk::PipelineStageFlags::DRAW_INDIRECT
-                | vk::PipelineStageFlags::VERTEX_SHADER
-                | vk::PipelineStageFlags::FRAGMENT_SHADER
-        );
-        assert_eq!(
-            u.access,
-            vk::AccessFlags::UNIFORM_READ
-                | vk::AccessFlags::SHADER_READ
-                | vk::AccessFlags::INDIRECT_COMMAND_READ
-        );
-        assert_eq!(map_accesses(&[]).stage, vk::PipelineStageFlags::TOP_OF_PIPE);
+/// The barrier from the `prev` uses to the `next` uses. With `discard` the old contents are not
+/// kept (old layout `UNDEFINED`), but the execution dependency on `prev` still holds, so a later
+/// write cannot overtake an earlier read (write-after-read).
+pub fn map_barrier(prev: &[Access], next: &[Access], discard: bool) -> BarrierInfo {
+    let from = map_accesses(prev);
+    let to = map_accesses(next);
+    BarrierInfo {
+        src_stage: from.stage,
+        dst_stage: to.stage,
+        src_access: from.access & WRITE_ACCESSES,
+        dst_access: to.access,
+        old_layout: if discard {
+            vk::ImageLayout::UNDEFINED
+        } else {
+            from.layout
+        },
+        new_layout: to.layout,
     }
 }
+
+/// The global memory barrier from the `prev` uses to the `next` uses: as [`map_barrier`], with
+/// no layouts (both `UNDEFINED`).
+pub fn map_memory_barrier(prev: &[Access], next: &[Access]) -> BarrierInfo {
+    BarrierInfo {
+        old_layout: vk::ImageLayout::UNDEFINED,
+        new_layout: vk::ImageLayout::UNDEFINED,
+        ..map_barrier(prev, next, false)
+    }
+}
+
+/// Mip 0 and every array layer of an image (aerie's images have one mip level).
+pub fn subresource_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange {
+        aspect_mask: aspect,
+        base_mip_level: 0,
+        level_count: 1,
+        base_array_layer: 0,
+        layer_count: vk::REMAINING_ARRAY_LAYERS,
+    }
+}
+
+/// The aspect a view of (or barrier on) an image of `format` covers.
+pub fn map_format_aspect(format: vk::Format) -> vk::ImageAspectFlags {
+    use vk::Format as F;
+    match format {
+        F::D16_UNORM | F::X8_D24_UNORM_PACK32 | F::D32_SFLOAT => vk::ImageAspectFlags::DEPTH,
+        F::S8_UINT => vk::ImageAspectFlags::STENCIL,
+        F::D16_UNORM_S8_UINT | F::D24_UNORM_S8_UINT | F::D32_SFLOAT_S8_UINT => {
+            vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
+        }
+        _ => vk::ImageAspectFlags::COLOR,
+    }
+}
+
+// ----------------------------------------------------------------------------- validation
+
+/// How a debug-utils message counts: every error and warning fails a command; the rest is
+/// logged only.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MessageSeverity {
+    Error,
+    Warning,
+    Info,
+}
+
+/// The most severe bit of a debug-utils severity mask.
+pub fn map_message_severity(flags: vk::DebugUtilsMessageSeverityFlagsEXT) -> MessageSeverity {
+    if flags.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+        MessageSeverity::Error
+    } else if flags.contains(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING) {
+        MessageSeverity::Warning
+    } else {
+        MessageSeverity::Info
+    }
+}
+
+// ----------------------------------------------------------------------------- device choice
+
+/// Plain description of one physical device, for [`choose_device`].
+#[derive(Debug, Clone)]
+pub struct DeviceCandidate {
+    pub name: String,
+    pub kind: vk::PhysicalDeviceType,
+    /// Features and properties the renderer requires that this device lacks.
+    pub missing: Vec<&'static str>,
+}
+
+/// What a physical device offers of what the renderer requires (read from the device, judged by
+/// [`missing_requirements`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DeviceOffer {
+    pub api_version: u32,
+    pub graphics_queue: bool,
+    /// `None` when the swapchain extension was not asked for.
+    pub swapchain_extension: Option<bool>,
+    pub multi_draw_indirect: bool,
+    pub draw_indirect_first_instance: bool,
+    /// Only known (and required) on Vulkan 1.3 devices.
+    pub dynamic_rendering: bool,
+    /// Optimal-tiling features of [`DEPTH_FORMAT`].
+    pub depth_format_features: vk::FormatFeatureFlags,
+}
+
+/// The requirements `offer` misses, named for the "no suitable device" message.
+pub fn missing_requirements(offer: &DeviceOffer) -> Vec<&'static str> {
+    let mut missing = Vec::new();
+    let vulkan13 = offer.api_version >= vk::API_VERSION_1_3;
+    if !vulkan13 {
+        missing.push("Vulkan 1.3");
+    }
+    if !offer.graphics_queue {
+        missing.push("a graphics queue");
+    }
+    if offer.swapchain_extension == Some(false) {
+        missing.push("VK_KHR_swapchain");
+    }
+    if !offer.multi_draw_indirect {
+        missing.push("multiDrawIndirect");
+    }
+    if !offer.draw_indirect_first_instance {
+        missing.push("drawIndirectFirstInstance");
+    }
+    if vulkan13 && !offer.dynamic_rendering {
+        missing.push("dynamicRendering");
+    }
+    if !offer
+        .depth_format_features
+        .contains(vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT)
+    {
+        missing.push("D32_SFLOAT depth");
+    }
+    missing
+}
+
+/// Preference order: discrete > integrated > virtual > CPU > other.
+fn device_type_rank(kind: vk::PhysicalDeviceType) -> u32 {
+    match kind {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::CPU => 3,
+        _ => 4,
+    }
+}
+
+/// Picks the best suitable candidate (index), or explains why none is: every device found with
+/// its type and what it lacks.
+pub fn choose_device(
+    candidates: &[DeviceCandidate],
+    filter: Option<&str>,
+) -> Result<usize, String> {
+    let filter_lc = filter.map(|f| f.to_lowercase());
+    let best = candidates
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.missing.is_empty())
+        .filter(|(_, c)| {
+            filter_lc
+                .as_ref()
+                .is_none_or(|f| c.name.to_lowercase().contains(f))
+        })
+        .min_by_key(|(i, c)| (device_type_rank(c.kind), *i))
+        .map(|(i, _)| i);
+    best.ok_or_else(|| {
+        let list = if candidates.is_empty() {
+            "no Vulkan devices found".to_string()
+        } else {
+            candidates
+                .iter()
+                .map(|c| {
+                    let lacks = if c.missing.is_empty() {
+                        String::from("suitable")
+                    } else {
+                        format!("missing {}", c.missing.join(", "))
+                    };
+                    format!("'{}' ({:?}: {lacks})", c.name, c.kind)
+                })
+                .collect::<Vec<_>>()
+                .join("; ")
+        };
+        match filter {
+            Some(f) => format!("none matches --gpu '{f}'; devices found: {list}"),
+            None => format!("devices found: {list}"),
+        }
+    })
+}
+
+/// Nanoseconds per timestamp tick, or `None` when the queue family cannot write timestamps.
+pub fn map_timestamp_period(valid_bits: u32, period_ns: f32) -> Option<f64> {
+    (valid_bits > 0 && period_ns > 0.0).then_some(period_ns as f64)
+}
+
+// ----------------------------------------------------------------------------- swapchain
+
+/// Lower-case name of a present mode, as written in config files.
+pub fn present_mode_name(mode: vk::PresentModeKHR) -> String {
+    match mode {
+        vk::PresentModeKHR::FIFO => "fifo".into(),
+        vk::PresentModeKHR::MAILBOX => "mailbox".into(),
+        vk::PresentModeKHR::IMMEDIATE => "immediate".into(),
+        vk::PresentModeKHR::FIFO_RELAXED => "fifo_relaxed".into(),
+        other => format!("{other:?}").to_lowercase(),
+    }
+}
+
+/// Checks that `wanted` is among the surface's `supported` modes; the error lists them.
+pub fn choose_present_mode(
+    wanted: vk::PresentModeKHR,
+    supported: &[vk::PresentModeKHR],
+) -> Result<vk::PresentModeKHR, String> {
+    if supported.contains(&wanted) {
+        return Ok(wanted);
+    }
+    let list: Vec<String> = supported.iter().map(|&m| present_mode_name(m)).collect();
+    Err(format!(
+        "present mode {} is not supported by this window's surface (supported: {})",
+        present_mode_name(wanted),
+        if list.is_empty() {
+            "none".to_owned()
+        } else {
+            list.join(", ")
+        }
+    ))
+}
+
+/// Picks the swapchain format: an 8-bit sRGB format in the sRGB colour space if offered (the
+/// blit from the sRGB target then keeps colours exact), else the first format listed.
+pub fn choose_surface_format(formats: &[vk::SurfaceFormatKHR]) -> Option<vk::SurfaceFormatKHR> {
+    let preferred = [vk::Format::B8G8R8A8_SRGB, vk::Format::R8G8B8A8_SRGB];
+    preferred
+        .iter()
+        .find_map(|&p| {
+            formats
+                .iter()
+                .find(|f| f.format == p && f.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR)
+        })
+        .or_else(|| formats.first())
+        .copied()
+}
+
+/// The swapchain extent: the surface's current extent when it dictates one, else the window's
+/// size clamped to what the surface allows. A zero side means "minimised: do not render".
+pub fn choose_extent(caps: &vk::SurfaceCapabilitiesKHR, window: (u32, u32)) -> vk::Extent2D {
+    if caps.current_extent.width != u32::MAX {
+        return caps.current_extent;
+    }
+    vk::Extent2D {
+        width: window
+            .0
+            .clamp(caps.min_image_extent.width, caps.max_image_extent.width),
+        height: window
+            .1
+            .clamp(caps.min_image_extent.height, caps.max_image_extent.height),
+    }
+}
+
+/// Images to ask for: one more than the minimum (so acquiring never waits on the driver's
+/// own image), within the maximum (0 = none).
+pub fn choose_image_count(caps: &vk::SurfaceCapabilitiesKHR) -> u32 {
+    let n = caps.min_image_count + 1;
+    if caps.max_image_count > 0 {
+        n.min(caps.max_image_count)
+    } else {
+        n
+    }
+}
+
+/// The first composite-alpha mode the surface supports, opaque preferred (the frame is opaque).
+pub fn choose_composite_alpha(supported: vk::CompositeAlphaFlagsKHR) -> vk::CompositeAlphaFlagsKHR {
+    [
+        vk::CompositeAlphaFlagsKHR::OPAQUE,
+        vk::CompositeAlphaFlagsKHR::INHERIT,
+        vk::CompositeAlphaFlagsKHR::PRE_MULTIPLIED,
+        vk::CompositeAlphaFlagsKHR::POST_MULTIPLIED,
+    ]
+    .into_iter()
+    .find(|&a| supported.contains(a))
+    .unwrap_or(vk::CompositeAlphaFlagsKHR::OPAQUE)
+}
+
+#[cfg(test)]
+#[path = "conv_tests.rs"]
+mod tests;

@@ -1,4 +1,6 @@
-//! Physical-device choice, logical device, the graphics queue and the memory allocator.
+//! Physical-device choice, logical device, the graphics queue and the memory allocator. The
+//! choice itself is pure ([`choose_device`], [`missing_requirements`] in `conv.rs`); this file
+//! reads what each device offers and creates the chosen one.
 
 use std::mem::ManuallyDrop;
 use std::sync::Mutex;
@@ -6,7 +8,12 @@ use std::sync::Mutex;
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
-use super::{Instance, VkError, VkResultExt};
+use super::conv::{
+    choose_device, map_timestamp_period, missing_requirements, DeviceCandidate, DeviceOffer,
+    DEPTH_FORMAT,
+};
+use super::error::{VkError, VkResultExt};
+use super::instance::Instance;
 
 /// What the renderer needs from a device, and how to pick one.
 #[derive(Debug, Clone, Default)]
@@ -17,69 +24,10 @@ pub struct DeviceDesc {
     pub swapchain: bool,
 }
 
-/// Plain description of one physical device, for the (pure) choice below.
-#[derive(Debug, Clone)]
-pub struct DeviceCandidate {
-    pub name: String,
-    pub kind: vk::PhysicalDeviceType,
-    /// Features and properties the renderer requires that this device lacks.
-    pub missing: Vec<&'static str>,
-}
-
-/// Preference order: discrete > integrated > virtual > CPU > other.
-fn kind_rank(kind: vk::PhysicalDeviceType) -> u32 {
-    match kind {
-        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
-        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
-        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
-        vk::PhysicalDeviceType::CPU => 3,
-        _ => 4,
-    }
-}
-
-/// Picks the best suitable candidate (index), or explains why none is: every device found with
-/// its type and what it lacks.
-pub fn choose_device(
-    candidates: &[DeviceCandidate],
-    filter: Option<&str>,
-) -> Result<usize, String> {
-    let filter_lc = filter.map(|f| f.to_lowercase());
-    let best = candidates
-        .iter()
-        .enumerate()
-        .filter(|(_, c)| c.missing.is_empty())
-        .filter(|(_, c)| {
-            filter_lc
-                .as_ref()
-                .is_none_or(|f| c.name.to_lowercase().contains(f))
-        })
-        .min_by_key(|(i, c)| (kind_rank(c.kind), *i))
-        .map(|(i, _)| i);
-    best.ok_or_else(|| {
-        let list = if candidates.is_empty() {
-            "no Vulkan devices found".to_string()
-        } else {
-            candidates
-                .iter()
-                .map(|c| {
-                    let lacks = if c.missing.is_empty() {
-                        String::from("suitable")
-                    } else {
-                        format!("missing {}", c.missing.join(", "))
-                    };
-                    format!("'{}' ({:?}: {lacks})", c.name, c.kind)
-                })
-                .collect::<Vec<_>>()
-                .join("; ")
-        };
-        match filter {
-            Some(f) => format!("none matches --gpu '{f}'; devices found: {list}"),
-            None => format!("devices found: {list}"),
-        }
-    })
-}
-
-/// The logical device with its one graphics queue and the allocator. Destroyed explicitly.
+/// The logical device with its one graphics queue and the allocator. Created by
+/// [`Device::new`], destroyed by [`Device::destroy`] after every object made from it and before
+/// the [`Instance`] it was made from. Between the two, `raw` is a live device: every safe
+/// function of this layer taking a `&Device` relies on that.
 pub struct Device {
     pub raw: ash::Device,
     pub physical: vk::PhysicalDevice,
@@ -90,67 +38,63 @@ pub struct Device {
     /// Nanoseconds per timestamp tick; `None` when the queue cannot write timestamps.
     pub timestamp_period_ns: Option<f64>,
     allocator: ManuallyDrop<Mutex<Allocator>>,
+    /// Set by `destroy`, so that a second call neither drops the allocator again nor destroys
+    /// the device twice.
+    destroyed: bool,
 }
 
+/// Reads what `pd` offers; also returns its first graphics queue family.
 fn candidate(
     instance: &ash::Instance,
     pd: vk::PhysicalDevice,
     desc: &DeviceDesc,
 ) -> (DeviceCandidate, Option<u32>) {
+    // SAFETY (every call in this function): `instance` is live (borrowed from an `Instance`
+    // not yet destroyed) and `pd` was enumerated from it; the queries only fill plain structs.
     let props = unsafe { instance.get_physical_device_properties(pd) };
     let name = props
         .device_name_as_c_str()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|_| "?".into());
-    let mut missing = Vec::new();
-    if props.api_version < vk::API_VERSION_1_3 {
-        missing.push("Vulkan 1.3");
-    }
+    // SAFETY: see above.
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
     let family = families
         .iter()
         .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS))
         .map(|i| i as u32);
-    if family.is_none() {
-        missing.push("a graphics queue");
-    }
-    if desc.swapchain {
+    let swapchain_extension = desc.swapchain.then(|| {
+        // SAFETY: see above.
         let exts =
             unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
-        let has = exts
-            .iter()
-            .any(|e| e.extension_name_as_c_str().ok() == Some(ash::khr::swapchain::NAME));
-        if !has {
-            missing.push("VK_KHR_swapchain");
-        }
-    }
+        exts.iter()
+            .any(|e| e.extension_name_as_c_str().ok() == Some(ash::khr::swapchain::NAME))
+    });
+    // SAFETY: see above.
     let features = unsafe { instance.get_physical_device_features(pd) };
-    if features.multi_draw_indirect == vk::FALSE {
-        missing.push("multiDrawIndirect");
-    }
-    if features.draw_indirect_first_instance == vk::FALSE {
-        missing.push("drawIndirectFirstInstance");
-    }
-    if props.api_version >= vk::API_VERSION_1_3 {
+    let dynamic_rendering = props.api_version >= vk::API_VERSION_1_3 && {
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
         let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
+        // SAFETY: see above; the device is 1.3, so the 1.3 feature struct in the chain is
+        // known to it, and both structs outlive the call.
         unsafe { instance.get_physical_device_features2(pd, &mut f2) };
-        if f13.dynamic_rendering == vk::FALSE {
-            missing.push("dynamicRendering");
-        }
-    }
-    let fmt = unsafe { instance.get_physical_device_format_properties(pd, vk::Format::D32_SFLOAT) };
-    if !fmt
-        .optimal_tiling_features
-        .contains(vk::FormatFeatureFlags::DEPTH_STENCIL_ATTACHMENT)
-    {
-        missing.push("D32_SFLOAT depth");
-    }
+        f13.dynamic_rendering == vk::TRUE
+    };
+    // SAFETY: see above.
+    let depth = unsafe { instance.get_physical_device_format_properties(pd, DEPTH_FORMAT) };
+    let offer = DeviceOffer {
+        api_version: props.api_version,
+        graphics_queue: family.is_some(),
+        swapchain_extension,
+        multi_draw_indirect: features.multi_draw_indirect == vk::TRUE,
+        draw_indirect_first_instance: features.draw_indirect_first_instance == vk::TRUE,
+        dynamic_rendering,
+        depth_format_features: depth.optimal_tiling_features,
+    };
     (
         DeviceCandidate {
             name,
             kind: props.device_type,
-            missing,
+            missing: missing_requirements(&offer),
         },
         family,
     )
@@ -158,6 +102,7 @@ fn candidate(
 
 impl Device {
     pub fn new(instance: &Instance, desc: &DeviceDesc) -> Result<Self, VkError> {
+        // SAFETY: `instance.raw` is live (borrowed from an `Instance` not yet destroyed).
         let physicals = unsafe { instance.raw.enumerate_physical_devices() }
             .call("vkEnumeratePhysicalDevices")?;
         let described: Vec<_> = physicals
@@ -171,15 +116,18 @@ impl Device {
         let queue_family = described[index]
             .1
             .expect("suitable device has a graphics queue");
+        // SAFETY: the instance is live and `physical` was enumerated from it.
         let properties = unsafe { instance.raw.get_physical_device_properties(physical) };
+        // SAFETY: as above.
         let families = unsafe {
             instance
                 .raw
                 .get_physical_device_queue_family_properties(physical)
         };
-        let timestamp_period_ns = (families[queue_family as usize].timestamp_valid_bits > 0
-            && properties.limits.timestamp_period > 0.0)
-            .then_some(properties.limits.timestamp_period as f64);
+        let timestamp_period_ns = map_timestamp_period(
+            families[queue_family as usize].timestamp_valid_bits,
+            properties.limits.timestamp_period,
+        );
 
         let priorities = [1.0f32];
         let queue_infos = [vk::DeviceQueueCreateInfo::default()
@@ -199,8 +147,12 @@ impl Device {
             .enabled_extension_names(&extensions)
             .enabled_features(&features)
             .push_next(&mut f13);
+        // SAFETY: the instance is live; `physical` is its device and was found suitable, so it
+        // has the queue family, the features and (when asked) the extension enabled here; every
+        // array and chained struct the create-info points to lives until the call returns.
         let raw = unsafe { instance.raw.create_device(physical, &create_info, None) }
             .call("vkCreateDevice")?;
+        // SAFETY: queue 0 of `queue_family` was requested in `queue_infos` above.
         let queue = unsafe { raw.get_device_queue(queue_family, 0) };
 
         let allocator = Allocator::new(&AllocatorCreateDesc {
@@ -214,6 +166,7 @@ impl Device {
         let allocator = match allocator {
             Ok(a) => a,
             Err(source) => {
+                // SAFETY: the device was just created and nothing was made from it yet.
                 unsafe { raw.destroy_device(None) };
                 return Err(VkError::Allocation {
                     what: "allocator".into(),
@@ -230,91 +183,42 @@ impl Device {
             properties,
             timestamp_period_ns,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            destroyed: false,
         })
     }
 
     /// The allocator; poisoned locks are recovered because the allocator has no invariants a
     /// panicking caller could have broken half-way.
     pub fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {
+        assert!(!self.destroyed, "the allocator of a destroyed device");
         self.allocator.lock().unwrap_or_else(|p| p.into_inner())
     }
 
     pub fn wait_idle(&self) {
+        if self.destroyed {
+            return;
+        }
+        // SAFETY: the device is live (not destroyed: checked above); waiting touches no object.
         // Teardown path: a lost device leaves nothing better to do than continue destroying.
         let _ = unsafe { self.raw.device_wait_idle() };
     }
 
-    /// Drops the allocator (frees its memory blocks), then destroys the device. Every buffer and
-    /// image must have been destroyed first.
+    /// Waits for the device, drops the allocator (frees its memory blocks; it reports leaked
+    /// allocations in its log), then destroys the device. Every buffer, image and other object
+    /// made from the device must have been destroyed first (the validation layer reports any
+    /// left). Idempotent.
     pub fn destroy(&mut self) {
+        if self.destroyed {
+            return;
+        }
         self.wait_idle();
+        self.destroyed = true;
+        // SAFETY: `destroyed` was false, so the allocator is still there and is dropped exactly
+        // once; nothing reads it afterwards (`allocator()` asserts). The device is idle, its
+        // memory blocks were freed by that drop, and it is destroyed once, after them.
         unsafe {
             ManuallyDrop::drop(&mut self.allocator);
             self.raw.destroy_device(None);
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn c(name: &str, kind: vk::PhysicalDeviceType, missing: &[&'static str]) -> DeviceCandidate {
-        DeviceCandidate {
-            name: name.into(),
-            kind,
-            missing: missing.to_vec(),
-        }
-    }
-
-    #[test]
-    fn prefers_discrete_then_integrated_then_virtual_then_cpu() {
-        let list = vec![
-            c("llvmpipe", vk::PhysicalDeviceType::CPU, &[]),
-            c("virt", vk::PhysicalDeviceType::VIRTUAL_GPU, &[]),
-            c("igpu", vk::PhysicalDeviceType::INTEGRATED_GPU, &[]),
-            c("dgpu", vk::PhysicalDeviceType::DISCRETE_GPU, &[]),
-        ];
-        assert_eq!(choose_device(&list, None), Ok(3));
-        assert_eq!(choose_device(&list[..3], None), Ok(2));
-        assert_eq!(choose_device(&list[..2], None), Ok(1));
-        assert_eq!(choose_device(&list[..1], None), Ok(0));
-    }
-
-    #[test]
-    fn unsuitable_devices_are_skipped_and_listed() {
-        let list = vec![
-            c(
-                "dgpu",
-                vk::PhysicalDeviceType::DISCRETE_GPU,
-                &["multiDrawIndirect"],
-            ),
-            c("llvmpipe", vk::PhysicalDeviceType::CPU, &[]),
-        ];
-        assert_eq!(choose_device(&list, None), Ok(1));
-        let err = choose_device(&list[..1], None).unwrap_err();
-        assert!(
-            err.contains("dgpu") && err.contains("missing multiDrawIndirect"),
-            "{err}"
-        );
-    }
-
-    #[test]
-    fn gpu_filter_overrides_preference() {
-        let list = vec![
-            c("NVIDIA RTX", vk::PhysicalDeviceType::DISCRETE_GPU, &[]),
-            c("llvmpipe (LLVM)", vk::PhysicalDeviceType::CPU, &[]),
-        ];
-        assert_eq!(choose_device(&list, Some("LLVMPIPE")), Ok(1));
-        let err = choose_device(&list, Some("radeon")).unwrap_err();
-        assert!(
-            err.contains("--gpu 'radeon'")
-                && err.contains("NVIDIA RTX")
-                && err.contains("llvmpipe"),
-            "{err}"
-        );
-        assert!(choose_device(&[], None)
-            .unwrap_err()
-            .contains("no Vulkan devices"));
     }
 }

@@ -1,10 +1,14 @@
-//! A 2-D image (optionally an array) with its memory and one view.
+//! A 2-D image (optionally an array) with its memory and one view: one coherent group, created
+//! in [`Image2d::new`] and destroyed in reverse (view, image, memory) by [`Image2d::destroy`].
 
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
-use super::{Device, VkError, VkResultExt};
+use super::device::Device;
+use super::error::{VkError, VkResultExt};
+
+pub use super::conv::subresource_range;
 
 #[derive(Debug, Clone, Copy)]
 pub struct ImageDesc {
@@ -41,7 +45,10 @@ impl Image2d {
             .usage(desc.usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: the device is live; `info` is a fully initialised create-info that outlives the
+        // call (one mip, at least one layer, a 2-D extent).
         let raw = unsafe { device.raw.create_image(&info, None) }.call("vkCreateImage")?;
+        // SAFETY: `raw` was just created on this device and is not yet destroyed.
         let requirements = unsafe { device.raw.get_image_memory_requirements(raw) };
         let allocation = device.allocator().allocate(&AllocationCreateDesc {
             name,
@@ -53,6 +60,7 @@ impl Image2d {
         let allocation = match allocation {
             Ok(a) => a,
             Err(source) => {
+                // SAFETY: `raw` is ours, unbound and unused by any command: nothing else has it.
                 unsafe { device.raw.destroy_image(raw, None) };
                 return Err(VkError::Allocation {
                     what: name.into(),
@@ -66,6 +74,8 @@ impl Image2d {
             desc,
             allocation: None,
         };
+        // SAFETY: `raw` is a live, not yet bound image of this device; the allocation was made
+        // for its memory requirements, so memory and offset satisfy size and alignment.
         let bound = unsafe {
             device
                 .raw
@@ -91,6 +101,8 @@ impl Image2d {
                 layer_count: desc.layers.max(1),
                 ..subresource_range(desc.aspect)
             });
+        // SAFETY: `raw` is live and bound to memory; the view's format and range match its
+        // creation (same format, its aspect, its layer count).
         match unsafe { device.raw.create_image_view(&view_info, None) } {
             Ok(v) => image.view = v,
             Err(result) => {
@@ -104,34 +116,29 @@ impl Image2d {
         Ok(image)
     }
 
-    /// View first, then image, then memory.
+    /// View first, then image, then memory. Idempotent: handles are nulled as they go. The
+    /// caller must no longer have commands using the image in flight (the owners destroy after
+    /// `Device::wait_idle`).
     pub fn destroy(&mut self, device: &Device) {
-        unsafe {
-            if self.view != vk::ImageView::null() {
-                device.raw.destroy_image_view(self.view, None);
-                self.view = vk::ImageView::null();
-            }
-            if let Some(a) = self.allocation.take() {
-                device.raw.destroy_image(self.raw, None);
-                let _ = device.allocator().free(a);
-                self.raw = vk::Image::null();
-            }
+        if self.view != vk::ImageView::null() {
+            // SAFETY: the view was created by `new` on this device and is destroyed once (nulled
+            // right after); no command using it is pending (see above).
+            unsafe { device.raw.destroy_image_view(self.view, None) };
+            self.view = vk::ImageView::null();
+        }
+        if let Some(a) = self.allocation.take() {
+            // SAFETY: as for the view; the allocation is taken, so this runs once per image, and
+            // the memory is freed only after the image bound to it is gone.
+            unsafe { device.raw.destroy_image(self.raw, None) };
+            let _ = device.allocator().free(a);
+            self.raw = vk::Image::null();
         }
     }
 }
 
-/// Every mip level and array layer of the image.
-pub fn subresource_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
-    vk::ImageSubresourceRange {
-        aspect_mask: aspect,
-        base_mip_level: 0,
-        level_count: 1,
-        base_array_layer: 0,
-        layer_count: vk::REMAINING_ARRAY_LAYERS,
-    }
-}
-
 /// A layout transition of the whole image with explicit stages and accesses.
+// Last callers move to access::image_barrier; remove then.
+#[doc(hidden)]
 #[allow(clippy::too_many_arguments)]
 pub fn transition(
     device: &Device,
@@ -150,6 +157,8 @@ pub fn transition(
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .image(image)
         .subresource_range(subresource_range(aspect));
+    // SAFETY: as in `access::image_barrier`: the device is live, `cmd` is recording on it and
+    // `image` is one of its images (the callers' frame command buffer and their own images).
     unsafe {
         device.raw.cmd_pipeline_barrier(
             cmd,

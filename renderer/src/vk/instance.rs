@@ -7,7 +7,8 @@ use std::sync::{Arc, Mutex};
 
 use ash::{ext, vk};
 
-use super::{VkError, VkResultExt};
+use super::conv::{map_message_severity, MessageSeverity};
+use super::error::{VkError, VkResultExt};
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
@@ -45,14 +46,62 @@ impl ValidationCounters {
     }
 }
 
+/// The loader entry, the instance and (with validation) the debug messenger. Created by
+/// [`Instance::new`], destroyed by [`Instance::destroy`] after every device and surface made from
+/// it. `entry` keeps the loader library loaded as long as `Self` lives, so the loader outlives
+/// the instance, which `destroy` ends explicitly (an instance never destroyed is leaked).
 pub struct Instance {
     pub entry: ash::Entry,
     pub raw: ash::Instance,
     debug: Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    /// The messenger's user data points into this `Arc`; the instance holds it until the
+    /// messenger is destroyed, and callers hold their own clones.
     counters: Arc<ValidationCounters>,
     pub validation: bool,
+    /// Set by `destroy`, so that a second call does not destroy the instance twice.
+    destroyed: bool,
 }
 
+/// Counts one message (the first 16 are kept verbatim) and logs it.
+fn count_message(
+    counters: Option<&ValidationCounters>,
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    kind: vk::DebugUtilsMessageTypeFlagsEXT,
+    message: String,
+) {
+    let keep = |c: &ValidationCounters| {
+        if let Ok(mut m) = c.messages.lock() {
+            if m.len() < 16 {
+                m.push(message.clone());
+            }
+        }
+    };
+    match map_message_severity(severity) {
+        MessageSeverity::Error => {
+            tracing::error!(target: "vulkan", ?kind, "{message}");
+            if let Some(c) = counters {
+                c.errors.fetch_add(1, Ordering::SeqCst);
+                keep(c);
+            }
+        }
+        MessageSeverity::Warning => {
+            tracing::warn!(target: "vulkan", ?kind, "{message}");
+            if let Some(c) = counters {
+                c.warnings.fetch_add(1, Ordering::SeqCst);
+                keep(c);
+            }
+        }
+        MessageSeverity::Info => tracing::debug!(target: "vulkan", ?kind, "{message}"),
+    }
+}
+
+/// The debug-utils callback.
+///
+/// # Safety
+/// Called by the validation layer only: `data` is null or points to a valid callback-data
+/// struct for the duration of the call, and `user` is the user data given at messenger
+/// creation, a pointer to the `ValidationCounters` in the instance's `Arc`, which outlives the
+/// messenger (see `Instance::destroy`).
 unsafe extern "system" fn debug_callback(
     severity: vk::DebugUtilsMessageSeverityFlagsEXT,
     kind: vk::DebugUtilsMessageTypeFlagsEXT,
@@ -62,34 +111,16 @@ unsafe extern "system" fn debug_callback(
     let message = if data.is_null() {
         String::from("(no message)")
     } else {
-        (*data)
-            .message_as_c_str()
+        // SAFETY: non-null `data` is valid for this call (the layer's contract above), and its
+        // message is a NUL-terminated string (or null, which `message_as_c_str` handles).
+        unsafe { (*data).message_as_c_str() }
             .map(|m| m.to_string_lossy().into_owned())
             .unwrap_or_default()
     };
-    let counters = (user as *const ValidationCounters).as_ref();
-    let keep = |c: &ValidationCounters| {
-        if let Ok(mut m) = c.messages.lock() {
-            if m.len() < 16 {
-                m.push(message.clone());
-            }
-        }
-    };
-    if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
-        tracing::error!(target: "vulkan", ?kind, "{message}");
-        if let Some(c) = counters {
-            c.errors.fetch_add(1, Ordering::SeqCst);
-            keep(c);
-        }
-    } else if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING) {
-        tracing::warn!(target: "vulkan", ?kind, "{message}");
-        if let Some(c) = counters {
-            c.warnings.fetch_add(1, Ordering::SeqCst);
-            keep(c);
-        }
-    } else {
-        tracing::debug!(target: "vulkan", ?kind, "{message}");
-    }
+    // SAFETY: `user` is null or points to the live `ValidationCounters` (contract above); only
+    // shared references are made, and the counters are atomics and a mutex.
+    let counters = unsafe { (user as *const ValidationCounters).as_ref() };
+    count_message(counters, severity, kind, message);
     vk::FALSE
 }
 
@@ -103,6 +134,8 @@ impl Instance {
     /// As [`Self::new`], also enabling `extra` instance extensions (e.g. the surface extensions
     /// `ash_window::enumerate_required_extensions` names for a window).
     pub fn with_extensions(validation: bool, extra: &[&CStr]) -> Result<Self, VkError> {
+        // SAFETY: loading the system Vulkan loader runs its initialisation; the `Entry` keeps the
+        // library loaded for as long as it lives (as long as the instance: see `Instance`).
         let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::Loader(e.to_string()))?;
         let counters = Arc::new(ValidationCounters::default());
 
@@ -110,6 +143,7 @@ impl Instance {
         let mut extensions: Vec<*const std::ffi::c_char> =
             extra.iter().map(|e| e.as_ptr()).collect();
         if validation {
+            // SAFETY: a global query on the loaded entry; it fills plain structs.
             let available = unsafe { entry.enumerate_instance_layer_properties() }
                 .call("vkEnumerateInstanceLayerProperties")?;
             let found = available
@@ -148,14 +182,21 @@ impl Instance {
             // Also catches messages from vkCreateInstance / vkDestroyInstance themselves.
             create_info = create_info.push_next(&mut messenger_info);
         }
+        // SAFETY: the create-info and every name, layer and chained struct it points to live
+        // until the call returns; the layer was found above and the extensions are the
+        // caller's (window-system ones) plus debug-utils, which the validation layer provides.
+        // The messenger's user data (`counters`) is kept alive by `Self`.
         let raw = unsafe { entry.create_instance(&create_info, None) }.call("vkCreateInstance")?;
 
         let debug = if validation {
             let loader = ext::debug_utils::Instance::new(&entry, &raw);
+            // SAFETY: `raw` is live and has the debug-utils extension enabled; the user data
+            // points into `counters`, which `Self` keeps until the messenger is destroyed.
             let messenger = unsafe { loader.create_debug_utils_messenger(&messenger_info, None) };
             match messenger {
                 Ok(m) => Some((loader, m)),
                 Err(e) => {
+                    // SAFETY: the instance was just created and nothing was made from it.
                     unsafe { raw.destroy_instance(None) };
                     return Err(VkError::Call {
                         call: "vkCreateDebugUtilsMessengerEXT",
@@ -172,6 +213,7 @@ impl Instance {
             debug,
             counters,
             validation,
+            destroyed: false,
         })
     }
 
@@ -180,13 +222,20 @@ impl Instance {
         self.counters.clone()
     }
 
-    /// Destroys the messenger, then the instance. Every device must be destroyed before.
+    /// Destroys the messenger, then the instance. Every device and surface made from it must
+    /// be destroyed before (the validation layer reports any left). Idempotent.
     pub fn destroy(&mut self) {
-        unsafe {
-            if let Some((loader, messenger)) = self.debug.take() {
-                loader.destroy_debug_utils_messenger(messenger, None);
-            }
-            self.raw.destroy_instance(None);
+        if self.destroyed {
+            return;
         }
+        self.destroyed = true;
+        if let Some((loader, messenger)) = self.debug.take() {
+            // SAFETY: the messenger was created on this live instance and is taken, so it is
+            // destroyed once; after this the layer no longer calls back into `counters`.
+            unsafe { loader.destroy_debug_utils_messenger(messenger, None) };
+        }
+        // SAFETY: `destroyed` was false, so the instance is live and destroyed exactly once;
+        // its children were destroyed by their owners first (contract above).
+        unsafe { self.raw.destroy_instance(None) };
     }
 }

@@ -1,7 +1,17 @@
-//! Thin, explicit Vulkan plumbing: each struct owns one Vulkan object or one coherent group,
-//! is created in one function and destroyed by an explicit `destroy` in reverse order.
+//! Thin, explicit Vulkan plumbing. The rules every file here follows:
+//!
+//! - Each struct owns one Vulkan object or one coherent group (an image with its memory and
+//!   view, a swapchain with its images and semaphores), is created in one function and
+//!   destroyed by an explicit `destroy`, which releases in reverse order of creation and is
+//!   idempotent. Owners destroy in reverse order too: objects, then the device, then surfaces,
+//!   then the instance.
+//! - Barriers are named by use ([`access`]); pure mappings and choices live in [`conv`], tested.
+//! - Every `unsafe` block says in a `// SAFETY:` comment why it is sound. A `&Device` is a live
+//!   device until its `destroy`; handles a struct owns are live until its `destroy`.
+//! - Nothing here imports the renderer, the simulator links, the tools or the application.
 
 pub mod access;
+pub mod access_type;
 pub mod buffer;
 pub mod conv;
 pub mod descriptors;

@@ -1,10 +1,12 @@
 //! The terrain pipeline: descriptor set layout, pipeline layout, graphics pipeline (dynamic
-//! rendering, reversed-Z GREATER depth test) and the height sampler.
+//! rendering, reversed-Z GREATER depth test) and the height sampler: one coherent group, made
+//! in [`TerrainPipeline::new`] and destroyed in reverse by [`TerrainPipeline::destroy`].
 
 use ash::vk;
 
-use super::target::{COLOUR_FORMAT, DEPTH_FORMAT};
-use super::{Device, VkError, VkResultExt};
+use super::conv::{COLOUR_FORMAT, DEPTH_FORMAT};
+use super::device::Device;
+use super::error::{VkError, VkResultExt};
 
 const TERRAIN_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/terrain.vert.spv"));
 const TERRAIN_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/terrain.frag.spv"));
@@ -28,6 +30,8 @@ fn shader_module(device: &Device, spv: &[u8]) -> Result<vk::ShaderModule, VkErro
     let words = ash::util::read_spv(&mut std::io::Cursor::new(spv))
         .map_err(|e| VkError::Other(format!("embedded SPIR-V is malformed: {e}")))?;
     let info = vk::ShaderModuleCreateInfo::default().code(&words);
+    // SAFETY: the device is live; `read_spv` gave aligned, whole SPIR-V words (it checks the
+    // magic number and length), and the shaders were validated by shaderc at build time.
     unsafe { device.raw.create_shader_module(&info, None) }.call("vkCreateShaderModule")
 }
 
@@ -55,6 +59,7 @@ impl TerrainPipeline {
             .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .max_lod(0.0);
+        // SAFETY: the device is live; the create-info is complete and outlives the call.
         self.height_sampler =
             unsafe { device.raw.create_sampler(&sampler_info, None) }.call("vkCreateSampler")?;
 
@@ -82,10 +87,12 @@ impl TerrainPipeline {
                 .stage_flags(vk::ShaderStageFlags::VERTEX),
         ];
         let set_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+        // SAFETY: the device is live; `bindings` outlives the call and has distinct numbers.
         self.set_layout = unsafe { device.raw.create_descriptor_set_layout(&set_info, None) }
             .call("vkCreateDescriptorSetLayout")?;
         let set_layouts = [self.set_layout];
         let layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        // SAFETY: the device is live; the set layout was just created on it.
         self.layout = unsafe { device.raw.create_pipeline_layout(&layout_info, None) }
             .call("vkCreatePipelineLayout")?;
 
@@ -93,11 +100,14 @@ impl TerrainPipeline {
         let frag = match shader_module(device, TERRAIN_FRAG) {
             Ok(f) => f,
             Err(e) => {
+                // SAFETY: `vert` was just created and no pipeline was made from it.
                 unsafe { device.raw.destroy_shader_module(vert, None) };
                 return Err(e);
             }
         };
         let result = self.create_pipeline(device, vert, frag);
+        // SAFETY: both modules are live and ours; a pipeline does not need its modules after
+        // creation, so they are destroyed whether or not it succeeded.
         unsafe {
             device.raw.destroy_shader_module(frag, None);
             device.raw.destroy_shader_module(vert, None);
@@ -162,6 +172,9 @@ impl TerrainPipeline {
             .dynamic_state(&dynamic)
             .layout(self.layout)
             .push_next(&mut rendering);
+        // SAFETY: the device is live; the modules and the layout were created on it and are
+        // live; every state struct, array and the chained rendering info outlive the call, and
+        // the dynamic-rendering formats match the offscreen target's attachments.
         unsafe {
             device
                 .raw
@@ -175,7 +188,11 @@ impl TerrainPipeline {
     }
 
     /// Pipeline, then pipeline layout, set layout and sampler (reverse of creation).
+    /// Idempotent: the handles are nulled, and destroying a null handle does nothing. Commands
+    /// using the pipeline must have completed (owners destroy after `Device::wait_idle`).
     pub fn destroy(&mut self, device: &Device) {
+        // SAFETY: each handle is null or was created by `new` on this device and is destroyed
+        // once (all are nulled below); no command using them is pending (contract above).
         unsafe {
             device.raw.destroy_pipeline(self.raw, None);
             device.raw.destroy_pipeline_layout(self.layout, None);

@@ -1,11 +1,16 @@
 //! Window surfaces and swapchains for windowed presentation (issue 7).
 //!
 //! [`Surface`] owns one `VkSurfaceKHR` made from a window's raw handles. [`Swapchain`] owns the
-//! swapchain, the list of its images, one render-finished semaphore per image (signaled by the
-//! frame's submission, waited by the present) and a small ring of acquire semaphores (signaled by
-//! the acquire, waited by the frame's copy into the image). Both are created in one function and
-//! destroyed explicitly, in reverse order: swapchain, then surface, then (by the renderer) device
-//! and instance.
+//! swapchain, the list of its images and two kinds of binary semaphores:
+//!
+//! - **acquire** (a ring of `FRAMES_IN_FLIGHT + 1`): signaled by the presentation engine when
+//!   `vkAcquireNextImageKHR` hands out an image; waited by the frame's queue submission at
+//!   [`ACQUIRE_WAIT_STAGE`], before the blit into the image.
+//! - **rendered** (one per image): signaled by that same submission when it completes; waited by
+//!   `vkQueuePresentKHR` of the image.
+//!
+//! Both are created in one function and destroyed explicitly, in reverse order: swapchain, then
+//! surface, then (by the renderer) device and instance.
 //!
 //! The renderer draws offscreen and blits into the swapchain image, so images need
 //! `TRANSFER_DST` usage and a format the device can blit into; an sRGB format is preferred so
@@ -14,9 +19,24 @@
 use ash::{khr, vk};
 use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
 
-use super::{Device, Instance, VkError, VkResultExt, FRAMES_IN_FLIGHT};
+use super::conv::{
+    choose_composite_alpha, choose_extent, choose_image_count, choose_surface_format,
+};
+use super::device::Device;
+use super::error::{VkError, VkResultExt};
+use super::instance::Instance;
+use super::FRAMES_IN_FLIGHT;
 
-/// A window's Vulkan surface. Destroy it after its swapchain and before the instance.
+pub use super::conv::{choose_present_mode, present_mode_name};
+
+/// The stage at which a frame's submission waits for [`PresentTarget::acquired`]: the blit into
+/// the swapchain image is a transfer, and its barrier (from `Access::SwapchainAcquired`)
+/// starts at this stage so that it chains to the wait.
+pub const ACQUIRE_WAIT_STAGE: vk::PipelineStageFlags = vk::PipelineStageFlags::TRANSFER;
+
+/// A window's Vulkan surface. Destroy it after its swapchain and before the instance. Between
+/// [`Surface::new`] and [`Surface::destroy`], `raw` is a live surface of the instance `loader`
+/// was made from.
 pub struct Surface {
     pub loader: khr::surface::Instance,
     pub raw: vk::SurfaceKHR,
@@ -34,6 +54,8 @@ impl Surface {
         display: RawDisplayHandle,
         window: RawWindowHandle,
     ) -> Result<Self, VkError> {
+        // SAFETY: the handles are valid and the instance has the extensions (this function's
+        // contract); the instance is live.
         let raw = ash_window::create_surface(&instance.entry, &instance.raw, display, window, None)
             .call("vkCreate*SurfaceKHR")?;
         Ok(Self {
@@ -44,6 +66,8 @@ impl Surface {
 
     /// Whether the device's queue family can present to this surface.
     pub fn supports_queue(&self, device: &Device) -> Result<bool, VkError> {
+        // SAFETY: the surface is live (see `Surface`), `device.physical` belongs to the same
+        // instance and `queue_family` is one of its families.
         unsafe {
             self.loader.get_physical_device_surface_support(
                 device.physical,
@@ -56,6 +80,7 @@ impl Surface {
 
     /// Present modes the surface offers on this device.
     pub fn present_modes(&self, device: &Device) -> Result<Vec<vk::PresentModeKHR>, VkError> {
+        // SAFETY: the surface is live and `device.physical` belongs to the same instance.
         unsafe {
             self.loader
                 .get_physical_device_surface_present_modes(device.physical, self.raw)
@@ -64,6 +89,7 @@ impl Surface {
     }
 
     pub fn capabilities(&self, device: &Device) -> Result<vk::SurfaceCapabilitiesKHR, VkError> {
+        // SAFETY: the surface is live and `device.physical` belongs to the same instance.
         unsafe {
             self.loader
                 .get_physical_device_surface_capabilities(device.physical, self.raw)
@@ -71,84 +97,14 @@ impl Surface {
         .call("vkGetPhysicalDeviceSurfaceCapabilitiesKHR")
     }
 
+    /// Idempotent. The swapchain made on it must be destroyed first.
     pub fn destroy(&mut self) {
         if self.raw != vk::SurfaceKHR::null() {
+            // SAFETY: the surface is live and destroyed once (nulled right after); its
+            // swapchain is gone (contract above), so nothing else uses it.
             unsafe { self.loader.destroy_surface(self.raw, None) };
             self.raw = vk::SurfaceKHR::null();
         }
-    }
-}
-
-/// Lower-case name of a present mode, as written in config files.
-pub fn present_mode_name(mode: vk::PresentModeKHR) -> String {
-    match mode {
-        vk::PresentModeKHR::FIFO => "fifo".into(),
-        vk::PresentModeKHR::MAILBOX => "mailbox".into(),
-        vk::PresentModeKHR::IMMEDIATE => "immediate".into(),
-        vk::PresentModeKHR::FIFO_RELAXED => "fifo_relaxed".into(),
-        other => format!("{other:?}").to_lowercase(),
-    }
-}
-
-/// Checks that `wanted` is among the surface's `supported` modes; the error lists them.
-pub fn choose_present_mode(
-    wanted: vk::PresentModeKHR,
-    supported: &[vk::PresentModeKHR],
-) -> Result<vk::PresentModeKHR, String> {
-    if supported.contains(&wanted) {
-        return Ok(wanted);
-    }
-    let list: Vec<String> = supported.iter().map(|&m| present_mode_name(m)).collect();
-    Err(format!(
-        "present mode {} is not supported by this window's surface (supported: {})",
-        present_mode_name(wanted),
-        if list.is_empty() {
-            "none".to_owned()
-        } else {
-            list.join(", ")
-        }
-    ))
-}
-
-/// Picks the swapchain format: an 8-bit sRGB format in the sRGB colour space if offered (the
-/// blit from the sRGB target then keeps colours exact), else the first format listed.
-pub fn choose_surface_format(formats: &[vk::SurfaceFormatKHR]) -> Option<vk::SurfaceFormatKHR> {
-    let preferred = [vk::Format::B8G8R8A8_SRGB, vk::Format::R8G8B8A8_SRGB];
-    preferred
-        .iter()
-        .find_map(|&p| {
-            formats
-                .iter()
-                .find(|f| f.format == p && f.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR)
-        })
-        .or_else(|| formats.first())
-        .copied()
-}
-
-/// The swapchain extent: the surface's current extent when it dictates one, else the window's
-/// size clamped to what the surface allows. A zero side means "minimised: do not render".
-pub fn choose_extent(caps: &vk::SurfaceCapabilitiesKHR, window: (u32, u32)) -> vk::Extent2D {
-    if caps.current_extent.width != u32::MAX {
-        return caps.current_extent;
-    }
-    vk::Extent2D {
-        width: window
-            .0
-            .clamp(caps.min_image_extent.width, caps.max_image_extent.width),
-        height: window
-            .1
-            .clamp(caps.min_image_extent.height, caps.max_image_extent.height),
-    }
-}
-
-/// Images to ask for: one more than the minimum (so acquiring never waits on the driver's
-/// own image), within the maximum (0 = none).
-pub fn choose_image_count(caps: &vk::SurfaceCapabilitiesKHR) -> u32 {
-    let n = caps.min_image_count + 1;
-    if caps.max_image_count > 0 {
-        n.min(caps.max_image_count)
-    } else {
-        n
     }
 }
 
@@ -189,20 +145,26 @@ pub struct Swapchain {
     pub extent: vk::Extent2D,
     pub present_mode: vk::PresentModeKHR,
     pub images: Vec<vk::Image>,
-    /// One per image: signaled when the frame's copy into the image is done, waited by the
-    /// present of that image. Reused when the image is acquired again.
+    /// One per image: signaled by the frame's submission when its copy into the image is done,
+    /// waited by the present of that image. Reused when the image is acquired again (that
+    /// present has then consumed the signal).
     rendered: Vec<vk::Semaphore>,
-    /// Ring of acquire semaphores: FRAMES_IN_FLIGHT + 1 of them, so that a semaphore is acquired
-    /// again only after the renderer has waited for the frame that consumed it (the renderer
-    /// waits for frame n − FRAMES_IN_FLIGHT before recording frame n).
+    /// Ring of acquire semaphores, signaled by the acquire and waited by the frame's submission:
+    /// FRAMES_IN_FLIGHT + 1 of them, so that a semaphore is acquired again only after the
+    /// renderer has waited for the frame that consumed it (the renderer waits for frame
+    /// n − FRAMES_IN_FLIGHT before recording frame n).
     acquire: Vec<vk::Semaphore>,
     next_acquire: usize,
+    /// A recreate found the window without area: the images no longer match it, so
+    /// [`Swapchain::acquire`] answers `OutOfDate` until a recreate succeeds.
+    needs_recreate: bool,
 }
 
 /// Semaphores created so far are destroyed if a later one fails.
 fn create_semaphores(device: &Device, n: usize) -> Result<Vec<vk::Semaphore>, VkError> {
     let mut out = Vec::with_capacity(n);
     for _ in 0..n {
+        // SAFETY: the device is live; a default create-info makes a binary semaphore.
         match unsafe {
             device
                 .raw
@@ -221,16 +183,20 @@ fn create_semaphores(device: &Device, n: usize) -> Result<Vec<vk::Semaphore>, Vk
     Ok(out)
 }
 
+/// The caller has waited for the device, so no submission or present still uses them.
 fn destroy_semaphores(device: &Device, semaphores: &mut Vec<vk::Semaphore>) {
     for s in semaphores.drain(..) {
+        // SAFETY: `s` was created on this device by `create_semaphores` and is drained, so it
+        // is destroyed once; no pending operation waits on or signals it (contract above).
         unsafe { device.raw.destroy_semaphore(s, None) };
     }
 }
 
 impl Swapchain {
     /// Creates a swapchain of `window` size (pixels) on `surface` presenting with
-    /// `present_mode` (which must be supported: see [`choose_present_mode`]). Returns
-    /// `Ok(None)` when the surface's extent is zero (minimised window).
+    /// `present_mode`; an error names the supported modes when it is not one of them (see
+    /// [`choose_present_mode`]), or says that the device's queue cannot present to `surface`. Returns `Ok(None)` when the surface's extent is zero
+    /// (minimised window).
     pub fn new(
         instance: &Instance,
         device: &Device,
@@ -238,6 +204,13 @@ impl Swapchain {
         window: (u32, u32),
         present_mode: vk::PresentModeKHR,
     ) -> Result<Option<Self>, VkError> {
+        if !surface.supports_queue(device)? {
+            return Err(VkError::Other(
+                "the device's graphics queue cannot present to this window's surface".into(),
+            ));
+        }
+        let supported = surface.present_modes(device)?;
+        let present_mode = choose_present_mode(present_mode, &supported).map_err(VkError::Other)?;
         let loader = khr::swapchain::Device::new(&instance.raw, &device.raw);
         let Some((raw, format, extent, images)) = Self::create_raw(
             &instance.raw,
@@ -251,6 +224,7 @@ impl Swapchain {
         else {
             return Ok(None);
         };
+        // SAFETY: `raw` was just created by `loader` and no image of it was acquired yet.
         let unwind =
             |loader: &khr::swapchain::Device| unsafe { loader.destroy_swapchain(raw, None) };
         let rendered = match create_semaphores(device, images.len()) {
@@ -280,6 +254,7 @@ impl Swapchain {
             rendered,
             acquire,
             next_acquire: 0,
+            needs_recreate: false,
         }))
     }
 
@@ -316,6 +291,7 @@ impl Swapchain {
                 "the window's surface does not accept transfer writes (TRANSFER_DST), which the presentation blit needs".into(),
             ));
         }
+        // SAFETY: the surface is live and `device.physical` belongs to its instance.
         let formats = unsafe {
             surface
                 .loader
@@ -324,6 +300,7 @@ impl Swapchain {
         .call("vkGetPhysicalDeviceSurfaceFormatsKHR")?;
         let format = choose_surface_format(&formats)
             .ok_or_else(|| VkError::Other("the window's surface offers no format".into()))?;
+        // SAFETY: `instance` is live and `device.physical` was enumerated from it.
         let features = unsafe {
             instance.get_physical_device_format_properties(device.physical, format.format)
         }
@@ -334,15 +311,7 @@ impl Swapchain {
                 format.format
             )));
         }
-        let alpha = [
-            vk::CompositeAlphaFlagsKHR::OPAQUE,
-            vk::CompositeAlphaFlagsKHR::INHERIT,
-            vk::CompositeAlphaFlagsKHR::PRE_MULTIPLIED,
-            vk::CompositeAlphaFlagsKHR::POST_MULTIPLIED,
-        ]
-        .into_iter()
-        .find(|&a| caps.supported_composite_alpha.contains(a))
-        .unwrap_or(vk::CompositeAlphaFlagsKHR::OPAQUE);
+        let alpha = choose_composite_alpha(caps.supported_composite_alpha);
         let info = vk::SwapchainCreateInfoKHR::default()
             .surface(surface.raw)
             .min_image_count(choose_image_count(&caps))
@@ -357,10 +326,16 @@ impl Swapchain {
             .present_mode(present_mode)
             .clipped(true)
             .old_swapchain(old.unwrap_or_default());
+        // SAFETY: the surface is live and the device's queue family can present to it (checked
+        // in `new`: the surface of a swapchain never changes); extent, image count, usage, format and
+        // present mode were chosen from this surface's capabilities, formats and modes; `old`,
+        // when given, is the live swapchain of this surface, retired by this call.
         let raw = unsafe { loader.create_swapchain(&info, None) }.call("vkCreateSwapchainKHR")?;
+        // SAFETY: `raw` was just created by `loader`.
         let images = match unsafe { loader.get_swapchain_images(raw) } {
             Ok(i) => i,
             Err(result) => {
+                // SAFETY: `raw` is live and none of its images was acquired.
                 unsafe { loader.destroy_swapchain(raw, None) };
                 return Err(VkError::Call {
                     call: "vkGetSwapchainImagesKHR",
@@ -373,13 +348,17 @@ impl Swapchain {
 
     /// Recreates the swapchain for a new window size (after a resize, out-of-date or
     /// suboptimal). Waits for the device first. Returns false when the extent is zero
-    /// (minimised): the swapchain is then left as it was and should not be used.
+    /// (minimised): the swapchain is then left as it was, and [`Self::acquire`] answers
+    /// `OutOfDate` until a later recreate succeeds.
     pub fn recreate(
         &mut self,
         device: &Device,
         surface: &Surface,
         window: (u32, u32),
     ) -> Result<bool, VkError> {
+        if self.acquire.is_empty() {
+            return Err(VkError::Other("recreate of a destroyed swapchain".into()));
+        }
         device.wait_idle();
         let Some((raw, format, extent, images)) = Self::create_raw(
             &self.instance,
@@ -391,8 +370,12 @@ impl Swapchain {
             Some(self.raw),
         )?
         else {
+            self.needs_recreate = true;
             return Ok(false);
         };
+        self.needs_recreate = false;
+        // SAFETY: the device is idle (waited above), so no frame still uses the old swapchain's
+        // images or presents it; it was retired by `create_raw` and is destroyed once.
         unsafe { self.loader.destroy_swapchain(self.raw, None) };
         self.raw = raw;
         self.format = format;
@@ -407,7 +390,14 @@ impl Swapchain {
 
     /// Acquires the next image (waits for one to be available).
     pub fn acquire(&mut self) -> Result<Acquire, VkError> {
+        if self.needs_recreate || self.images.is_empty() {
+            return Ok(Acquire::OutOfDate);
+        }
         let semaphore = self.acquire[self.next_acquire];
+        // SAFETY: the swapchain is live (not destroyed: `destroy` empties `images`, checked
+        // above); `semaphore` is unsignaled with no pending wait: the ring is one longer
+        // than the frames in flight and the renderer waits for frame n − FRAMES_IN_FLIGHT
+        // (which consumed it) before acquiring for frame n.
         let result = unsafe {
             self.loader
                 .acquire_next_image(self.raw, u64::MAX, semaphore, vk::Fence::null())
@@ -444,6 +434,9 @@ impl Swapchain {
             .wait_semaphores(&wait)
             .swapchains(&swapchains)
             .image_indices(&indices);
+        // SAFETY: the swapchain and `device.queue` are live; `index` was acquired (callers pass
+        // `AcquiredImage::index`) and its `rendered` semaphore is signaled by the submission that
+        // copied into it; the arrays live until the call returns.
         match unsafe { self.loader.queue_present(device.queue, &info) } {
             Ok(false) => Ok(Presented::Optimal),
             Ok(true) => Ok(Presented::Suboptimal),
@@ -461,6 +454,8 @@ impl Swapchain {
         destroy_semaphores(device, &mut self.acquire);
         destroy_semaphores(device, &mut self.rendered);
         if self.raw != vk::SwapchainKHR::null() {
+            // SAFETY: the device is idle, so no frame or present uses the swapchain; it is
+            // destroyed once (nulled right after), before its surface (see `Surface::destroy`).
             unsafe { self.loader.destroy_swapchain(self.raw, None) };
             self.raw = vk::SwapchainKHR::null();
         }
@@ -468,92 +463,29 @@ impl Swapchain {
     }
 }
 
-/// A swapchain image to present a frame in (the renderer records a copy into it; see `render::frame`).
+/// A swapchain image to present a frame in (the renderer records a copy into it).
 #[derive(Debug, Clone, Copy)]
 pub struct PresentTarget {
     pub image: vk::Image,
     pub extent: vk::Extent2D,
-    /// Signaled by the presentation engine when the image is acquired; waited before the copy.
+    /// Signaled by the presentation engine when the image is acquired; the frame's submission
+    /// waits for it at [`ACQUIRE_WAIT_STAGE`], before the copy.
     pub acquired: vk::Semaphore,
-    /// Signaled when the copy is done; the present waits for it.
+    /// Signaled by the frame's submission when the copy is done; the present waits for it.
     pub rendered: vk::Semaphore,
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn caps(current: (u32, u32), min: (u32, u32), max: (u32, u32)) -> vk::SurfaceCapabilitiesKHR {
-        vk::SurfaceCapabilitiesKHR {
-            min_image_count: 2,
-            max_image_count: 3,
-            current_extent: vk::Extent2D {
-                width: current.0,
-                height: current.1,
-            },
-            min_image_extent: vk::Extent2D {
-                width: min.0,
-                height: min.1,
-            },
-            max_image_extent: vk::Extent2D {
-                width: max.0,
-                height: max.1,
-            },
-            ..Default::default()
-        }
-    }
+    use crate::vk::access_type::Access;
+    use crate::vk::conv::map_access;
 
     #[test]
-    fn unsupported_present_mode_lists_the_supported_ones() {
-        let supported = [vk::PresentModeKHR::FIFO, vk::PresentModeKHR::IMMEDIATE];
+    fn the_acquire_wait_and_the_blit_barrier_share_a_stage() {
         assert_eq!(
-            choose_present_mode(vk::PresentModeKHR::IMMEDIATE, &supported),
-            Ok(vk::PresentModeKHR::IMMEDIATE)
+            map_access(Access::SwapchainAcquired).stage,
+            ACQUIRE_WAIT_STAGE
         );
-        let e = choose_present_mode(vk::PresentModeKHR::MAILBOX, &supported).unwrap_err();
-        assert_eq!(
-            e,
-            "present mode mailbox is not supported by this window's surface (supported: fifo, immediate)"
-        );
-    }
-
-    #[test]
-    fn srgb_format_is_preferred() {
-        let f = |format| vk::SurfaceFormatKHR {
-            format,
-            color_space: vk::ColorSpaceKHR::SRGB_NONLINEAR,
-        };
-        let list = [
-            f(vk::Format::B8G8R8A8_UNORM),
-            f(vk::Format::R8G8B8A8_SRGB),
-            f(vk::Format::B8G8R8A8_SRGB),
-        ];
-        assert_eq!(
-            choose_surface_format(&list).unwrap().format,
-            vk::Format::B8G8R8A8_SRGB
-        );
-        assert_eq!(
-            choose_surface_format(&list[..1]).unwrap().format,
-            vk::Format::B8G8R8A8_UNORM
-        );
-        assert!(choose_surface_format(&[]).is_none());
-    }
-
-    #[test]
-    fn extent_follows_the_surface_or_the_clamped_window() {
-        let fixed = caps((800, 600), (1, 1), (4096, 4096));
-        let e = choose_extent(&fixed, (1024, 768));
-        assert_eq!((e.width, e.height), (800, 600));
-        let free = caps((u32::MAX, u32::MAX), (16, 16), (2048, 1024));
-        let e = choose_extent(&free, (4000, 8));
-        assert_eq!((e.width, e.height), (2048, 16));
-        let minimised = caps((0, 0), (0, 0), (4096, 4096));
-        assert_eq!(choose_extent(&minimised, (640, 480)).width, 0);
-        assert_eq!(choose_image_count(&fixed), 3);
-        let unbounded = vk::SurfaceCapabilitiesKHR {
-            max_image_count: 0,
-            ..fixed
-        };
-        assert_eq!(choose_image_count(&unbounded), 3);
     }
 }

@@ -1,14 +1,19 @@
 //! The offscreen render target: colour RGBA8 sRGB + depth D32 (reversed-Z: clear 0, GREATER),
-//! and a host-visible buffer the colour is copied into for PNG output.
+//! and host-visible buffers colour and depth are copied into for PNG output. Owns the two images
+//! and the two readback buffers; destroyed in reverse order of creation.
 
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use super::image::{transition, Image2d, ImageDesc};
-use super::{Buffer, Device, VkError};
+use super::access::{image_barrier, memory_barrier, Access};
+use super::buffer::Buffer;
+use super::conv::map_format_aspect;
+use super::device::Device;
+use super::error::VkError;
+use super::image::{Image2d, ImageDesc};
 
-pub const COLOUR_FORMAT: vk::Format = vk::Format::R8G8B8A8_SRGB;
-pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+pub use super::conv::{COLOUR_FORMAT, DEPTH_FORMAT};
+
 /// Reversed-Z: the far plane (at infinity) is depth 0.
 pub const DEPTH_CLEAR: f32 = 0.0;
 
@@ -40,7 +45,7 @@ impl OffscreenTarget {
                 usage: vk::ImageUsageFlags::COLOR_ATTACHMENT
                     | vk::ImageUsageFlags::TRANSFER_SRC
                     | vk::ImageUsageFlags::TRANSFER_DST,
-                aspect: vk::ImageAspectFlags::COLOR,
+                aspect: map_format_aspect(COLOUR_FORMAT),
                 layers: 0,
             },
         )?;
@@ -53,7 +58,7 @@ impl OffscreenTarget {
                 format: DEPTH_FORMAT,
                 usage: vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
                     | vk::ImageUsageFlags::TRANSFER_SRC,
-                aspect: vk::ImageAspectFlags::DEPTH,
+                aspect: map_format_aspect(DEPTH_FORMAT),
                 layers: 0,
             },
         );
@@ -107,77 +112,49 @@ impl OffscreenTarget {
         })
     }
 
-    /// Transitions both attachments for rendering (contents discarded: they are cleared).
+    /// Transitions both attachments for rendering (contents discarded: they are cleared). The
+    /// last use of both was the previous frame's copy out of them ([`Self::record_readback`] or
+    /// [`Self::record_blit_to`]); the clear must not overtake it.
     pub fn record_begin(&self, device: &Device, cmd: vk::CommandBuffer) {
-        transition(
+        image_barrier(
             device,
             cmd,
             self.colour.raw,
-            vk::ImageAspectFlags::COLOR,
-            (
-                vk::ImageLayout::UNDEFINED,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::empty(),
-            ),
-            (
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-            ),
+            self.colour.desc.aspect,
+            &[Access::TransferRead],
+            &[Access::ColourAttachmentWrite],
+            true,
         );
-        transition(
+        image_barrier(
             device,
             cmd,
             self.depth.raw,
-            vk::ImageAspectFlags::DEPTH,
-            (
-                vk::ImageLayout::UNDEFINED,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::empty(),
-            ),
-            (
-                vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags::EARLY_FRAGMENT_TESTS
-                    | vk::PipelineStageFlags::LATE_FRAGMENT_TESTS,
-                vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE
-                    | vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_READ,
-            ),
+            self.depth.desc.aspect,
+            &[Access::TransferRead],
+            &[Access::DepthAttachmentReadWrite],
+            true,
         );
     }
 
     /// Copies colour and depth into the readback buffers, visible to the host after the fence.
     pub fn record_readback(&self, device: &Device, cmd: vk::CommandBuffer) {
-        transition(
+        image_barrier(
             device,
             cmd,
             self.colour.raw,
-            vk::ImageAspectFlags::COLOR,
-            (
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-            ),
-            (
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_READ,
-            ),
+            self.colour.desc.aspect,
+            &[Access::ColourAttachmentWrite],
+            &[Access::TransferRead],
+            false,
         );
-        transition(
+        image_barrier(
             device,
             cmd,
             self.depth.raw,
-            vk::ImageAspectFlags::DEPTH,
-            (
-                vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags::LATE_FRAGMENT_TESTS,
-                vk::AccessFlags::DEPTH_STENCIL_ATTACHMENT_WRITE,
-            ),
-            (
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_READ,
-            ),
+            self.depth.desc.aspect,
+            &[Access::DepthAttachmentReadWrite],
+            &[Access::TransferRead],
+            false,
         );
         let region = |aspect| {
             vk::BufferImageCopy::default()
@@ -193,6 +170,11 @@ impl OffscreenTarget {
                     depth: 1,
                 })
         };
+        // SAFETY: the device is live and `cmd` is recording on it (callers record between the
+        // begin and end of a frame's command buffer); the images and buffers are owned by `self`
+        // and live until `destroy`; each buffer holds width * height * 4 bytes, exactly one
+        // RGBA8 or D32 copy of the extent, and the images are in TRANSFER_SRC_OPTIMAL (barriers
+        // above).
         unsafe {
             device.raw.cmd_copy_image_to_buffer(
                 cmd,
@@ -208,19 +190,8 @@ impl OffscreenTarget {
                 self.depth_readback.raw,
                 &[region(vk::ImageAspectFlags::DEPTH)],
             );
-            let to_host = vk::MemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-                .dst_access_mask(vk::AccessFlags::HOST_READ);
-            device.raw.cmd_pipeline_barrier(
-                cmd,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::HOST,
-                vk::DependencyFlags::empty(),
-                &[to_host],
-                &[],
-                &[],
-            );
         }
+        memory_barrier(device, cmd, &[Access::TransferWrite], &[Access::HostRead]);
     }
 
     /// Blits the rendered colour into a swapchain image (scaled to its extent) and leaves that
@@ -232,37 +203,24 @@ impl OffscreenTarget {
         image: vk::Image,
         extent: vk::Extent2D,
     ) {
-        transition(
+        image_barrier(
             device,
             cmd,
             self.colour.raw,
-            vk::ImageAspectFlags::COLOR,
-            (
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-                vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-            ),
-            (
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_READ,
-            ),
+            self.colour.desc.aspect,
+            &[Access::ColourAttachmentWrite],
+            &[Access::TransferRead],
+            false,
         );
-        transition(
+        // The swapchain image's old contents are not needed; its last use ends at the acquire.
+        image_barrier(
             device,
             cmd,
             image,
             vk::ImageAspectFlags::COLOR,
-            (
-                vk::ImageLayout::UNDEFINED,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::empty(),
-            ),
-            (
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_WRITE,
-            ),
+            &[Access::SwapchainAcquired],
+            &[Access::TransferWrite],
+            true,
         );
         let layers = vk::ImageSubresourceLayers {
             aspect_mask: vk::ImageAspectFlags::COLOR,
@@ -281,6 +239,10 @@ impl OffscreenTarget {
             dst_subresource: layers,
             dst_offsets: [vk::Offset3D::default(), corner(extent.width, extent.height)],
         };
+        // SAFETY: the device is live and `cmd` is recording on it; `self.colour` is owned by
+        // `self` and in TRANSFER_SRC_OPTIMAL, `image` is the caller's acquired swapchain image
+        // (`PresentTarget::image`, live until the swapchain is recreated, which waits for the
+        // device) in TRANSFER_DST_OPTIMAL (barriers above); the regions lie within both extents.
         unsafe {
             device.raw.cmd_blit_image(
                 cmd,
@@ -292,25 +254,21 @@ impl OffscreenTarget {
                 vk::Filter::LINEAR,
             )
         };
-        transition(
+        image_barrier(
             device,
             cmd,
             image,
             vk::ImageAspectFlags::COLOR,
-            (
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::AccessFlags::TRANSFER_WRITE,
-            ),
-            (
-                vk::ImageLayout::PRESENT_SRC_KHR,
-                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                vk::AccessFlags::empty(),
-            ),
+            &[Access::TransferWrite],
+            &[Access::Present],
+            false,
         );
     }
 
-    /// RGBA8 (sRGB-encoded) pixels, rows top to bottom. Valid after the frame's fence.
+    /// RGBA8 (sRGB-encoded) pixels, rows top to bottom: what the last completed
+    /// [`Self::record_readback`] copied, read from persistently mapped memory; the frame's
+    /// fence (waited by the renderer before reading) orders the copy before this read, and the
+    /// memory barrier in `record_readback` makes it visible to the host.
     pub fn colour_rgba(&self) -> Vec<u8> {
         self.readback
             .mapped()
@@ -318,7 +276,8 @@ impl OffscreenTarget {
             .unwrap_or_default()
     }
 
-    /// Reversed-Z depth per pixel (1 = near plane, 0 = infinitely far / sky).
+    /// Reversed-Z depth per pixel (1 = near plane, 0 = infinitely far / sky), from the same
+    /// copy as [`Self::colour_rgba`].
     pub fn depth(&self) -> Vec<f32> {
         self.depth_readback
             .mapped()
@@ -326,6 +285,8 @@ impl OffscreenTarget {
             .unwrap_or_default()
     }
 
+    /// Reverse of creation. Idempotent (each part is). The frame that used the target must have
+    /// completed (the renderer waits for the device first).
     pub fn destroy(&mut self, device: &Device) {
         self.depth_readback.destroy(device);
         self.readback.destroy(device);
