@@ -20,7 +20,7 @@ use crate::vk::swapchain::{choose_present_mode, Acquire, Presented, Surface, Swa
 use crate::vk::{Device, Instance};
 
 /// One channel's window and its presentation objects.
-pub struct ChannelWindow {
+pub(crate) struct ChannelWindow {
     /// Index into the channel list (and the reports).
     pub channel: usize,
     pub swapchain: Option<Swapchain>,
@@ -45,7 +45,7 @@ impl ChannelWindow {
 /// Creates a channel's window (placed and sized, or fullscreen), its surface and its first
 /// swapchain (none while the window has no area), checking that the device can present to it
 /// in the channel's present mode.
-pub fn open_window(
+pub(crate) fn open_window(
     event_loop: &ActiveEventLoop,
     instance: &Instance,
     device: &Device,
@@ -196,7 +196,7 @@ fn rebuild(
 
 /// Acquires, renders the channel's view (with the overlay panel when on) into the image and
 /// presents it. Returns the frame's statistics when a frame was drawn.
-pub fn draw_channel(
+pub(crate) fn draw_channel(
     renderer: &mut TerrainRenderer,
     w: &mut ChannelWindow,
     live: &LiveChannel,

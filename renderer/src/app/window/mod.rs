@@ -1,11 +1,12 @@
 //! Windowed presentation (issue 7): one winit window per display channel, each with its own
-//! surface and swapchain, all drawn by one [`TerrainRenderer`] (one device) from one aircraft
+//! surface and swapchain, all drawn by one [`TerrainRenderer`](crate::render::frame::TerrainRenderer) (one device) from one aircraft
 //! pose sample per frame.
 //!
 //! The flow of one frame: the pose source gives the aircraft pose; for every channel that can be
 //! drawn, its swapchain image is acquired, the terrain is rendered from the channel's camera
-//! ([`channel_camera`]) and blitted into the image by
-//! [`TerrainRenderer::render_frame`], and the image is presented.
+//! ([`channel_camera`](crate::sim::channel::channel_camera)) and blitted into the image by
+//! [`TerrainRenderer::render_frame`](crate::render::frame::TerrainRenderer::render_frame), and
+//! the image is presented.
 //!
 //! - Swapchains are recreated after a resize, an out-of-date or a suboptimal result.
 //! - Minimised windows (or a zero-sized surface) are skipped; when nothing can be drawn the loop
@@ -19,7 +20,7 @@
 //!   [`WindowError::Channel`] naming the channel's key.
 //!
 //! - With several channels, one tile selection serves all of them
-//!   ([`TerrainRenderer::set_channels`]), so shared tiles match across seams. The renderer has
+//!   ([`TerrainRenderer::set_channels`](crate::render::frame::TerrainRenderer::set_channels)), so shared tiles match across seams. The renderer has
 //!   one offscreen target: channels of one process should share a render resolution, otherwise
 //!   the target is recreated (after a device wait) whenever consecutive channels differ.
 //!

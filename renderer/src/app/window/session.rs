@@ -30,7 +30,7 @@ const IDLE_WAIT: Duration = Duration::from_millis(100);
 /// Opens one window per channel on `event_loop`, renders every frame from `pose` until Esc, a
 /// closed window, `opts.max_frames` or `opts.max_seconds`, and destroys every window, swapchain
 /// and surface before returning. `renderer` must have been created with
-/// [`required_instance_extensions`] and `device.swapchain = true`, and have its terrain loaded.
+/// [`required_instance_extensions`](crate::app::window::display::required_instance_extensions) and `device.swapchain = true`, and have its terrain loaded.
 pub fn run_channels(
     event_loop: &mut EventLoop<()>,
     renderer: &mut TerrainRenderer,
