@@ -289,3 +289,45 @@ fn sends_to_a_multicast_group() {
     wait_accepted(&rx, 5);
     assert_eq!(reader.latest().unwrap().latest.pose.frame, 5);
 }
+
+/// The sender speaks the receivers' vocabulary: `--help` names the protocol words and flags of
+/// `aerie run` / `aerie listen` (`native`, not the old `aerie`), and the old word still sends
+/// native packets.
+#[test]
+fn help_uses_the_receivers_words_and_the_old_protocol_word_still_works() {
+    let out = send(&["--help"]);
+    assert!(out.status.success());
+    let help = String::from_utf8_lossy(&out.stdout);
+    for word in [
+        "--protocol native|cigi|xplane|fgfs|shm",
+        "--shm-name",
+        "--multicast-if",
+        "--to",
+    ] {
+        assert!(help.contains(word), "{word} missing from\n{help}");
+    }
+    assert!(!help.contains("aerie|"), "{help}");
+
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("send.json");
+    let (rx, _reader) = receiver();
+    let to = rx.local_addr().to_string();
+    let out = send(&[
+        "--straight",
+        "0,0,1000,0,0,0,10",
+        "--protocol",
+        "aerie",
+        "--to",
+        &to,
+        "--count",
+        "2",
+        "--as-fast-as-possible",
+        "--quiet",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    wait_accepted(&rx, 2);
+    let summary = std::fs::read_to_string(&json).unwrap();
+    assert!(summary.contains("\"protocol\":\"native\""), "{summary}");
+}

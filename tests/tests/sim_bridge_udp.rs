@@ -7,6 +7,7 @@ use std::net::{Ipv4Addr, SocketAddr, UdpSocket};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
+use aerie::app::commands::input_args::InputArgs;
 use aerie::app::commands::listen::{self, ListenArgs};
 use aerie::app::commands::replay::{self, ReplayArgs};
 use aerie_sim_bridge::codec::cigi::{
@@ -629,18 +630,17 @@ fn listen_and_replay_commands() {
     let json = dir.path().join("listen.json");
     let listen_rec = dir.path().join("heard.aerie-rec");
     let args = ListenArgs {
-        bind: SocketAddr::from(([127, 0, 0, 1], port)),
-        protocol: ProtocolChoice::Auto,
-        multicast: None,
-        allow: vec![],
-        shm: None,
+        input: InputArgs {
+            listen: Some(SocketAddr::from(([127, 0, 0, 1], port))),
+            max_extrapolation_ms: Some(100.0),
+            ..InputArgs::default()
+        },
         record: Some(listen_rec.clone()),
         seconds: Some(1.2),
         json: Some(json.clone()),
         no_cigi_reply: false,
         xplane: None,
         xplane_rate: 60,
-        cap_ms: 100.0,
     };
     let listener = std::thread::spawn(move || listen::run(args));
     std::thread::sleep(Duration::from_millis(300));

@@ -3,6 +3,5 @@
 pub mod cli;
 pub mod commands;
 pub mod failure;
-pub mod headless;
 pub mod prepare;
 pub mod window;

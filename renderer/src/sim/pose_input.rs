@@ -265,13 +265,17 @@ pub enum InputProtocol {
 
 impl std::str::FromStr for InputProtocol {
     type Err = String;
+    /// The command-line words: auto, native, cigi, xplane, fgfs, shm (and the aliases
+    /// [`ProtocolChoice`] knows, e.g. `aerie` for native).
     fn from_str(s: &str) -> Result<Self, String> {
         if s.eq_ignore_ascii_case("shm") {
             return Ok(InputProtocol::Shm);
         }
         s.parse::<ProtocolChoice>()
             .map(InputProtocol::Udp)
-            .map_err(|e| format!("{e}, or shm"))
+            .map_err(|_| {
+                format!("unknown protocol `{s}` (expected auto, native, cigi, xplane, fgfs or shm)")
+            })
     }
 }
 

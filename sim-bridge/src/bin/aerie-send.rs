@@ -31,10 +31,13 @@ usage: aerie-send (--path <waypoints.csv> | --straight x,y,z,heading,pitch,roll,
 
   --path         timed waypoints `t_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg` (aerie fly's)
   --straight     level pass along the heading at speed_mps from x,y,z (local ENU metres)
-  --protocol     native (default), cigi, xplane, fgfs (UDP) or shm (shared memory)
-  --to           UDP destination, default 127.0.0.1:47800; a multicast group is fine
+  --protocol     native (default), cigi, xplane, fgfs (UDP) or shm (shared memory): the words
+                 of `aerie run --protocol` and `aerie listen --protocol`
+  --to           UDP destination, default 127.0.0.1:47800 (the receiver's --listen address);
+                 a multicast group is fine
   --multicast-if local IPv4 address to send multicast from (e.g. 127.0.0.1)
-  --shm-name     shared-memory file for --protocol shm (default aerie-pose: /dev/shm/aerie-pose)
+  --shm-name     shared-memory file for --protocol shm (default aerie-pose: /dev/shm/aerie-pose),
+                 as the receiver's --shm-name
   --rate         packets per second (default 60); packet i carries script time i/rate
   --seconds      script seconds to send, both ends included (default: the path's duration;
                  10 s for --straight)

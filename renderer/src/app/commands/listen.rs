@@ -5,43 +5,28 @@
 
 use std::collections::BTreeMap;
 use std::io::IsTerminal;
-use std::net::{IpAddr, Ipv4Addr, SocketAddr};
+use std::net::{Ipv4Addr, SocketAddr};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use aerie_sim_bridge::codec::ProtocolChoice;
-use aerie_sim_bridge::shm::{shm_path, ShmConfig, ShmSource};
+use aerie_sim_bridge::shm::{shm_path, ShmConfig, ShmSource, DEFAULT_SHM_NAME};
 use aerie_sim_bridge::timing::{monotonic_s, ExtrapolationParams, StreamState};
 use aerie_sim_bridge::udp::{CigiReply, RposRequest, UdpConfig, UdpReceiver};
 use aerie_sim_bridge::{DropReason, PosePosition, PoseReader, StatsSnapshot};
 use clap::Args;
 
-use super::check_out_folder;
+use crate::app::commands::check_out_folder;
+use crate::app::commands::input_args::InputArgs;
 use crate::app::failure::{bad_input, runtime, Failure};
+use crate::sim::pose_input::InputProtocol;
 use crate::tools::output::write_text;
 
-fn parse_protocol(s: &str) -> Result<ProtocolChoice, String> {
-    s.parse()
-}
+/// Default `--max-extrapolation-ms`: the extrapolation cap and lost-stream threshold.
+pub const DEFAULT_CAP_MS: f64 = 100.0;
 
 #[derive(Debug, Args)]
 pub struct ListenArgs {
-    /// Local address to listen on (0.0.0.0:47800 for every interface; needed for multicast).
-    #[arg(long, default_value = "127.0.0.1:47800")]
-    pub bind: SocketAddr,
-    /// Protocol: auto (detected per datagram), aerie, cigi, xplane or fgfs.
-    #[arg(long, default_value = "auto", value_parser = parse_protocol)]
-    pub protocol: ProtocolChoice,
-    /// Join this IPv4 multicast group (bind 0.0.0.0:<port>).
-    #[arg(long)]
-    pub multicast: Option<Ipv4Addr>,
-    /// Accept datagrams only from these source addresses (comma-separated); others are
-    /// dropped and counted.
-    #[arg(long, value_delimiter = ',')]
-    pub allow: Vec<IpAddr>,
-    /// Read shared memory instead of UDP: a name in /dev/shm (e.g. aerie-pose) or a path.
-    #[arg(long)]
-    pub shm: Option<String>,
     /// Record every received datagram with its arrival time (for `aerie replay`).
     #[arg(long)]
     pub record: Option<PathBuf>,
@@ -60,9 +45,9 @@ pub struct ListenArgs {
     /// RPOS rate to ask X-Plane for, positions per second.
     #[arg(long, default_value_t = 60)]
     pub xplane_rate: u32,
-    /// Extrapolation cap and lost-stream threshold, milliseconds.
-    #[arg(long, default_value_t = 100.0)]
-    pub cap_ms: f64,
+    // Last: the flattened input section's heading applies to the fields after it.
+    #[command(flatten)]
+    pub input: InputArgs,
 }
 
 enum Source {
@@ -131,10 +116,10 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
             )));
         }
     }
-    if !(a.cap_ms.is_finite() && a.cap_ms > 0.0) {
+    let cap_ms = a.input.max_extrapolation_ms.unwrap_or(DEFAULT_CAP_MS);
+    if !(cap_ms.is_finite() && cap_ms > 0.0) {
         return Err(bad_input(format!(
-            "--cap-ms: {} must be a positive number of milliseconds",
-            a.cap_ms
+            "--max-extrapolation-ms: {cap_ms} must be a positive number of milliseconds"
         )));
     }
     if let Some(j) = &a.json {
@@ -143,22 +128,29 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
     if let Some(r) = &a.record {
         check_out_folder("--record", r)?;
     }
-    if a.shm.is_some()
-        && (a.record.is_some()
-            || a.multicast.is_some()
-            || a.xplane.is_some()
-            || !a.allow.is_empty()
-            || a.protocol != ProtocolChoice::Auto)
-    {
-        return Err(bad_input(
-            "--shm reads shared memory: --record, --multicast, --allow, --xplane and --protocol apply to UDP only",
-        ));
+    let input = &a.input;
+    input.check(&[
+        ("--record", a.record.is_some()),
+        ("--xplane", a.xplane.is_some()),
+    ])?;
+    if input.multicast_if.is_some() && input.multicast.is_none() {
+        return Err(bad_input("--multicast-if: only with --multicast"));
     }
     let extrapolation = ExtrapolationParams {
-        cap_s: a.cap_ms / 1e3,
+        cap_s: cap_ms / 1e3,
         ..ExtrapolationParams::default()
     };
-    let (source, mut reader, what) = match &a.shm {
+    let shm_name = input.wants_shm().then(|| {
+        input
+            .shm_name
+            .clone()
+            .unwrap_or_else(|| DEFAULT_SHM_NAME.to_string())
+    });
+    let protocol = match input.protocol {
+        Some(InputProtocol::Udp(p)) => p,
+        Some(InputProtocol::Shm) | None => ProtocolChoice::Auto,
+    };
+    let (source, mut reader, what) = match &shm_name {
         Some(name) => {
             let path = shm_path(name);
             let (src, reader) = ShmSource::spawn(ShmConfig {
@@ -175,10 +167,11 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
         }
         None => {
             let (rx, reader) = UdpReceiver::spawn(UdpConfig {
-                bind: a.bind,
-                protocol: a.protocol,
-                multicast: a.multicast,
-                allow: a.allow.clone(),
+                bind: InputArgs::listen_or_default(input.listen, input.multicast.is_some()),
+                protocol,
+                multicast: input.multicast,
+                multicast_interface: input.multicast_if.unwrap_or(Ipv4Addr::UNSPECIFIED),
+                allow: input.allow.clone(),
                 cigi_reply: if a.no_cigi_reply {
                     CigiReply::Off
                 } else {
@@ -193,7 +186,7 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
                 ..UdpConfig::default()
             })
             .map_err(runtime)?;
-            let protocol = match a.protocol {
+            let protocol = match protocol {
                 ProtocolChoice::Auto => "auto".to_string(),
                 ProtocolChoice::Only(p) => p.to_string(),
             };
@@ -332,4 +325,98 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
         eprintln!("recorded {} datagrams to {}", stats.received, r.display());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::{CommandFactory, Parser};
+
+    use crate::app::commands::listen::{run, ListenArgs};
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: ListenArgs,
+    }
+
+    fn args(extra: &[&str]) -> ListenArgs {
+        Cli::try_parse_from(std::iter::once("listen").chain(extra.iter().copied()))
+            .unwrap_or_else(|e| panic!("{extra:?}: {e}"))
+            .args
+    }
+
+    /// The spellings used before (`--bind`, `--shm`, `--cap-ms`, `--protocol aerie`) still
+    /// parse to the same values as the shared names, and `--help` shows only the new ones.
+    #[test]
+    fn old_and_new_flag_names_mean_the_same() {
+        let old = args(&[
+            "--bind",
+            "0.0.0.0:47801",
+            "--protocol",
+            "aerie",
+            "--cap-ms",
+            "50",
+            "--multicast",
+            "239.1.2.3",
+        ]);
+        let new = args(&[
+            "--listen",
+            "0.0.0.0:47801",
+            "--protocol",
+            "native",
+            "--max-extrapolation-ms",
+            "50",
+            "--multicast",
+            "239.1.2.3",
+        ]);
+        assert_eq!(old.input, new.input);
+        assert_eq!(
+            args(&["--shm", "sim"]).input,
+            args(&["--shm-name", "sim"]).input
+        );
+        let help = Cli::command().render_long_help().to_string();
+        for name in [
+            "--listen",
+            "--shm-name",
+            "--max-extrapolation-ms",
+            "--record",
+        ] {
+            assert!(help.contains(name), "{name} missing from\n{help}");
+        }
+        for old in ["--bind", "--cap-ms", "--shm "] {
+            assert!(!help.contains(old), "{old} shown in\n{help}");
+        }
+    }
+
+    /// Contradicting flags stop before anything is bound, naming the flags.
+    #[test]
+    fn bad_flag_combinations_are_refused_before_listening() {
+        for (extra, says) in [
+            (
+                &["--shm-name", "x", "--record", "r.rec"][..],
+                "--protocol shm reads shared memory: --listen, --multicast, --allow, --record and --xplane apply to UDP only",
+            ),
+            (
+                &["--protocol", "shm", "--listen", "127.0.0.1:9"],
+                "apply to UDP only",
+            ),
+            (
+                &["--protocol", "cigi", "--shm-name", "x"],
+                "--shm-name: only with --protocol shm",
+            ),
+            (
+                &["--multicast-if", "127.0.0.1"],
+                "--multicast-if: only with --multicast",
+            ),
+            (
+                &["--cap-ms", "0"],
+                "--max-extrapolation-ms: 0 must be a positive number",
+            ),
+            (&["--seconds", "0"], "--seconds: 0"),
+        ] {
+            let f = run(args(extra)).expect_err("refused");
+            assert_eq!(f.code, 2, "{extra:?}: {}", f.message);
+            assert!(f.message.contains(says), "{extra:?}: {}", f.message);
+        }
+    }
 }

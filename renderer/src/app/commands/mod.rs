@@ -5,6 +5,7 @@ pub mod bake;
 pub mod bench;
 pub mod fly;
 pub mod gen_dem;
+pub mod input_args;
 pub mod listen;
 pub mod replay;
 pub mod run;

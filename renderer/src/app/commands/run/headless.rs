@@ -11,12 +11,12 @@ use std::time::{Duration, Instant};
 
 use aerie_config::Channel;
 
-use crate::app::commands::run::{
-    open_input, open_stats, plan, Plan, RunArgs, RunPoses, StraightPassSource,
-};
+use crate::app::commands::run::args::RunArgs;
+use crate::app::commands::run::plan::{plan, Plan};
+use crate::app::commands::run::poses::{open_input, open_stats, RunPoses, StraightPassSource};
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::prepare::prepare_terrain;
-use crate::app::window::PoseSource;
+use crate::app::window::pose_source::PoseSource;
 use crate::render::frame::{RendererDesc, TerrainRenderer};
 use crate::sim::channel::AircraftPose;
 use crate::sim::flight::StraightPass;
