@@ -1,3 +1,4 @@
+use super::finish::{fill_voids, flip_rows};
 use super::*;
 
 #[test]
@@ -100,6 +101,7 @@ fn directory_is_unreadable_not_a_panic() {
 
 mod fuzz {
     use super::super::*;
+    use crate::load::sidecar::sidecar_path;
     use proptest::prelude::*;
 
     fn load_as(name: &str, bytes: &[u8], sidecar: Option<&str>) {
