@@ -34,14 +34,14 @@
 //! Every error is one line naming the file, the key (`channel[1].frustum.left`), its line and
 //! column when known, and the reason; a config with any bad channel is refused as a whole.
 
-use std::collections::BTreeMap;
 use std::fmt;
 
-use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
+use serde::de::{self, Deserializer, Visitor};
 use serde::{Deserialize, Serialize, Serializer};
 
-use crate::error::Location;
-use crate::{RenderSettings, MAX_DIMENSION};
+use crate::locate::Seg;
+use crate::settings::RenderSettings;
+use crate::size::{parse_size, MAX_DIMENSION};
 
 /// One display channel, validated.
 #[derive(Clone, Debug, PartialEq)]
@@ -422,13 +422,6 @@ impl Serialize for Channel {
 // ---------------------------------------------------------------------------------------------
 // Validation.
 
-/// One step of a key path inside the channel list.
-#[derive(Clone, Debug, PartialEq)]
-pub(crate) enum Seg {
-    Key(&'static str),
-    Index(usize),
-}
-
 /// A channel validation failure: where (as a path) and why.
 #[derive(Debug)]
 pub(crate) struct ChannelInvalid {
@@ -517,7 +510,7 @@ fn validate_one(
 
     let resolution = match r.resolution.as_deref() {
         None => None,
-        Some(s) => Some(parse_resolution(s).map_err(|m| at(&["resolution"], m))?),
+        Some(s) => Some(parse_size(s).map_err(|m| at(&["resolution"], m))?),
     };
 
     let display =
@@ -730,135 +723,4 @@ fn validate_frustum(
     };
     let vfov_deg = f.vfov.map(|v| check("vfov", v)).transpose()?;
     Ok(ChannelFrustum::Symmetric { hfov_deg, vfov_deg })
-}
-
-fn parse_resolution(s: &str) -> Result<(u32, u32), String> {
-    let malformed = || format!("expected \"WIDTHxHEIGHT\" such as \"1920x1080\", got {s:?}");
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(malformed)?;
-    let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
-    if !digits(w) || !digits(h) {
-        return Err(malformed());
-    }
-    let dim = |t: &str| {
-        t.parse::<u64>()
-            .ok()
-            .filter(|v| (1..=u64::from(MAX_DIMENSION)).contains(v))
-    };
-    match (dim(w), dim(h)) {
-        (Some(w), Some(h)) => Ok((w as u32, h as u32)),
-        _ => Err(format!(
-            "width and height must each be 1..={MAX_DIMENSION} pixels, got {s:?}"
-        )),
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// Locating a key path (tables, arrays, arrays of tables) in the text.
-
-/// A TOML document with the span of every value.
-enum Node {
-    Table(BTreeMap<String, toml::Spanned<Node>>),
-    Array(Vec<toml::Spanned<Node>>),
-    Leaf,
-}
-
-impl<'de> Deserialize<'de> for Node {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct V;
-        impl<'de> Visitor<'de> for V {
-            type Value = Node;
-            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str("any TOML value")
-            }
-            fn visit_bool<E>(self, _: bool) -> Result<Node, E> {
-                Ok(Node::Leaf)
-            }
-            fn visit_i64<E>(self, _: i64) -> Result<Node, E> {
-                Ok(Node::Leaf)
-            }
-            fn visit_u64<E>(self, _: u64) -> Result<Node, E> {
-                Ok(Node::Leaf)
-            }
-            fn visit_f64<E>(self, _: f64) -> Result<Node, E> {
-                Ok(Node::Leaf)
-            }
-            fn visit_str<E>(self, _: &str) -> Result<Node, E> {
-                Ok(Node::Leaf)
-            }
-            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Node, A::Error> {
-                let mut items = Vec::new();
-                while let Some(item) = seq.next_element::<toml::Spanned<Node>>()? {
-                    items.push(item);
-                }
-                Ok(Node::Array(items))
-            }
-            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Node, A::Error> {
-                let mut entries = BTreeMap::new();
-                while let Some((k, v)) = map.next_entry::<String, toml::Spanned<Node>>()? {
-                    entries.insert(k, v);
-                }
-                Ok(Node::Table(entries))
-            }
-        }
-        d.deserialize_any(V)
-    }
-}
-
-/// Line and column of the value at `path`, or of the nearest enclosing value that exists
-/// (a missing key points at its table).
-pub(crate) fn locate(text: &str, path: &[Seg]) -> Option<Location> {
-    let owned: Vec<SegOwned> = path
-        .iter()
-        .map(|s| match s {
-            Seg::Key(k) => SegOwned::Key((*k).to_owned()),
-            Seg::Index(i) => SegOwned::Index(*i),
-        })
-        .collect();
-    walk(text, &owned, true)
-}
-
-/// Line and column of the value of a dotted key such as `channel[1].monitor` or
-/// `render.tau_px` in config `text` (for errors found after parsing, e.g. when windows open).
-pub fn key_location(text: &str, key: &str) -> Option<Location> {
-    let mut path = Vec::new();
-    for part in key.split('.') {
-        let (name, mut rest) = part.split_once('[').map_or((part, ""), |(n, r)| (n, r));
-        if !name.is_empty() {
-            path.push(SegOwned::Key(name.to_owned()));
-        }
-        while let Some((index, after)) = rest.split_once(']') {
-            path.push(SegOwned::Index(index.parse().ok()?));
-            rest = after.strip_prefix('[').unwrap_or(after);
-        }
-    }
-    walk(text, &path, false)
-}
-
-/// Follows `path` through the spanned document; with `nearest`, stops at the deepest value
-/// that exists instead of failing.
-fn walk(text: &str, path: &[SegOwned], nearest: bool) -> Option<Location> {
-    let root: Node = toml::from_str(text).ok()?;
-    let mut node = &root;
-    let mut span = None;
-    for seg in path {
-        let next = match (seg, node) {
-            (SegOwned::Key(k), Node::Table(t)) => t.get(k),
-            (SegOwned::Index(i), Node::Array(a)) => a.get(*i),
-            _ => None,
-        };
-        match next {
-            Some(n) => {
-                span = Some(n.span());
-                node = n.get_ref();
-            }
-            None if nearest => break,
-            None => return None,
-        }
-    }
-    span.map(|s| Location::from_offset(text, s.start))
-}
-
-enum SegOwned {
-    Key(String),
-    Index(usize),
 }

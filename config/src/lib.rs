@@ -33,26 +33,26 @@
 mod channels;
 mod error;
 mod input;
+mod locate;
 mod path_de;
+mod settings;
+mod size;
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
 pub use channels::{
-    key_location, Channel, ChannelDisplay, ChannelFrustum, EyeOffset, FullscreenMode,
-    MonitorSelector, PresentMode, ViewOffset,
+    Channel, ChannelDisplay, ChannelFrustum, EyeOffset, FullscreenMode, MonitorSelector,
+    PresentMode, ViewOffset,
 };
 pub use error::{ConfigError, Location};
 pub use input::{InputProtocolName, InputSettings, MAX_SYNC_FRAMES};
-
-/// Allowed tile sizes `m = 2^j + 1` (vertices per tile side).
-pub const TILE_SIZES: [u32; 8] = [3, 5, 9, 17, 33, 65, 129, 257];
-/// Largest accepted viewport width or height, pixels.
-pub const MAX_DIMENSION: u32 = 16384;
-/// Largest accepted per-frame staging budget, MiB.
-pub const MAX_STAGING_BUDGET_MIB: u32 = 1024;
+pub use locate::key_location;
+pub use settings::{
+    is_valid_tile_size, DemSettings, RenderSettings, MAX_STAGING_BUDGET_MIB, TILE_SIZES,
+};
+pub use size::{parse_size, MAX_DIMENSION};
 
 /// The whole configuration file, validated.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
@@ -69,73 +69,12 @@ pub struct RenderConfig {
     pub channels: Vec<Channel>,
 }
 
-/// Renderer settings (`[render]`).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct RenderSettings {
-    /// Viewport width, pixels (`size = "WxH"` or `width`), 1..=[`MAX_DIMENSION`].
-    pub width: u32,
-    /// Viewport height, pixels (`size = "WxH"` or `height`), 1..=[`MAX_DIMENSION`].
-    pub height: u32,
-    /// Horizontal field of view, degrees, in (0, 180).
-    pub fov_deg: f64,
-    /// Screen-space error bound τ, pixels, finite and > 0.
-    pub tau_px: f64,
-    /// Vertices per tile side, one of [`TILE_SIZES`].
-    pub tile_size: u32,
-    /// Per-frame upload budget through the staging ring, MiB, 1..=[`MAX_STAGING_BUDGET_MIB`].
-    pub staging_budget_mib: u32,
-    /// Enable the Khronos validation layer.
-    pub validation: bool,
-    /// Pick the first GPU whose name contains this substring; `None` lets aerie choose.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub gpu: Option<String>,
-    /// `aerie run --headless` frame rate, frames/s in (0, 1000]; `None`: the `--fps` default.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub fps: Option<f64>,
-}
-
-impl Default for RenderSettings {
-    fn default() -> Self {
-        Self {
-            width: 1920,
-            height: 1080,
-            fov_deg: 90.0,
-            tau_px: 1.0,
-            tile_size: 17,
-            staging_budget_mib: 8,
-            validation: false,
-            gpu: None,
-            fps: None,
-        }
-    }
-}
-
-impl RenderSettings {
-    /// The staging budget in bytes.
-    pub fn staging_budget_bytes(&self) -> u64 {
-        u64::from(self.staging_budget_mib) << 20
-    }
-}
-
-/// Elevation dataset settings (`[dem]`).
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct DemSettings {
-    /// Path of the elevation dataset, as written in the file (not resolved).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub path: Option<PathBuf>,
-}
-
 impl RenderConfig {
     /// Writes the configuration as TOML that [`parse`] reads back to an equal value
     /// (the size is written as `width` and `height`).
     pub fn to_toml(&self) -> Result<String, toml::ser::Error> {
         toml::to_string(self)
     }
-}
-
-/// True if `m` is an allowed tile size (`2^j + 1`, 3..=257).
-pub fn is_valid_tile_size(m: u32) -> bool {
-    TILE_SIZES.contains(&m)
 }
 
 /// Reads and validates the config file at `path`; errors name `path`.
@@ -187,27 +126,18 @@ pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError>
         .validate()
         .map_err(|(key, message)| ConfigError::Invalid {
             source_name: source_name.to_owned(),
-            location: locate_key(text, key),
+            location: locate::key_location(text, key),
             key: key.to_owned(),
             message,
         })?;
     cfg.channels =
         channels::validate(raw_channels, &cfg.render).map_err(|e| ConfigError::Invalid {
             source_name: source_name.to_owned(),
-            location: channels::locate(text, &e.path),
+            location: locate::locate(text, &e.path),
             key: e.dotted(),
             message: e.message,
         })?;
     Ok(cfg)
-}
-
-/// Line and column of the value of a `table.key` leaf, if it can be found.
-fn locate_key(text: &str, key: &str) -> Option<Location> {
-    let (table, leaf) = key.split_once('.')?;
-    type Spans = BTreeMap<String, BTreeMap<String, toml::Spanned<toml::Value>>>;
-    let spans: Spans = toml::from_str(text).ok()?;
-    let value = spans.get(table)?.get(leaf)?;
-    Some(Location::from_offset(text, value.span().start))
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -255,33 +185,6 @@ fn check_dimension(key: &'static str, v: u32) -> Result<u32, Invalid> {
     }
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), Invalid> {
-    const KEY: &str = "render.size";
-    let malformed = || {
-        (
-            KEY,
-            format!("expected \"WIDTHxHEIGHT\" such as \"1920x1080\", got {s:?}"),
-        )
-    };
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(malformed)?;
-    let digits = |t: &str| !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit());
-    if !digits(w) || !digits(h) {
-        return Err(malformed());
-    }
-    let dim = |t: &str| {
-        t.parse::<u64>()
-            .ok()
-            .filter(|v| (1..=u64::from(MAX_DIMENSION)).contains(v))
-    };
-    match (dim(w), dim(h)) {
-        (Some(w), Some(h)) => Ok((w as u32, h as u32)),
-        _ => Err((
-            KEY,
-            format!("width and height must each be 1..={MAX_DIMENSION} pixels, got {s:?}"),
-        )),
-    }
-}
-
 impl RawConfig {
     fn validate(self) -> Result<RenderConfig, Invalid> {
         let d = RenderSettings::default();
@@ -294,7 +197,7 @@ impl RawConfig {
                     "give either size or width and height, not both".to_owned(),
                 ))
             }
-            (Some(s), None, None) => parse_size(s)?,
+            (Some(s), None, None) => parse_size(s).map_err(|m| ("render.size", m))?,
             (None, Some(w), Some(h)) => (
                 check_dimension("render.width", w)?,
                 check_dimension("render.height", h)?,

@@ -29,8 +29,8 @@
 //! | 88.. | | body velocities, accelerations, stall, engines ×4, tanks ×4, wheels ×3, time, surfaces |
 //! | 404 | 4 | trailing padding (struct aligned to 8) |
 
+use super::protocol::{validated, DecodeError, Protocol};
 use super::wire::{ByteOrder, Rd, Wr};
-use super::{validated, DecodeError, Protocol};
 use crate::pose::{Pose, PosePosition};
 
 /// `FG_NET_FDM_VERSION` read here.

@@ -17,8 +17,8 @@
 //! | 104 | 24 | rates f64×3: heading, pitch, roll rates, deg/s |
 //! | 128 | 4 | CRC-32 (IEEE, as zlib's `crc32`) of bytes 0..128 |
 
+use super::protocol::{validated, DecodeError, Protocol};
 use super::wire::{ByteOrder, Rd, Wr};
-use super::{validated, DecodeError, Protocol};
 use crate::pose::{Pose, PosePosition};
 
 /// First four bytes of every native datagram.

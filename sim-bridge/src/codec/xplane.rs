@@ -22,8 +22,8 @@
 //! The body rates are turned into heading/pitch/roll (Euler) rates for extrapolation; near
 //! ±90° pitch (where that is singular) the rates are dropped and the two-pose estimate is used.
 
+use super::protocol::{validated, DecodeError, Protocol};
 use super::wire::{ByteOrder, Rd, Wr};
-use super::{validated, DecodeError, Protocol};
 use crate::pose::{Pose, PosePosition};
 
 /// The first four bytes.

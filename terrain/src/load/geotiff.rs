@@ -14,10 +14,10 @@ use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 use tiff::ColorType;
 
-use super::{
-    check_dims, finish, format_err, geographic_spacing_with_note, size_err, DemError, Grid,
-    DEFAULT_SPACING_M,
-};
+use super::error::{format_err, io_err, size_err, DemError};
+use super::finish::{check_dims, finish};
+use super::placement::Placement;
+use super::sidecar::DEFAULT_SPACING_M;
 use crate::{GeoReference, Heightfield};
 
 /// Largest grid accepted (samples): 32769², so a lying header cannot ask for terabytes.
@@ -53,7 +53,7 @@ fn key(keys: &[(u16, u16)], id: u16) -> Option<u16> {
 }
 
 pub(super) fn load_geotiff(path: &Path) -> Result<Heightfield, DemError> {
-    let file = std::fs::File::open(path).map_err(|e| super::io_err(path, &e))?;
+    let file = std::fs::File::open(path).map_err(|e| io_err(path, &e))?;
     let mut dec = Decoder::new(std::io::BufReader::new(file))
         .map_err(|e| tiff_err(path, "not a readable TIFF", e))?;
     let (w, h) = dec
@@ -154,7 +154,7 @@ pub(super) fn load_geotiff(path: &Path) -> Result<Heightfield, DemError> {
         ));
     }
 
-    let (spacing_x, spacing_y, geo, spacing_note) = placement(
+    let place = placement(
         path,
         width,
         height,
@@ -163,19 +163,7 @@ pub(super) fn load_geotiff(path: &Path) -> Result<Heightfield, DemError> {
         &keys,
         kind,
     )?;
-    finish(
-        path,
-        Grid {
-            width,
-            height,
-            samples,
-            north_up: true,
-            spacing_x,
-            spacing_y,
-            geo,
-            spacing_note,
-        },
-    )
+    finish(path, width, height, samples, true, place)
 }
 
 /// Spacing, geo-reference and the note, from the pixel scale, the first tie point and the keys.
@@ -187,16 +175,16 @@ fn placement(
     tie: Option<&[f64]>,
     keys: &[(u16, u16)],
     kind: &str,
-) -> Result<(f64, f64, Option<GeoReference>, String), DemError> {
+) -> Result<Placement, DemError> {
     let Some(scale) = scale else {
-        return Ok((
-            DEFAULT_SPACING_M,
-            DEFAULT_SPACING_M,
-            None,
-            format!(
+        return Ok(Placement {
+            spacing_x: DEFAULT_SPACING_M,
+            spacing_y: DEFAULT_SPACING_M,
+            geo: None,
+            spacing_note: format!(
                 "GeoTIFF {kind} without ModelPixelScale: default {DEFAULT_SPACING_M} m grid, {DEFAULT_SPACING_M} m E-W, {DEFAULT_SPACING_M} m N-S"
             ),
-        ));
+        });
     };
     if scale.len() < 2 || !scale[..2].iter().all(|s| s.is_finite() && *s > 0.0) {
         return Err(format_err(
@@ -233,22 +221,13 @@ fn placement(
     let south = y - ((height - 1) as f64 + centre - tj) * sy;
     let model = key(keys, GT_MODEL_TYPE);
     if model == Some(2) {
-        let (spacing_x, spacing_y, note) = geographic_spacing_with_note(south, sy, sx, height);
+        let mut place = Placement::geographic(south, west, sy, sx, height);
         let epsg = key(keys, GEOGRAPHIC_TYPE)
             .filter(|&c| c != 0 && c != 32767)
             .map(|c| format!(" EPSG:{c}"))
             .unwrap_or_default();
-        return Ok((
-            spacing_x,
-            spacing_y,
-            Some(GeoReference::Geographic {
-                south_lat_deg: south,
-                west_lon_deg: west,
-                dlat_deg: sy,
-                dlon_deg: sx,
-            }),
-            format!("GeoTIFF {kind}{epsg}, {note}"),
-        ));
+        place.spacing_note = format!("GeoTIFF {kind}{epsg}, {}", place.spacing_note);
+        return Ok(place);
     }
     // Projected (or unspecified): the model unit is the metre unless the keys say feet.
     let (unit, unit_name) = match key(keys, PROJ_LINEAR_UNITS) {
@@ -270,7 +249,12 @@ fn placement(
         northing: south * unit,
     });
     let _ = width;
-    Ok((spacing_x, spacing_y, geo, note))
+    Ok(Placement {
+        spacing_x,
+        spacing_y,
+        geo,
+        spacing_note: note,
+    })
 }
 
 #[cfg(test)]

@@ -3,11 +3,11 @@
 
 use std::path::Path;
 
-use super::{
-    finish, format_err, geographic_spacing_with_note, open_zip, read_file, read_zip_entry,
-    size_err, zip_names, DemError, Grid,
-};
-use crate::{GeoReference, Heightfield};
+use super::archive::{open_zip, read_zip_entry, zip_names};
+use super::error::{format_err, read_file, size_err, DemError};
+use super::finish::finish;
+use super::placement::Placement;
+use crate::Heightfield;
 
 /// SRTM nodata marker.
 const VOID: i16 = -32768;
@@ -57,7 +57,7 @@ fn file_name(path: &Path) -> String {
 
 pub(super) fn load_hgt(path: &Path) -> Result<Heightfield, DemError> {
     let tile = read_tile(path)?;
-    finish(path, tile.into_grid())
+    tile.finish(path)
 }
 
 /// One SRTM tile decoded but not finished (no flip, no void fill): what stitching needs.
@@ -80,25 +80,11 @@ impl HgtTile {
         1.0 / (3600 / self.arcsec) as f64
     }
 
-    pub(crate) fn into_grid(self) -> Grid {
+    /// Flipped, checked and void-filled: the tile as a heightfield.
+    pub(crate) fn finish(self, path: &Path) -> Result<Heightfield, DemError> {
         let d = self.step_deg();
-        let (spacing_x, spacing_y, spacing_note) =
-            geographic_spacing_with_note(self.lat, d, d, self.n);
-        Grid {
-            width: self.n,
-            height: self.n,
-            samples: self.samples,
-            north_up: true,
-            spacing_x,
-            spacing_y,
-            geo: Some(GeoReference::Geographic {
-                south_lat_deg: self.lat,
-                west_lon_deg: self.lon,
-                dlat_deg: d,
-                dlon_deg: d,
-            }),
-            spacing_note,
-        }
+        let place = Placement::geographic(self.lat, self.lon, d, d, self.n);
+        finish(path, self.n, self.n, self.samples, true, place)
     }
 }
 
@@ -167,7 +153,7 @@ fn in_entry(e: DemError, entry: &str) -> DemError {
 /// `.hgt.zip` or `.zip` with exactly one `.hgt` entry, unzipped in memory.
 pub(super) fn load_hgt_zip(path: &Path) -> Result<Heightfield, DemError> {
     let tile = read_zip_tile(path)?;
-    finish(path, tile.into_grid())
+    tile.finish(path)
 }
 
 fn read_zip_tile(path: &Path) -> Result<HgtTile, DemError> {
@@ -231,6 +217,7 @@ fn preview(names: &[String]) -> String {
 mod tests {
     use super::*;
     use crate::load::load_dem;
+    use crate::GeoReference;
     use std::io::Write as _;
 
     const N: usize = 1201;

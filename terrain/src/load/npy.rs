@@ -3,11 +3,12 @@
 
 use std::path::Path;
 
-use super::{
-    finish, format_err, geographic_spacing_with_note, metric_spacing, open_zip, read_file,
-    read_zip_entry, size_err, zip_names, DemError, Grid, Sidecar,
-};
-use crate::{GeoReference, Heightfield};
+use super::archive::{open_zip, read_zip_entry, zip_names};
+use super::error::{format_err, read_file, size_err, DemError};
+use super::finish::{check_dims, finish};
+use super::placement::Placement;
+use super::sidecar::Sidecar;
+use crate::Heightfield;
 
 const KEYS: &[&str] = &["spacing_x", "spacing_y", "north_up"];
 const MAGIC: &[u8] = b"\x93NUMPY";
@@ -335,7 +336,7 @@ impl Npy<'_> {
                 ),
             ));
         };
-        super::check_dims(path, cols, rows)?;
+        check_dims(path, cols, rows)?;
         let n = self.checked_len(path)?;
         let mut out = Vec::with_capacity(n);
         for i in 0..n {
@@ -365,20 +366,8 @@ pub(super) fn load_npy(path: &Path) -> Result<Heightfield, DemError> {
         Some(s) => s.bool("north_up")?.unwrap_or(true),
         None => true,
     };
-    let (spacing_x, spacing_y, spacing_note) = metric_spacing(sidecar.as_ref())?;
-    finish(
-        path,
-        Grid {
-            width,
-            height,
-            samples,
-            north_up,
-            spacing_x,
-            spacing_y,
-            geo: None,
-            spacing_note,
-        },
-    )
+    let place = Placement::metric(sidecar.as_ref())?;
+    finish(path, width, height, samples, north_up, place)
 }
 
 /// `.npz`: the `elevation` or `topo` array, else the first 2-D one. Orientation and a
@@ -485,41 +474,21 @@ pub(super) fn load_npz(path: &Path) -> Result<Heightfield, DemError> {
         Some(s) => s.positive("spacing_x")?.is_some() || s.positive("spacing_y")?.is_some(),
         None => false,
     };
-    let (spacing_x, spacing_y, spacing_note, geo) = match geo_guess {
+    let place = match geo_guess {
         Some((_, south, west, dlat, dlon)) if !has_spacing => {
-            let (sx, sy, note) = geographic_spacing_with_note(south, dlat, dlon, height);
-            let geo = GeoReference::Geographic {
-                south_lat_deg: south,
-                west_lon_deg: west,
-                dlat_deg: dlat,
-                dlon_deg: dlon,
-            };
-            (sx, sy, note, Some(geo))
+            Placement::geographic(south, west, dlat, dlon, height)
         }
-        _ => {
-            let (sx, sy, note) = metric_spacing(sc)?;
-            (sx, sy, note, None)
-        }
+        _ => Placement::metric(sc)?,
     };
-    finish(
-        path,
-        Grid {
-            width,
-            height,
-            samples,
-            north_up,
-            spacing_x,
-            spacing_y,
-            geo,
-            spacing_note,
-        },
-    )
+    finish(path, width, height, samples, north_up, place)
 }
 
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::load::{load_dem, sidecar_path};
+    use crate::load::load_dem;
+    use crate::load::sidecar::sidecar_path;
+    use crate::GeoReference;
     use std::io::Write as _;
 
     /// A version-1.0 `.npy` with the header padded to 64 bytes as NumPy does.

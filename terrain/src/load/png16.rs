@@ -7,9 +7,10 @@ use std::path::Path;
 use image::codecs::png::PngDecoder;
 use image::{ColorType, ExtendedColorType, ImageDecoder, Limits};
 
-use super::{
-    check_dims, finish, format_err, metric_spacing, read_file, size_err, DemError, Grid, Sidecar,
-};
+use super::error::{format_err, read_file, size_err, DemError};
+use super::finish::{check_dims, finish};
+use super::placement::Placement;
+use super::sidecar::Sidecar;
 use crate::Heightfield;
 
 const KEYS: &[&str] = &["scale", "offset", "spacing_x", "spacing_y", "north_up"];
@@ -78,31 +79,20 @@ pub(super) fn load_png(path: &Path) -> Result<Heightfield, DemError> {
         .transpose()?
         .flatten()
         .unwrap_or(true);
-    let (spacing_x, spacing_y, spacing_note) = metric_spacing(sc)?;
+    let place = Placement::metric(sc)?;
     // `read_image` yields native-endian u16 for L16.
     let samples = buf
         .chunks_exact(2)
         .map(|b| (f64::from(u16::from_ne_bytes([b[0], b[1]])) * scale + offset) as f32)
         .collect();
-    finish(
-        path,
-        Grid {
-            width,
-            height,
-            samples,
-            north_up,
-            spacing_x,
-            spacing_y,
-            geo: None,
-            spacing_note,
-        },
-    )
+    finish(path, width, height, samples, north_up, place)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::load::{load_dem, sidecar_path};
+    use crate::load::load_dem;
+    use crate::load::sidecar::sidecar_path;
     use image::{ImageBuffer, Luma, Rgb};
 
     const W: u32 = 5;

@@ -3,7 +3,10 @@
 
 use std::path::Path;
 
-use super::{check_dims, finish, io_err, metric_spacing, show, size_err, DemError, Grid, Sidecar};
+use super::error::{io_err, show, size_err, DemError};
+use super::finish::{check_dims, finish};
+use super::placement::Placement;
+use super::sidecar::Sidecar;
 use crate::Heightfield;
 
 const KEYS: &[&str] = &[
@@ -92,7 +95,7 @@ pub(super) fn load_raw(path: &Path, default: SampleFormat) -> Result<Heightfield
         )
     };
     let north_up = sc.bool("north_up")?.unwrap_or(true);
-    let (spacing_x, spacing_y, spacing_note) = metric_spacing(Some(&sc))?;
+    let place = Placement::metric(Some(&sc))?;
     check_dims(path, width, height)?;
     let expected = width
         .checked_mul(height)
@@ -120,19 +123,7 @@ pub(super) fn load_raw(path: &Path, default: SampleFormat) -> Result<Heightfield
         return Err(length_err(found));
     }
     let samples = read_samples(path, expected, format, width, scale, offset)?;
-    finish(
-        path,
-        Grid {
-            width,
-            height,
-            samples,
-            north_up,
-            spacing_x,
-            spacing_y,
-            geo: None,
-            spacing_note,
-        },
-    )
+    finish(path, width, height, samples, north_up, place)
 }
 
 /// Reads and decodes the file in 4 MiB pieces, so a 1 GB grid costs 1 GB of memory, not 2.
@@ -235,7 +226,8 @@ fn non_finite(path: &Path, v: f32, i: usize, width: usize, item: usize) -> DemEr
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::load::{load_dem, sidecar_path};
+    use crate::load::load_dem;
+    use crate::load::sidecar::sidecar_path;
 
     fn write(dir: &Path, name: &str, data: &[u8], sidecar: Option<&str>) -> std::path::PathBuf {
         let p = dir.join(name);

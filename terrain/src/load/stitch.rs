@@ -12,8 +12,10 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use super::error::{format_err, io_err, show, DemError};
+use super::finish::finish;
 use super::hgt::{read_tile, HgtTile};
-use super::{finish, format_err, io_err, show, DemError};
+use super::placement::Placement;
 use crate::Heightfield;
 
 /// What stitching did, for the load summary.
@@ -251,24 +253,10 @@ fn stitch_at(whole: &Path, paths: &[PathBuf]) -> Result<(Heightfield, StitchInfo
     };
     // The SW tile's geo-reference and spacing, re-centred on the whole mosaic.
     let (_, sw) = &by_pos[&(lat_min, lon_min)];
-    let mut grid = HgtTile {
-        lat: sw.lat,
-        lon: sw.lon,
-        n,
-        arcsec,
-        samples: Vec::new(),
-    }
-    .into_grid();
     let d = 1.0 / (3600 / arcsec) as f64;
-    let (sx, sy, note) = super::geographic_spacing_with_note(sw.lat, d, d, height);
-    grid.width = width;
-    grid.height = height;
-    grid.samples = samples;
-    grid.spacing_x = sx;
-    grid.spacing_y = sy;
-    grid.spacing_note = note;
+    let place = Placement::geographic(sw.lat, sw.lon, d, d, height);
     drop(by_pos);
-    let hf = finish(whole, grid)?;
+    let hf = finish(whole, width, height, samples, true, place)?;
     Ok((hf, info))
 }
 

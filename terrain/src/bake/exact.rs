@@ -1,0 +1,411 @@
+//! The ε computation: the level surfaces against every full-resolution sample, on all cores.
+
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+
+use crate::dataset::Dataset;
+use crate::mesh::{quad_surface, Diagonal, TILE_DIAGONAL};
+
+use super::table::{build_tables, level_geoms, BakeParams, ErrorBake, LevelGeom};
+
+/// Rows per work item: small enough to share out evenly, large enough that the level-L vertex
+/// rows a chunk needs stay in cache across its rows.
+const CHUNK_ROWS: usize = 32;
+
+/// Smallest f32 ≥ x (x ≥ 0, finite).
+#[inline]
+pub fn round_up_f32(x: f64) -> f32 {
+    let f = x as f32;
+    if f64::from(f) >= x {
+        f
+    } else {
+        f32::from_bits(f.to_bits() + 1)
+    }
+}
+
+/// Tile rows of a level that sample row `r` belongs to: `(lo, hi)` (equal unless `r` is an
+/// edge shared by two tile rows).
+#[inline]
+fn tile_rows_of(r: usize, t: usize, tiles_y: usize) -> (usize, usize) {
+    let hi = (r / t).min(tiles_y - 1);
+    let lo = if r.is_multiple_of(t) && r > 0 {
+        r / t - 1
+    } else {
+        hi
+    };
+    (lo, hi)
+}
+
+/// `a > b ? a : b` — one `maxsd`/`maxpd`; the values are never NaN (heights are finite).
+#[inline(always)]
+fn gt_max(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+/// |h − ĥ| at one sample of a cell row, ĥ from [`quad_surface`] at (u, v).
+#[inline(always)]
+fn sample_err(h: f32, c: &Corners, u: f64, v: f64) -> f64 {
+    (f64::from(h) - quad_surface(c.sw, c.se, c.nw, c.ne, u, v)).abs()
+}
+
+/// The four corner heights of one level-L cell.
+struct Corners {
+    sw: f64,
+    se: f64,
+    nw: f64,
+    ne: f64,
+}
+
+impl Corners {
+    #[inline(always)]
+    fn at(hs: &[f32], hn: &[f32], c0: usize, s: usize) -> Self {
+        Corners {
+            sw: f64::from(hs[c0]),
+            se: f64::from(hs[c0 + s]),
+            nw: f64::from(hn[c0]),
+            ne: f64::from(hn[c0 + s]),
+        }
+    }
+}
+
+/// Max |h − ĥ_L| over samples `i = 0 .. S` (west edge included, east edge excluded) of one
+/// cell row; `S = 2^L` known at compile time so the loop unrolls with constant `u`.
+#[inline(always)]
+fn cell_max_const<const S: usize>(h: &[f32], c: &Corners, v: f64) -> f64 {
+    let h = &h[..S];
+    let mut e = [0f64; S];
+    for (i, (e, &hi)) in e.iter_mut().zip(h).enumerate() {
+        let u = i as f64 * (1.0 / S as f64);
+        *e = sample_err(hi, c, u, v);
+    }
+    // Pairwise, so the maxima do not form one long dependency chain.
+    let mut n = S;
+    while n > 1 {
+        n /= 2;
+        for i in 0..n {
+            e[i] = gt_max(e[i], e[i + n]);
+        }
+    }
+    e[0]
+}
+
+/// Max |h − ĥ| over `B` samples of a cell row starting at sample `i0` (u = (i0 + i) / s).
+#[inline(always)]
+fn block_max<const B: usize>(h: &[f32], c: &Corners, v: f64, i0: usize, inv: f64) -> f64 {
+    let h = &h[i0..i0 + B];
+    let u0 = i0 as u32 as f64 * inv;
+    let mut e = [0f64; B];
+    for (i, (e, &hi)) in e.iter_mut().zip(h).enumerate() {
+        // Exact: u0 and i·inv are multiples of 1/s < 1, so the sum is (i0 + i) / s exactly.
+        *e = sample_err(hi, c, u0 + i as f64 * inv, v);
+    }
+    let mut n = B;
+    while n > 1 {
+        n /= 2;
+        for i in 0..n {
+            e[i] = gt_max(e[i], e[i + n]);
+        }
+    }
+    e[0]
+}
+
+/// The same as [`cell_max_const`] for `s ≥ 64` known at run time (coarse levels).
+#[inline(always)]
+fn cell_max_dyn(h: &[f32], c: &Corners, v: f64, s: usize) -> f64 {
+    debug_assert!(s >= 64 && s.is_multiple_of(64));
+    let inv = 1.0 / s as f64;
+    let (mut a, mut b) = (0f64, 0f64);
+    for i0 in (0..s).step_by(64) {
+        a = gt_max(block_max::<32>(h, c, v, i0, inv), a);
+        b = gt_max(block_max::<32>(h, c, v, i0 + 32, inv), b);
+    }
+    gt_max(a, b)
+}
+
+/// For one full-resolution row and one level `L ≥ 1`: the max |h − ĥ_L| over each tile's
+/// part of the row (both edge samples included) into `out[tx]`.
+///
+/// ĥ_L is [`quad_surface`] over the level-L cell holding the sample. The loops assume the
+/// cell row bends where the SW–NE diagonal crosses it, which `quad_surface` decides per sample
+/// anyway; the match below makes a new [`Diagonal`] a compile error here.
+#[inline(always)]
+fn level_row_tile_max<const S: usize>(
+    row: &[f32],
+    hs: &[f32],
+    hn: &[f32],
+    s: usize,
+    v: f64,
+    cells_per_tile: usize,
+    out: &mut [f64],
+) {
+    match TILE_DIAGONAL {
+        Diagonal::SouthWestToNorthEast => {}
+    }
+    let s = if S > 0 { S } else { s };
+    for (tx, o) in out.iter_mut().enumerate() {
+        let first = tx * cells_per_tile;
+        // Four running maxima, one per cell modulo 4, merged at the end.
+        let mut ms = [0f64; 4];
+        for (k, cx) in (first..first + cells_per_tile).enumerate() {
+            let c0 = cx * s;
+            let c = Corners::at(hs, hn, c0, s);
+            let e = if S > 0 {
+                cell_max_const::<S>(&row[c0..], &c, v)
+            } else {
+                cell_max_dyn(&row[c0..], &c, v, s)
+            };
+            ms[k & 3] = gt_max(e, ms[k & 3]);
+        }
+        let m = gt_max(gt_max(ms[0], ms[1]), gt_max(ms[2], ms[3]));
+        // The tile's east edge: u = 1 in its last cell.
+        let c0 = (first + cells_per_tile - 1) * s;
+        let c = Corners::at(hs, hn, c0, s);
+        *o = gt_max(sample_err(row[c0 + s], &c, 1.0, v), m);
+    }
+}
+
+/// One worker's running maxima: ε per level (f64, level 0 unused) and level-0 min/max.
+struct Acc {
+    eps: Vec<Vec<f64>>,
+    min0: Vec<f32>,
+    max0: Vec<f32>,
+}
+
+impl Acc {
+    fn new(geo: &[LevelGeom]) -> Self {
+        let n0 = geo[0].tiles_x * geo[0].tiles_y;
+        Acc {
+            eps: geo
+                .iter()
+                .enumerate()
+                .map(|(l, g)| {
+                    if l == 0 {
+                        Vec::new()
+                    } else {
+                        vec![0.0; g.tiles_x * g.tiles_y]
+                    }
+                })
+                .collect(),
+            min0: vec![f32::INFINITY; n0],
+            max0: vec![f32::NEG_INFINITY; n0],
+        }
+    }
+
+    fn merge(&mut self, o: &Acc) {
+        for (a, b) in self.eps.iter_mut().zip(&o.eps) {
+            for (x, y) in a.iter_mut().zip(b) {
+                *x = x.max(*y);
+            }
+        }
+        for (x, y) in self.min0.iter_mut().zip(&o.min0) {
+            *x = x.min(*y);
+        }
+        for (x, y) in self.max0.iter_mut().zip(&o.max0) {
+            *x = x.max(*y);
+        }
+    }
+}
+
+/// Rows `r0..r1` into the worker's maxima, with AVX2 when the CPU has it (same IEEE
+/// operations in the same order either way, so the results are bit-identical).
+#[allow(clippy::too_many_arguments)]
+fn process_rows(
+    ds: &Dataset,
+    geo: &[LevelGeom],
+    q: usize,
+    r0: usize,
+    r1: usize,
+    acc: &mut Acc,
+    tile_max: &mut [f64],
+    simd: bool,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if simd && std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU supports AVX2 (checked just above).
+        unsafe { process_rows_avx2(ds, geo, q, r0, r1, acc, tile_max) };
+        return;
+    }
+    process_rows_impl(ds, geo, q, r0, r1, acc, tile_max);
+}
+
+/// [`process_rows_impl`] compiled for AVX2.
+///
+/// # Safety
+///
+/// The CPU running it must support AVX2 (`is_x86_feature_detected!("avx2")`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn process_rows_avx2(
+    ds: &Dataset,
+    geo: &[LevelGeom],
+    q: usize,
+    r0: usize,
+    r1: usize,
+    acc: &mut Acc,
+    tile_max: &mut [f64],
+) {
+    process_rows_impl(ds, geo, q, r0, r1, acc, tile_max);
+}
+
+#[inline(always)]
+fn process_rows_impl(
+    ds: &Dataset,
+    geo: &[LevelGeom],
+    q: usize,
+    r0: usize,
+    r1: usize,
+    acc: &mut Acc,
+    tile_max: &mut [f64],
+) {
+    let w = ds.hf.width;
+    let heights = &ds.hf.heights;
+    for r in r0..r1 {
+        let row = &heights[r * w..(r + 1) * w];
+        // Level 0: height bounds.
+        let g = geo[0];
+        let (lo, hi) = tile_rows_of(r, g.t, g.tiles_y);
+        for tx in 0..g.tiles_x {
+            let seg = &row[tx * g.t..=(tx + 1) * g.t];
+            let (mut mn, mut mx) = (seg[0], seg[0]);
+            for &h in seg {
+                mn = if h < mn { h } else { mn };
+                mx = if h > mx { h } else { mx };
+            }
+            for ty in [lo, hi] {
+                let i = ty * g.tiles_x + tx;
+                acc.min0[i] = acc.min0[i].min(mn);
+                acc.max0[i] = acc.max0[i].max(mx);
+            }
+        }
+        // Levels ≥ 1: errors against the level surface, for tiles holding real samples only
+        // (a tile is real when its south-west sample is; all-padding tiles keep ε = 0).
+        for (l, g) in geo.iter().enumerate().skip(1) {
+            let (lo, hi) = tile_rows_of(r, g.t, g.tiles_y);
+            if lo * g.t >= ds.valid_height {
+                continue;
+            }
+            let real_tiles_x = ds.valid_width.div_ceil(g.t).min(g.tiles_x);
+            let s = 1usize << l;
+            let j = r & (s - 1);
+            let south = r - j;
+            let north = if j == 0 { south } else { south + s };
+            let hs = &heights[south * w..(south + 1) * w];
+            let hn = &heights[north * w..(north + 1) * w];
+            let v = j as f64 / s as f64;
+            let out = &mut tile_max[..real_tiles_x];
+            match s {
+                2 => level_row_tile_max::<2>(row, hs, hn, s, v, q, out),
+                4 => level_row_tile_max::<4>(row, hs, hn, s, v, q, out),
+                8 => level_row_tile_max::<8>(row, hs, hn, s, v, q, out),
+                16 => level_row_tile_max::<16>(row, hs, hn, s, v, q, out),
+                32 => level_row_tile_max::<32>(row, hs, hn, s, v, q, out),
+                _ => level_row_tile_max::<0>(row, hs, hn, s, v, q, out),
+            }
+            let a = &mut acc.eps[l];
+            for (tx, &m) in out.iter().enumerate() {
+                for ty in [lo, hi] {
+                    let i = ty * g.tiles_x + tx;
+                    a[i] = gt_max(m, a[i]);
+                }
+            }
+        }
+    }
+}
+
+/// Bakes ε, min/max and the terrain flags of every level, on all cores.
+///
+/// `progress(done, total)` is called from the calling thread, in samples (rows × width).
+/// Panics when `params` do not fit the dataset: check with [`BakeParams::resolve_levels`] first.
+pub fn bake(ds: &Dataset, params: BakeParams, progress: &dyn Fn(u64, u64)) -> ErrorBake {
+    bake_with(ds, params, progress, true)
+}
+
+/// [`bake`]; `simd = false` keeps to the baseline instruction set (tests compare the two).
+pub(super) fn bake_with(
+    ds: &Dataset,
+    params: BakeParams,
+    progress: &dyn Fn(u64, u64),
+    simd: bool,
+) -> ErrorBake {
+    let levels = params.resolve_levels(ds).unwrap_or_else(|e| panic!("{e}"));
+    let (w, h) = (ds.hf.width, ds.hf.height);
+    let q = (params.tile_size - 1) as usize;
+    let geo = level_geoms(q, w, h, levels);
+    let total = (w * h) as u64;
+    let chunks = h.div_ceil(CHUNK_ROWS);
+    let threads = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1)
+        .clamp(1, chunks);
+    let next = AtomicUsize::new(0);
+    let rows_done = AtomicU64::new(0);
+    let finished = AtomicUsize::new(0);
+    progress(0, total);
+    let accs: Vec<Acc> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads)
+            .map(|_| {
+                s.spawn(|| {
+                    let mut acc = Acc::new(&geo);
+                    let mut tile_max = vec![0f64; geo[0].tiles_x];
+                    loop {
+                        let c = next.fetch_add(1, Ordering::Relaxed);
+                        if c >= chunks {
+                            break;
+                        }
+                        let r0 = c * CHUNK_ROWS;
+                        let r1 = (r0 + CHUNK_ROWS).min(h);
+                        process_rows(ds, &geo, q, r0, r1, &mut acc, &mut tile_max, simd);
+                        rows_done.fetch_add((r1 - r0) as u64, Ordering::Relaxed);
+                    }
+                    finished.fetch_add(1, Ordering::Release);
+                    acc
+                })
+            })
+            .collect();
+        while finished.load(Ordering::Acquire) < threads {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+            progress(rows_done.load(Ordering::Relaxed) * w as u64, total);
+        }
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("bake worker panicked"))
+            .collect()
+    });
+    let mut accs = accs.into_iter();
+    let mut acc = accs.next().expect("at least one worker");
+    for o in accs {
+        acc.merge(&o);
+    }
+    progress(total, total);
+
+    let eps: Vec<Vec<f32>> = acc
+        .eps
+        .iter()
+        .map(|e| e.iter().map(|&e| round_up_f32(e)).collect())
+        .collect();
+    let tables = build_tables(
+        &geo,
+        std::mem::take(&mut acc.min0),
+        std::mem::take(&mut acc.max0),
+        eps,
+        ds.valid_width,
+        ds.valid_height,
+    );
+    ErrorBake {
+        params: BakeParams {
+            tile_size: params.tile_size,
+            levels,
+        },
+        width: w as u32,
+        height: h as u32,
+        valid_width: ds.valid_width as u32,
+        valid_height: ds.valid_height as u32,
+        spacing_x: ds.hf.spacing_x,
+        spacing_y: ds.hf.spacing_y,
+        source_checksum: ds.checksum(),
+        levels: tables,
+    }
+}

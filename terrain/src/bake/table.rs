@@ -1,0 +1,350 @@
+//! What a bake holds: its parameters and one table of per-tile numbers per level.
+
+use crate::dataset::Dataset;
+
+use super::error::BakeError;
+use super::format::file_layout;
+
+/// Bake parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BakeParams {
+    /// Tile side in vertices, `m = 2^j + 1` with `1 ≤ j ≤ 8` (3 ..= 257); default 17.
+    pub tile_size: u32,
+    /// Number of levels to bake (0 = as many as fit the dataset).
+    pub levels: u32,
+}
+
+impl Default for BakeParams {
+    fn default() -> Self {
+        BakeParams {
+            tile_size: 17,
+            levels: 0,
+        }
+    }
+}
+
+impl BakeParams {
+    /// `j` with `m = 2^j + 1`, or an error saying what is accepted.
+    pub fn log2_quads(&self) -> Result<u32, BakeError> {
+        let m = self.tile_size;
+        let q = m.wrapping_sub(1);
+        if !(3..=257).contains(&m) || !q.is_power_of_two() {
+            return Err(BakeError::Params {
+                reason: format!("tile size {m} is not 2^j + 1 in 3..=257 (e.g. 9, 17, 33, 65)"),
+            });
+        }
+        Ok(q.trailing_zeros())
+    }
+
+    /// Levels that fit the dataset: `min(Kx, Ky) − j + 1`, or 0 when not even one tile fits.
+    pub fn max_levels(&self, ds: &Dataset) -> Result<u32, BakeError> {
+        let j = self.log2_quads()?;
+        let (kx, ky) = ds.log2_sides();
+        Ok((kx.min(ky) + 1).saturating_sub(j))
+    }
+
+    /// The number of levels a bake with these parameters has on `ds`, or why it cannot be made.
+    pub fn resolve_levels(&self, ds: &Dataset) -> Result<u32, BakeError> {
+        let fit = self.max_levels(ds)?;
+        if fit == 0 {
+            return Err(BakeError::Params {
+                reason: format!(
+                    "the dataset ({}×{} padded samples) is smaller than one {}×{} tile; use a smaller tile size",
+                    ds.hf.width, ds.hf.height, self.tile_size, self.tile_size
+                ),
+            });
+        }
+        match self.levels {
+            0 => Ok(fit),
+            n if n <= fit => Ok(n),
+            n => Err(BakeError::Params {
+                reason: format!(
+                    "{n} levels asked, but only {fit} fit a {}×{} dataset with {}×{} tiles (levels 0..={})",
+                    ds.hf.width,
+                    ds.hf.height,
+                    self.tile_size,
+                    self.tile_size,
+                    fit - 1
+                ),
+            }),
+        }
+    }
+}
+
+/// One level's per-tile numbers, row-major by tile (`ty * tiles_x + tx`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LevelTable {
+    pub level: u32,
+    pub tiles_x: u32,
+    pub tiles_y: u32,
+    /// Maximum absolute vertical error of the level surface over the tile, metres (rounded
+    /// up); 0 for tiles that are all padding.
+    pub eps: Vec<f32>,
+    /// Smallest / largest full-resolution height in the tile (edges included), metres.
+    pub min: Vec<f32>,
+    pub max: Vec<f32>,
+    /// False when every sample of the tile is padding.
+    pub terrain: Vec<bool>,
+}
+
+impl LevelTable {
+    #[inline]
+    fn index(&self, tx: u32, ty: u32) -> usize {
+        assert!(
+            tx < self.tiles_x && ty < self.tiles_y,
+            "tile ({tx}, {ty}) outside level {} ({}×{} tiles)",
+            self.level,
+            self.tiles_x,
+            self.tiles_y
+        );
+        (ty * self.tiles_x + tx) as usize
+    }
+
+    pub fn len(&self) -> usize {
+        self.eps.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.eps.is_empty()
+    }
+}
+
+/// The result of a bake: parameters, what it was made from, and one table per level.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ErrorBake {
+    /// `levels` is the resolved count (never 0).
+    pub params: BakeParams,
+    pub width: u32,
+    pub height: u32,
+    pub valid_width: u32,
+    pub valid_height: u32,
+    pub spacing_x: f64,
+    pub spacing_y: f64,
+    /// CRC-32 of the padded samples ([`Dataset::checksum`]).
+    pub source_checksum: u32,
+    pub levels: Vec<LevelTable>,
+}
+
+impl ErrorBake {
+    pub fn level(&self, level: u32) -> &LevelTable {
+        &self.levels[level as usize]
+    }
+
+    /// ε of level-`level` tile (tx, ty), metres.
+    pub fn eps(&self, level: u32, tx: u32, ty: u32) -> f32 {
+        let t = self.level(level);
+        t.eps[t.index(tx, ty)]
+    }
+
+    /// (min, max) full-resolution height of the tile, metres.
+    pub fn bounds(&self, level: u32, tx: u32, ty: u32) -> (f32, f32) {
+        let t = self.level(level);
+        let i = t.index(tx, ty);
+        (t.min[i], t.max[i])
+    }
+
+    /// False when the tile is all padding.
+    pub fn is_terrain(&self, level: u32, tx: u32, ty: u32) -> bool {
+        let t = self.level(level);
+        t.terrain[t.index(tx, ty)]
+    }
+
+    /// ε of level-L tile (tx, ty) drawn with refinement r, i.e. with the level (L−r) surface:
+    /// the max of ε over its `2^r × 2^r` level-(L−r) subtiles (exact: the subtiles' samples
+    /// are the tile's samples and their surfaces are the level-(L−r) surface over the tile;
+    /// padding-only subtiles count 0, see the module documentation).
+    /// `r` larger than `level` is taken as `level` (full resolution, ε = 0).
+    pub fn eps_refined(&self, level: u32, tx: u32, ty: u32, r: u32) -> f32 {
+        let r = r.min(level);
+        if r == 0 {
+            return self.eps(level, tx, ty);
+        }
+        let fine = self.level(level - r);
+        let k = 1u32 << r;
+        let mut e = 0f32;
+        for sy in ty * k..(ty + 1) * k {
+            let row = &fine.eps[(sy * fine.tiles_x + tx * k) as usize..][..k as usize];
+            e = row.iter().fold(e, |a, &b| a.max(b));
+        }
+        e
+    }
+
+    /// Total size of the bake file in bytes.
+    pub fn file_size(&self) -> u64 {
+        file_layout(
+            self.width,
+            self.height,
+            self.params.tile_size,
+            self.levels.len() as u32,
+        )
+        .total
+    }
+
+    /// Per-level distribution of ε over the tiles that hold terrain.
+    pub fn level_stats(&self) -> Vec<LevelStats> {
+        self.levels
+            .iter()
+            .map(|t| {
+                let mut e: Vec<f32> = t
+                    .eps
+                    .iter()
+                    .zip(&t.terrain)
+                    .filter(|(_, &k)| k)
+                    .map(|(&e, _)| e)
+                    .collect();
+                e.sort_by(f32::total_cmp);
+                let rank = |p: f64| -> f32 {
+                    if e.is_empty() {
+                        return 0.0;
+                    }
+                    let k = ((p * e.len() as f64).ceil() as usize).clamp(1, e.len());
+                    e[k - 1]
+                };
+                LevelStats {
+                    level: t.level,
+                    tiles: t.len(),
+                    terrain_tiles: e.len(),
+                    max: e.last().copied().unwrap_or(0.0),
+                    p99: rank(0.99),
+                    median: rank(0.5),
+                    tile_extent_x_m: f64::from(self.params.tile_size - 1)
+                        * f64::from(1u32 << t.level)
+                        * self.spacing_x,
+                    tile_extent_y_m: f64::from(self.params.tile_size - 1)
+                        * f64::from(1u32 << t.level)
+                        * self.spacing_y,
+                }
+            })
+            .collect()
+    }
+}
+
+/// ε distribution of one level over its terrain tiles (nearest-rank percentiles).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LevelStats {
+    pub level: u32,
+    pub tiles: usize,
+    pub terrain_tiles: usize,
+    pub max: f32,
+    pub p99: f32,
+    pub median: f32,
+    /// Ground size of one tile of this level, metres.
+    pub tile_extent_x_m: f64,
+    pub tile_extent_y_m: f64,
+}
+
+/// Header of the `--report` CSV.
+pub const REPORT_CSV_HEADER: &str =
+    "level,sample_step,tiles,terrain_tiles,tile_extent_x_m,tile_extent_y_m,max_eps_m,p99_eps_m,median_eps_m\n";
+
+/// The `--report` table as CSV (one row per level).
+pub fn report_csv(stats: &[LevelStats]) -> String {
+    let mut s = String::from(REPORT_CSV_HEADER);
+    for l in stats {
+        s.push_str(&format!(
+            "{},{},{},{},{:.3},{:.3},{},{},{}\n",
+            l.level,
+            1u64 << l.level,
+            l.tiles,
+            l.terrain_tiles,
+            l.tile_extent_x_m,
+            l.tile_extent_y_m,
+            l.max,
+            l.p99,
+            l.median
+        ));
+    }
+    s
+}
+
+/// Tile geometry of one level.
+#[derive(Clone, Copy)]
+pub(super) struct LevelGeom {
+    /// Samples per tile side minus one: (m − 1) · 2^L.
+    pub(super) t: usize,
+    pub(super) tiles_x: usize,
+    pub(super) tiles_y: usize,
+}
+
+pub(super) fn level_geoms(q: usize, width: usize, height: usize, levels: u32) -> Vec<LevelGeom> {
+    (0..levels)
+        .map(|l| {
+            let t = q << l;
+            LevelGeom {
+                t,
+                tiles_x: (width - 1) / t,
+                tiles_y: (height - 1) / t,
+            }
+        })
+        .collect()
+}
+
+/// The level tables from what is measured (level-0 min/max, ε of levels ≥ 1; `eps[0]` is
+/// ignored) and what follows from it: level-0 ε = 0; a level-L tile is exactly its 2×2
+/// level-(L−1) children (edges included), so its min/max is theirs; a tile is terrain when its
+/// south-west sample is real; all-padding tiles have ε = 0. The file stores the measured part.
+pub(super) fn build_tables(
+    geo: &[LevelGeom],
+    min0: Vec<f32>,
+    max0: Vec<f32>,
+    mut eps: Vec<Vec<f32>>,
+    valid_width: usize,
+    valid_height: usize,
+) -> Vec<LevelTable> {
+    let mut tables: Vec<LevelTable> = Vec::with_capacity(geo.len());
+    for (l, g) in geo.iter().enumerate() {
+        let n = g.tiles_x * g.tiles_y;
+        let (min, max) = if l == 0 {
+            (min0.clone(), max0.clone())
+        } else {
+            let f: &LevelTable = &tables[l - 1];
+            let fx = f.tiles_x as usize;
+            let mut mn = Vec::with_capacity(n);
+            let mut mx = Vec::with_capacity(n);
+            for ty in 0..g.tiles_y {
+                for tx in 0..g.tiles_x {
+                    let kids = [
+                        (2 * ty) * fx + 2 * tx,
+                        (2 * ty) * fx + 2 * tx + 1,
+                        (2 * ty + 1) * fx + 2 * tx,
+                        (2 * ty + 1) * fx + 2 * tx + 1,
+                    ];
+                    mn.push(kids.iter().map(|&k| f.min[k]).fold(f32::INFINITY, f32::min));
+                    mx.push(
+                        kids.iter()
+                            .map(|&k| f.max[k])
+                            .fold(f32::NEG_INFINITY, f32::max),
+                    );
+                }
+            }
+            (mn, mx)
+        };
+        let terrain: Vec<bool> = (0..n)
+            .map(|i| {
+                let (tx, ty) = (i % g.tiles_x, i / g.tiles_x);
+                tx * g.t < valid_width && ty * g.t < valid_height
+            })
+            .collect();
+        let e = if l == 0 {
+            vec![0.0; n]
+        } else {
+            let mut e = std::mem::take(&mut eps[l]);
+            for (e, &t) in e.iter_mut().zip(&terrain) {
+                if !t {
+                    *e = 0.0;
+                }
+            }
+            e
+        };
+        tables.push(LevelTable {
+            level: l as u32,
+            tiles_x: g.tiles_x as u32,
+            tiles_y: g.tiles_y as u32,
+            eps: e,
+            min,
+            max,
+            terrain,
+        });
+    }
+    tables
+}

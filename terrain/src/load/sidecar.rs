@@ -1,0 +1,179 @@
+//! The optional `<file>.json` sidecar: checked keys, typed values and the metric spacing.
+
+use std::path::{Path, PathBuf};
+
+use super::error::{one_line, show, DemError};
+
+/// Default grid spacing (metres) when a file carries none and no sidecar gives one.
+pub(crate) const DEFAULT_SPACING_M: f64 = 30.0;
+
+/// `<file>.json` next to `<file>` (the whole name plus `.json`, e.g. `foo.png.json`).
+pub(crate) fn sidecar_path(path: &Path) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(".json");
+    PathBuf::from(s)
+}
+
+/// A parsed sidecar whose keys have been checked against the loader's list.
+pub(crate) struct Sidecar {
+    path: PathBuf,
+    map: serde_json::Map<String, serde_json::Value>,
+}
+
+impl Sidecar {
+    /// Reads `<file>.json` when present. Unknown keys are rejected here so a typo
+    /// (`"spacingx"`) is an error instead of a silently ignored setting.
+    pub(crate) fn load(dem: &Path, allowed: &[&str]) -> Result<Option<Sidecar>, DemError> {
+        let path = sidecar_path(dem);
+        let bytes = match std::fs::read(&path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => {
+                return Err(DemError::Sidecar {
+                    path: show(&path),
+                    reason: format!("cannot read sidecar: {}", one_line(&e.to_string())),
+                })
+            }
+        };
+        let value: serde_json::Value =
+            serde_json::from_slice(&bytes).map_err(|e| DemError::Sidecar {
+                path: show(&path),
+                reason: format!("invalid JSON: {}", one_line(&e.to_string())),
+            })?;
+        let serde_json::Value::Object(map) = value else {
+            return Err(DemError::Sidecar {
+                path: show(&path),
+                reason: format!("expected a JSON object, found {}", json_type(&value)),
+            });
+        };
+        for key in map.keys() {
+            if !allowed.contains(&key.as_str()) {
+                return Err(DemError::Sidecar {
+                    path: show(&path),
+                    reason: format!(
+                        "unknown key `{}` (accepted: {})",
+                        one_line(key),
+                        allowed.join(", ")
+                    ),
+                });
+            }
+        }
+        Ok(Some(Sidecar { path, map }))
+    }
+
+    /// Like [`Sidecar::load`], for formats that cannot be read without one.
+    pub(crate) fn require(dem: &Path, allowed: &[&str], needs: &str) -> Result<Sidecar, DemError> {
+        Self::load(dem, allowed)?.ok_or_else(|| DemError::Sidecar {
+            path: show(dem),
+            reason: format!(
+                "missing sidecar {} (a JSON object with {needs})",
+                show(&sidecar_path(dem))
+            ),
+        })
+    }
+
+    pub(crate) fn path(&self) -> &Path {
+        &self.path
+    }
+
+    pub(crate) fn err(&self, key: &str, reason: impl std::fmt::Display) -> DemError {
+        DemError::Sidecar {
+            path: show(&self.path),
+            reason: one_line(&format!("key `{key}`: {reason}")),
+        }
+    }
+
+    fn wrong_type(&self, key: &str, want: &str, v: &serde_json::Value) -> DemError {
+        self.err(key, format!("expected {want}, found {}", json_type(v)))
+    }
+
+    /// A finite number.
+    pub(crate) fn f64(&self, key: &str) -> Result<Option<f64>, DemError> {
+        match self.map.get(key) {
+            None => Ok(None),
+            Some(v) => match v.as_f64() {
+                Some(x) if x.is_finite() => Ok(Some(x)),
+                _ => Err(self.wrong_type(key, "a finite number", v)),
+            },
+        }
+    }
+
+    /// A finite number > 0 (spacings).
+    pub(crate) fn positive(&self, key: &str) -> Result<Option<f64>, DemError> {
+        match self.f64(key)? {
+            Some(x) if x <= 0.0 => Err(self.err(key, format!("must be > 0, found {x}"))),
+            other => Ok(other),
+        }
+    }
+
+    pub(crate) fn bool(&self, key: &str) -> Result<Option<bool>, DemError> {
+        match self.map.get(key) {
+            None => Ok(None),
+            Some(serde_json::Value::Bool(b)) => Ok(Some(*b)),
+            Some(v) => Err(self.wrong_type(key, "true or false", v)),
+        }
+    }
+
+    /// A non-negative integer that fits in `usize`.
+    pub(crate) fn usize(&self, key: &str) -> Result<Option<usize>, DemError> {
+        match self.map.get(key) {
+            None => Ok(None),
+            Some(v) => match v.as_u64().and_then(|x| usize::try_from(x).ok()) {
+                Some(x) => Ok(Some(x)),
+                None => Err(self.wrong_type(key, "a non-negative integer", v)),
+            },
+        }
+    }
+
+    pub(crate) fn str(&self, key: &str) -> Result<Option<&str>, DemError> {
+        match self.map.get(key) {
+            None => Ok(None),
+            Some(serde_json::Value::String(s)) => Ok(Some(s)),
+            Some(v) => Err(self.wrong_type(key, "a string", v)),
+        }
+    }
+}
+
+fn json_type(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::Null => "null".into(),
+        serde_json::Value::Bool(b) => format!("boolean {b}"),
+        serde_json::Value::Number(n) => format!("number {n}"),
+        serde_json::Value::String(_) => "a string".into(),
+        serde_json::Value::Array(_) => "an array".into(),
+        serde_json::Value::Object(_) => "an object".into(),
+    }
+}
+
+/// Spacing for grids without a geo-reference: sidecar values or the 30 m default, plus the
+/// sentence for `spacing_note`.
+pub(crate) fn metric_spacing(sidecar: Option<&Sidecar>) -> Result<(f64, f64, String), DemError> {
+    let sx = match sidecar {
+        Some(s) => s.positive("spacing_x")?,
+        None => None,
+    };
+    let sy = match sidecar {
+        Some(s) => s.positive("spacing_y")?,
+        None => None,
+    };
+    let note = match (sidecar, sx, sy) {
+        (Some(s), Some(x), Some(y)) => format!(
+            "from sidecar {}: {x} m E-W, {y} m N-S",
+            show(s.path())
+        ),
+        (Some(s), x, y) if x.is_some() || y.is_some() => format!(
+            "from sidecar {} with the {DEFAULT_SPACING_M} m default for the missing one: {} m E-W, {} m N-S",
+            show(s.path()),
+            x.unwrap_or(DEFAULT_SPACING_M),
+            y.unwrap_or(DEFAULT_SPACING_M)
+        ),
+        _ => format!(
+            "default {DEFAULT_SPACING_M} m grid (no spacing in the file or a sidecar): {DEFAULT_SPACING_M} m E-W, {DEFAULT_SPACING_M} m N-S"
+        ),
+    };
+    Ok((
+        sx.unwrap_or(DEFAULT_SPACING_M),
+        sy.unwrap_or(DEFAULT_SPACING_M),
+        note,
+    ))
+}

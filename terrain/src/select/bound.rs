@@ -1,0 +1,153 @@
+//! The error bound: tile boxes with the curvature drop, view depths, the vertical-error gain
+//! on screen and the projected error in pixels.
+
+use glam::{DVec2, DVec3};
+
+use crate::camera::{Camera, Frustum};
+use crate::tiles::Aabb;
+
+use super::selection::EARTH_RADIUS_M;
+
+/// Extra vertical error from drawing the curvature drop linearly between vertices: over a cell
+/// of diagonal `w` the chord of d²/2R departs from it by at most w²/8R.
+pub fn curvature_interpolation_error(cell_diagonal_m: f64) -> f64 {
+    cell_diagonal_m * cell_diagonal_m / (8.0 * EARTH_RADIUS_M)
+}
+
+/// Box of a tile in world space, curvature drop included: the drop is d²/2R for the horizontal
+/// distance d from the eye, so the box bottom moves down by the farthest corner's drop (plus the
+/// interpolation slack of the coarsest cell drawn) and the top by the nearest point's.
+pub fn tile_aabb(
+    lo: DVec2,
+    hi: DVec2,
+    min_h: f32,
+    max_h: f32,
+    eye: DVec3,
+    curvature: bool,
+    cell_diagonal_m: f64,
+) -> Aabb {
+    let (mut zlo, mut zhi) = (min_h as f64, max_h as f64);
+    if curvature {
+        let e = eye.truncate();
+        let nearest = e.clamp(lo, hi);
+        let far = DVec2::new(
+            if (e.x - lo.x).abs() > (e.x - hi.x).abs() {
+                lo.x
+            } else {
+                hi.x
+            },
+            if (e.y - lo.y).abs() > (e.y - hi.y).abs() {
+                lo.y
+            } else {
+                hi.y
+            },
+        );
+        let d_min = (nearest - e).length();
+        let d_max = (far - e).length();
+        zhi -= d_min * d_min / (2.0 * EARTH_RADIUS_M);
+        zlo -=
+            d_max * d_max / (2.0 * EARTH_RADIUS_M) + curvature_interpolation_error(cell_diagonal_m);
+    }
+    Aabb {
+        min: DVec3::new(lo.x, lo.y, zlo),
+        max: DVec3::new(hi.x, hi.y, zhi),
+    }
+}
+
+/// Smallest view depth of a box (view depth is linear, so a corner attains it), clamped to the
+/// near plane.
+pub fn min_view_depth(camera: &Camera, aabb: &Aabb) -> f64 {
+    let m = camera.world_to_view();
+    min_depth_of(&aabb.corners().map(|c| m.transform_point3(c)), camera.near)
+}
+
+/// [`min_view_depth`] of corners already in view space.
+pub(super) fn min_depth_of(corners: &[DVec3; 8], near: f64) -> f64 {
+    corners
+        .iter()
+        .map(|c| c.z)
+        .fold(f64::INFINITY, f64::min)
+        .max(near)
+}
+
+/// [`crate::tiles::outside_frustum`] of corners already in view space.
+pub(super) fn outside_of(corners: &[DVec3; 8], f: &Frustum, near: f64) -> bool {
+    let all = |outside: &dyn Fn(&DVec3) -> bool| corners.iter().all(outside);
+    all(&|p| p.z < near)
+        || all(&|p| p.x > f.tan_right * p.z)
+        || all(&|p| p.x < f.tan_left * p.z)
+        || all(&|p| -p.y > f.tan_up * p.z)
+        || all(&|p| -p.y < f.tan_down * p.z)
+}
+
+/// The screen factor of a *vertical* error over the part of a box inside the frustum — the `c`
+/// of DESIGN.md's `ρ = ε·f·c / (z_min − ε)`, tightened for the direction terrain errors have.
+///
+/// A point p (view coordinates, a = x/z, b = y/z) displaced by ε' along the world vertical
+/// (unit w in view space, |ε'| ≤ ε) moves on screen by exactly
+/// `f·|ε'|·|(w_x − a·w_z, w_y − b·w_z)| / (z + ε'·w_z) ≤ f·ε·g / (z_min − ε)`
+/// with `g = max |(w_x − a·w_z, w_y − b·w_z)|` over the (a, b) the box shows. Both squared
+/// components are convex in one variable each, so their maxima over the box's (a, b) ranges —
+/// the corners' ranges clamped to the frustum, a rectangle holding everything visible of the box
+/// — are at range ends. `g ≤ sqrt(1 + a² + b²)` (the largest singular value of
+/// [[1, 0, −a], [0, 1, −b]]), the direction-free obliquity, which looking level at 90° × 59°
+/// overstates the vertical error's projection by up to 1.52×. A corner at or behind the eye
+/// plane falls back to the whole frustum's ranges.
+pub fn box_vertical_gain(camera: &Camera, aabb: &Aabb) -> f64 {
+    let m = camera.world_to_view();
+    let w = camera.world_to_view_rotation() * DVec3::Z;
+    vertical_gain_of(
+        &aabb.corners().map(|c| m.transform_point3(c)),
+        &camera.frustum,
+        w,
+    )
+}
+
+/// [`box_vertical_gain`] of corners already in view space; `w` is the world vertical there.
+pub(super) fn vertical_gain_of(corners: &[DVec3; 8], f: &Frustum, w: DVec3) -> f64 {
+    let (mut a_lo, mut a_hi, mut b_lo, mut b_hi) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for v in corners {
+        if v.z <= 1e-9 {
+            return vertical_gain(w, [f.tan_left, f.tan_right], [-f.tan_up, -f.tan_down]);
+        }
+        let (a, b) = (v.x / v.z, v.y / v.z);
+        (a_lo, a_hi) = (a_lo.min(a), a_hi.max(a));
+        (b_lo, b_hi) = (b_lo.min(b), b_hi.max(b));
+    }
+    // View y is down: b = y/z lies in [−tan_up, −tan_down].
+    let a = [a_lo, a_hi].map(|a| a.clamp(f.tan_left, f.tan_right));
+    let b = [b_lo, b_hi].map(|b| b.clamp(-f.tan_up, -f.tan_down));
+    vertical_gain(w, a, b)
+}
+
+/// [`box_vertical_gain`] over the whole frustum (for boxes not culled against it).
+pub fn frustum_vertical_gain(camera: &Camera) -> f64 {
+    let f = camera.frustum;
+    let w = camera.world_to_view_rotation() * DVec3::Z;
+    vertical_gain(w, [f.tan_left, f.tan_right], [-f.tan_up, -f.tan_down])
+}
+
+fn vertical_gain(w: DVec3, a: [f64; 2], b: [f64; 2]) -> f64 {
+    let gx = a.map(|a| (w.x - a * w.z).powi(2));
+    let gy = b.map(|b| (w.y - b * w.z).powi(2));
+    (gx[0].max(gx[1]) + gy[0].max(gy[1])).sqrt()
+}
+
+/// The projected-error bound in pixels of a vertical error `eps` anywhere in a box whose
+/// smallest view depth is `z_min` (DESIGN.md: ρ = ε·f·c / (z_min − ε)).
+pub fn projected_error_px(eps: f64, z_min: f64, focal_px: f64, obliquity: f64) -> f64 {
+    if eps <= 0.0 {
+        return 0.0;
+    }
+    let z = z_min - eps;
+    if z <= 0.0 {
+        f64::INFINITY
+    } else {
+        eps * focal_px * obliquity / z
+    }
+}

@@ -1,0 +1,480 @@
+//! The selection itself: each level's ring tiles, culled and refined until the bound holds,
+//! or (coarsening) a quadtree over the levels from the coarsest down.
+
+use glam::{DVec2, DVec3};
+
+use crate::bake::ErrorBake;
+use crate::camera::Camera;
+use crate::clipmap::{ring_tiles, ClipmapDesc, LevelPlacement};
+use crate::tiles::Aabb;
+
+use super::bound::{
+    curvature_interpolation_error, frustum_vertical_gain, min_depth_of, outside_of,
+    projected_error_px, tile_aabb, vertical_gain_of,
+};
+use super::selection::{
+    DrawItem, LevelStats, LodMode, SelectParams, Selection, View, MAX_REFINEMENT,
+};
+
+/// Geometry of a dataset the selection needs (from the bake).
+#[derive(Debug, Clone, Copy)]
+struct Grid {
+    q: u32,
+    spacing: DVec2,
+    valid_max: DVec2,
+}
+
+impl Grid {
+    fn of(bake: &ErrorBake) -> Self {
+        Self {
+            q: bake.params.tile_size - 1,
+            spacing: DVec2::new(bake.spacing_x, bake.spacing_y),
+            valid_max: DVec2::new(
+                (bake.valid_width - 1) as f64 * bake.spacing_x,
+                (bake.valid_height - 1) as f64 * bake.spacing_y,
+            ),
+        }
+    }
+
+    /// Horizontal rectangle of a level tile in metres, clipped to the valid data.
+    fn rect(&self, level: u32, tx: u32, ty: u32) -> (DVec2, DVec2) {
+        let side = (self.q as u64) << level;
+        let lo = DVec2::new((tx as u64 * side) as f64, (ty as u64 * side) as f64) * self.spacing;
+        let hi = lo + DVec2::splat(side as f64) * self.spacing;
+        (lo.min(self.valid_max), hi.min(self.valid_max))
+    }
+}
+
+/// Nodes (level, tx, ty).
+type NodeSet = std::collections::HashSet<(u32, u32, u32)>;
+
+/// Whether level-L tile (tx, ty) exists and holds any real (non-padding) sample.
+fn has_terrain(bake: &ErrorBake, level: u32, tx: u32, ty: u32) -> bool {
+    let t = &bake.levels[level as usize];
+    tx < t.tiles_x && ty < t.tiles_y && t.terrain[(ty * t.tiles_x + tx) as usize]
+}
+
+/// Context shared by every tile of a frame.
+struct Frame<'a> {
+    /// Distance mode: nodes split last frame, and the set being filled this frame.
+    split_prev: Option<&'a NodeSet>,
+    split_now: Option<&'a std::cell::RefCell<NodeSet>>,
+    bake: &'a ErrorBake,
+    grid: Grid,
+    views: Vec<ViewCtx<'a>>,
+    params: &'a SelectParams,
+}
+
+/// One channel's camera with what the bound needs from it.
+struct ViewCtx<'a> {
+    camera: &'a Camera,
+    /// World → view, computed once per frame (not per node: the attitude's trigonometry).
+    to_view: glam::DMat4,
+    /// The world vertical in view space.
+    up: DVec3,
+    focal: f64,
+    /// [`frustum_vertical_gain`].
+    vertical_gain: f64,
+    tau: f64,
+}
+
+/// A node as the views see it.
+struct NodeEval {
+    eps: f64,
+    /// Largest ρ (px) among the views that see the node.
+    rho_px: f64,
+    /// Largest ρ/τ among them: the node meets every channel's bound when ≤ 1.
+    rho_norm: f64,
+}
+
+impl Frame<'_> {
+    fn cell_diagonal(&self, level_drawn: u32) -> f64 {
+        (self.grid.spacing * (1u64 << level_drawn) as f64).length()
+    }
+
+    /// ε of level-L tile drawn with refinement r, curvature interpolation included.
+    fn eps(&self, level: u32, tx: u32, ty: u32, r: u32) -> f64 {
+        let mut e = self.bake.eps_refined(level, tx, ty, r) as f64;
+        if self.params.curvature {
+            e += curvature_interpolation_error(self.cell_diagonal(level - r));
+        }
+        e
+    }
+
+    /// ε of the level-ℓ surface over the level-ℓ tile (tx, ty), curvature slack included.
+    fn eps_node(&self, level: u32, tx: u32, ty: u32) -> f64 {
+        self.eps(level, tx, ty, 0)
+    }
+
+    /// The node's box as seen from `eye` (the curvature drop depends on the eye).
+    fn aabb(&self, level: u32, tx: u32, ty: u32, eye: DVec3) -> Aabb {
+        let (lo, hi) = self.grid.rect(level, tx, ty);
+        let (min_h, max_h) = self.bake.bounds(level, tx, ty);
+        tile_aabb(
+            lo,
+            hi,
+            min_h,
+            max_h,
+            eye,
+            self.params.curvature,
+            self.cell_diagonal(level),
+        )
+    }
+
+    /// ε and the projected error in every view that sees the node; `None` when no view does.
+    /// With `cull` false, views that do not see it count too (for level skipping).
+    fn evaluate(&self, level: u32, tx: u32, ty: u32, cull: bool) -> Option<NodeEval> {
+        let eps = self.eps_node(level, tx, ty);
+        let mut seen = false;
+        let (mut rho_px, mut rho_norm) = (0.0f64, 0.0f64);
+        for v in &self.views {
+            let aabb = self.aabb(level, tx, ty, v.camera.position);
+            let corners = aabb.corners().map(|c| v.to_view.transform_point3(c));
+            let f = &v.camera.frustum;
+            if cull && outside_of(&corners, f, v.camera.near) {
+                continue;
+            }
+            seen = true;
+            let z_min = min_depth_of(&corners, v.camera.near);
+            let c = if cull {
+                vertical_gain_of(&corners, f, v.up)
+            } else {
+                v.vertical_gain
+            };
+            let rho = projected_error_px(eps, z_min, v.focal, c);
+            rho_px = rho_px.max(rho);
+            rho_norm = rho_norm.max(rho / v.tau);
+        }
+        seen.then_some(NodeEval {
+            eps,
+            rho_px,
+            rho_norm,
+        })
+    }
+
+    /// Distance LOD: split while the eye is within `distance_factor` node sides of the node's
+    /// box; a node split last frame stays split until 10 % beyond, an unsplit one splits only
+    /// 10 % inside (hysteresis).
+    fn wants_distance_split(&self, level: u32, tx: u32, ty: u32, was_split: bool) -> bool {
+        let side = (self.grid.q as f64) * (1u64 << level) as f64 * self.grid.spacing.max_element();
+        let d = self
+            .views
+            .iter()
+            .map(|v| {
+                let p = v.camera.position;
+                let aabb = self.aabb(level, tx, ty, p);
+                (p.clamp(aabb.min, aabb.max) - p).length()
+            })
+            .fold(f64::INFINITY, f64::min);
+        let threshold = self.params.distance_factor * side;
+        if was_split {
+            d < threshold * 1.1
+        } else {
+            d < threshold * 0.9
+        }
+    }
+
+    /// Splits node (ℓ, tx, ty) of a ring tile until every part meets τ or reaches `finest`;
+    /// culled parts are dropped. Appends (ℓ, tx, ty, ε, ρ) and returns how many nodes miss τ.
+    fn subdivide(
+        &self,
+        level: u32,
+        tx: u32,
+        ty: u32,
+        finest: u32,
+        out: &mut Vec<(u32, u32, u32, f32, f32)>,
+    ) -> u32 {
+        let Some(NodeEval {
+            eps: e,
+            rho_px: rho,
+            rho_norm,
+        }) = self.evaluate(level, tx, ty, true)
+        else {
+            return 0;
+        };
+        let split = match self.params.mode {
+            LodMode::Full => true,
+            LodMode::Distance => {
+                let key = (level, tx, ty);
+                let was_split = self.split_prev.is_some_and(|s| s.contains(&key));
+                let want = self.wants_distance_split(level, tx, ty, was_split);
+                if want && level > finest {
+                    if let Some(s) = self.split_now {
+                        s.borrow_mut().insert(key);
+                    }
+                }
+                want
+            }
+            _ => rho_norm > 1.0,
+        };
+        if !split || level == finest {
+            out.push((level, tx, ty, e as f32, rho as f32));
+            return (rho_norm > 1.0 && self.params.mode == LodMode::Bounded) as u32;
+        }
+        let mut missed = 0;
+        for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let (cx, cy) = (2 * tx + dx, 2 * ty + dy);
+            if has_terrain(self.bake, level - 1, cx, cy) {
+                missed += self.subdivide(level - 1, cx, cy, finest, out);
+            }
+        }
+        missed
+    }
+}
+
+/// Selects the tiles to draw for one camera. `placements` come from `clipmap::place_levels`
+/// (finest first). Reuses `out`'s allocations.
+pub fn select_tiles(
+    bake: &ErrorBake,
+    desc: &ClipmapDesc,
+    placements: &[LevelPlacement],
+    camera: &Camera,
+    viewport: (u32, u32),
+    params: &SelectParams,
+    out: &mut Selection,
+) {
+    let view = View {
+        camera,
+        viewport,
+        tau_px: params.tau_px,
+    };
+    select_tiles_multi(bake, desc, placements, &[view], params, out);
+}
+
+/// One selection for several channels (DESIGN.md "Multi-channel"; issue 7): a tile is drawn
+/// when any channel sees it, at the resolution the most demanding channel that sees it needs
+/// (largest ρ/τ) — so a tile never differs between two adjacent channels and seams match.
+pub fn select_tiles_multi(
+    bake: &ErrorBake,
+    desc: &ClipmapDesc,
+    placements: &[LevelPlacement],
+    views: &[View],
+    params: &SelectParams,
+    out: &mut Selection,
+) {
+    out.items.clear();
+    out.levels.clear();
+    out.levels.resize(placements.len(), LevelStats::default());
+    out.unbounded = 0;
+    if views.is_empty() {
+        return;
+    }
+    let views: Vec<ViewCtx> = views
+        .iter()
+        .map(|v| {
+            let (fx, fy) = v.camera.frustum.focal_px(v.viewport.0, v.viewport.1);
+            ViewCtx {
+                camera: v.camera,
+                to_view: v.camera.world_to_view(),
+                up: v.camera.world_to_view_rotation() * DVec3::Z,
+                focal: fx.max(fy),
+                vertical_gain: frustum_vertical_gain(v.camera),
+                tau: v.tau_px,
+            }
+        })
+        .collect();
+    let split_prev = std::mem::take(&mut out.split);
+    let split_now = std::cell::RefCell::new(std::collections::HashSet::new());
+    let distance = params.mode == LodMode::Distance;
+    let frame = Frame {
+        split_prev: distance.then_some(&split_prev),
+        split_now: distance.then_some(&split_now),
+        bake,
+        grid: Grid::of(bake),
+        views,
+        params,
+    };
+
+    if params.mode == LodMode::Bounded && params.coarsen {
+        select_coarsest_first(&frame, placements, out);
+        out.split = split_now.into_inner();
+        return;
+    }
+    let finest = if params.mode == LodMode::Bounded {
+        finest_needed_level(&frame, placements)
+    } else {
+        0
+    };
+    out.finest_level = finest;
+    for s in out.levels.iter_mut().take(finest as usize) {
+        s.skipped = true;
+    }
+
+    let mut ring = Vec::new();
+    let mut nodes = Vec::new();
+    for (i, placement) in placements.iter().enumerate().skip(finest as usize) {
+        let finer = (i > finest as usize).then(|| &placements[i - 1]);
+        ring.clear();
+        ring_tiles(desc, placement, finer, &mut ring);
+        let level = placement.level;
+        for &[tx, ty] in &ring {
+            if !has_terrain(bake, level, tx, ty) {
+                continue;
+            }
+            out.levels[i].considered += 1;
+            let Some(NodeEval {
+                eps,
+                rho_px: rho,
+                rho_norm,
+            }) = frame.evaluate(level, tx, ty, true)
+            else {
+                out.levels[i].culled += 1;
+                continue;
+            };
+            out.levels[i].drawn += 1;
+            if params.mode == LodMode::Clipmap
+                || (params.mode == LodMode::Bounded && rho_norm <= 1.0)
+            {
+                out.levels[i].refined[0] += 1;
+                out.levels[i].nodes += 1;
+                out.items
+                    .push(DrawItem::whole(level, tx, ty, eps as f32, rho as f32));
+                continue;
+            }
+            refine_ring_tile(&frame, level, tx, ty, i, &mut nodes, out);
+        }
+    }
+    out.split = split_now.into_inner();
+}
+
+/// Draws ring tile (level, tx, ty) — which the finer levels do not cover — as a quadtree of
+/// nodes from one pool slot (refinement up to the cap), each split while it misses τ.
+fn refine_ring_tile(
+    frame: &Frame,
+    level: u32,
+    tx: u32,
+    ty: u32,
+    level_index: usize,
+    nodes: &mut Vec<(u32, u32, u32, f32, f32)>,
+    out: &mut Selection,
+) {
+    let cap = frame.params.max_refinement.min(level).min(MAX_REFINEMENT);
+    nodes.clear();
+    out.unbounded += frame.subdivide(level, tx, ty, level - cap, nodes);
+    let r = nodes.iter().map(|n| level - n.0).max().unwrap_or(0);
+    let stats = &mut out.levels[level_index];
+    stats.refined[r as usize] += 1;
+    stats.nodes += nodes.len() as u32;
+    for &(node_level, node_tx, node_ty, eps_m, rho_px) in nodes.iter() {
+        out.items.push(DrawItem {
+            level,
+            tx,
+            ty,
+            refinement: r,
+            node_level,
+            node_tx,
+            node_ty,
+            eps_m,
+            rho_px,
+        });
+    }
+}
+
+/// `Bounded` with [`SelectParams::coarsen`]: a quadtree over the clipmap levels. Every
+/// coarsest-level tile is a root; a node that meets τ is drawn from its own level's texture;
+/// one that misses it is split into its four children when the next finer level's patch holds
+/// them (the patches nest with even origins, so a tile is wholly inside or outside it), else it
+/// is a ring tile of its level and is refined from the pools. The result covers the same ground
+/// as the ring-by-ring selection, each part by one node meeting τ (or unbounded at the cap),
+/// at the coarsest level that does.
+fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut Selection) {
+    let Some(coarsest) = placements.last() else {
+        return;
+    };
+    let roots = &frame.bake.levels[coarsest.level as usize];
+    let mut nodes = Vec::new();
+    let top = placements.len() - 1;
+    let mut stack: Vec<(usize, u32, u32)> = (0..roots.tiles_y)
+        .rev()
+        .flat_map(|ty| (0..roots.tiles_x).rev().map(move |tx| (top, tx, ty)))
+        .collect();
+    while let Some((i, tx, ty)) = stack.pop() {
+        let level = placements[i].level;
+        if !has_terrain(frame.bake, level, tx, ty) {
+            continue;
+        }
+        // A split node is not a tile of its own: `considered` counts drawn + culled.
+        let Some(NodeEval {
+            eps,
+            rho_px: rho,
+            rho_norm,
+        }) = frame.evaluate(level, tx, ty, true)
+        else {
+            out.levels[i].considered += 1;
+            out.levels[i].culled += 1;
+            continue;
+        };
+        if rho_norm <= 1.0 {
+            let stats = &mut out.levels[i];
+            stats.considered += 1;
+            stats.drawn += 1;
+            stats.refined[0] += 1;
+            stats.nodes += 1;
+            out.items
+                .push(DrawItem::whole(level, tx, ty, eps as f32, rho as f32));
+            continue;
+        }
+        if i > 0 && inside_patch(&placements[i - 1], 2 * tx, 2 * ty) {
+            // Children in the finer patch: descend (pushed so that they pop south-west first).
+            for (dx, dy) in [(1, 1), (0, 1), (1, 0), (0, 0)] {
+                stack.push((i - 1, 2 * tx + dx, 2 * ty + dy));
+            }
+            continue;
+        }
+        out.levels[i].considered += 1;
+        out.levels[i].drawn += 1;
+        refine_ring_tile(frame, level, tx, ty, i, &mut nodes, out);
+    }
+    let drawn_levels = out.levels.iter().position(|l| l.drawn > 0);
+    out.finest_level = drawn_levels.unwrap_or(0) as u32;
+    for s in out.levels.iter_mut() {
+        s.skipped = s.drawn == 0;
+    }
+}
+
+/// Whether level-ℓ tile (tx, ty) lies in `placement`'s patch (ℓ = placement.level).
+fn inside_patch(placement: &LevelPlacement, tx: u32, ty: u32) -> bool {
+    let n = placement.patch_tiles as i64;
+    let [ox, oy] = placement.patch_origin;
+    (ox..ox + n).contains(&(tx as i64)) && (oy..oy + n).contains(&(ty as i64))
+}
+
+/// The finest level worth drawing: level L is skipped when every level-(L+1) tile under its
+/// patch already meets τ unrefined from where the eye is — drawing L would add triangles and
+/// no accuracy. Skipping never breaks the bound: the coarser level then covers that area and
+/// refines where it must.
+fn finest_needed_level(frame: &Frame, placements: &[LevelPlacement]) -> u32 {
+    let coarsest = placements.len().saturating_sub(1);
+    for i in 0..coarsest {
+        let patch = &placements[i];
+        let next = &placements[i + 1];
+        let lvl = next.level;
+        let (t0x, t0y) = (
+            patch.patch_origin[0].div_euclid(2),
+            patch.patch_origin[1].div_euclid(2),
+        );
+        let n = (patch.patch_tiles / 2) as i64;
+        let table = &frame.bake.levels[lvl as usize];
+        let (tiles_x, tiles_y) = (table.tiles_x, table.tiles_y);
+        let mut all_fine = true;
+        'tiles: for ty in t0y.max(0)..(t0y + n).min(tiles_y as i64) {
+            for tx in t0x.max(0)..(t0x + n).min(tiles_x as i64) {
+                let (tx, ty) = (tx as u32, ty as u32);
+                if !has_terrain(frame.bake, lvl, tx, ty) {
+                    continue;
+                }
+                let needs_more = frame
+                    .evaluate(lvl, tx, ty, false)
+                    .is_some_and(|n| n.rho_norm > 1.0);
+                if needs_more {
+                    all_fine = false;
+                    break 'tiles;
+                }
+            }
+        }
+        if !all_fine {
+            return i as u32;
+        }
+    }
+    coarsest as u32
+}

@@ -1,0 +1,218 @@
+use glam::{DVec2, DVec3};
+
+use super::bound::outside_of;
+use super::*;
+use crate::camera::{Attitude, Camera, Frustum};
+use crate::clipmap::ClipmapDesc;
+use crate::tiles::Aabb;
+
+#[test]
+fn projected_error_is_monotonic_and_infinite_inside_the_error() {
+    let f = 960.0;
+    let c = 1.5;
+    let a = projected_error_px(1.0, 1000.0, f, c);
+    assert!((a - 1.0 * 960.0 * 1.5 / 999.0).abs() < 1e-12);
+    assert!(projected_error_px(1.0, 2000.0, f, c) < a);
+    assert!(projected_error_px(2.0, 1000.0, f, c) > a);
+    assert_eq!(projected_error_px(5.0, 5.0, f, c), f64::INFINITY);
+    assert_eq!(projected_error_px(0.0, 0.5, f, c), 0.0);
+}
+
+/// Distance LOD keeps its previous decision inside the ±10 % band: the same camera position
+/// selects different nodes when approached from near than from far.
+#[test]
+fn distance_mode_has_hysteresis() {
+    use crate::bake::{bake, BakeParams};
+    use crate::clipmap::place_levels;
+    use crate::dataset::Dataset;
+    use crate::Heightfield;
+    let n = 257;
+    let hf = Heightfield {
+        width: n,
+        height: n,
+        spacing_x: 10.0,
+        spacing_y: 10.0,
+        heights: (0..n * n)
+            .map(|k| ((k % n) as f32 * 0.3).sin() * 20.0)
+            .collect(),
+        geo: None,
+        voids_filled: 0,
+        spacing_note: String::new(),
+    };
+    let ds = Dataset::from_heightfield(hf, "t".into());
+    let b = bake(
+        &ds,
+        BakeParams {
+            tile_size: 17,
+            levels: 0,
+        },
+        &|_, _| {},
+    );
+    let desc = ClipmapDesc {
+        tile_quads: 16,
+        patch_tiles: 8,
+        margin_tiles: 2,
+        width: n as u32,
+        height: n as u32,
+    };
+    let params = SelectParams {
+        mode: LodMode::Distance,
+        coarsen: false,
+        ..SelectParams::default()
+    };
+    let run = |heights: &[f64]| {
+        let mut sel = Selection::default();
+        for &z in heights {
+            let cam = Camera::new(
+                DVec3::new(1280.0, 1280.0, z),
+                Attitude::from_degrees(0.0, -89.0, 0.0),
+                Frustum::symmetric(170f64.to_radians(), 64, 64),
+            );
+            let placements = place_levels(&desc, [128.0, 128.0]);
+            select_tiles(&b, &desc, &placements, &cam, (64, 64), &params, &mut sel);
+        }
+        sel.items.len()
+    };
+    // Level-1 ring tiles are 320 m wide: split below 3 × 320 = 960 m (± 10 %). The nearest
+    // ones are 640 m away horizontally, so at 716 m up the eye is 960 m from them.
+    let from_near = run(&[100.0, 700.0, 716.0]);
+    let from_far = run(&[5000.0, 800.0, 716.0]);
+    assert!(from_near > from_far, "near {from_near} vs far {from_far}");
+    // Far outside the band, history does not matter.
+    assert_eq!(run(&[100.0, 30_000.0]), run(&[30_000.0]));
+}
+
+/// The tightened factor is never above the direction-free obliquity, and the bound it gives
+/// holds by brute force: random cameras and boxes, random visible points in the box moved
+/// vertically by up to ε, the exact screen displacement never exceeds ε·f·g/(z_min − ε).
+#[test]
+fn vertical_gain_bounds_vertical_errors_on_screen() {
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut rnd = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let (w, h) = (320u32, 180u32);
+    let mut checked = 0;
+    let mut tightest: f64 = 0.0;
+    for _ in 0..400 {
+        let cam = Camera::new(
+            DVec3::new(0.0, 0.0, 1000.0),
+            Attitude::from_degrees(rnd() * 360.0, rnd() * 180.0 - 90.0, rnd() * 360.0 - 180.0),
+            Frustum::symmetric((20.0 + rnd() * 140.0).to_radians(), w, h),
+        );
+        let lo = DVec3::new(
+            rnd() * 8000.0 - 4000.0,
+            rnd() * 8000.0 - 4000.0,
+            rnd() * 900.0,
+        );
+        let size = DVec3::new(50.0 + rnd() * 2000.0, 50.0 + rnd() * 2000.0, rnd() * 300.0);
+        let aabb = Aabb {
+            min: lo,
+            max: lo + size,
+        };
+        let g = box_vertical_gain(&cam, &aabb);
+        // The per-frame fast path agrees with the public functions.
+        let corners = aabb
+            .corners()
+            .map(|c| cam.world_to_view().transform_point3(c));
+        assert_eq!(
+            outside_of(&corners, &cam.frustum, cam.near),
+            crate::tiles::outside_frustum(&cam, &aabb)
+        );
+        assert!(g <= box_obliquity_reference(&cam, &aabb) + 1e-12);
+        let (fx, fy) = cam.frustum.focal_px(w, h);
+        let eps = 1.0 + rnd() * 20.0;
+        let z_min = min_view_depth(&cam, &aabb);
+        let bound = projected_error_px(eps, z_min, fx.max(fy), g);
+        for _ in 0..50 {
+            let p = aabb.min + (aabb.max - aabb.min) * DVec3::new(rnd(), rnd(), rnd());
+            let Some((s0, _)) = cam.project_px(p, w, h) else {
+                continue;
+            };
+            if !(0.0..=w as f64).contains(&s0.x) || !(0.0..=h as f64).contains(&s0.y) {
+                continue;
+            }
+            let e = eps * (2.0 * rnd() - 1.0);
+            let q = p + DVec3::new(0.0, 0.0, e);
+            let Some((s1, _)) = cam.project_px(q, w, h) else {
+                continue;
+            };
+            let moved = (s1 - s0).length();
+            assert!(
+                moved <= bound * (1.0 + 1e-9),
+                "moved {moved} px > bound {bound} px"
+            );
+            tightest = tightest.max(moved / bound);
+            checked += 1;
+        }
+    }
+    assert!(checked > 1000, "only {checked} visible samples");
+    // Not vacuous: some samples come close to the bound.
+    assert!(tightest > 0.5, "tightest {tightest}");
+}
+
+/// The direction-free factor sqrt(1 + a² + b²) over the box's clamped (a, b) ranges.
+fn box_obliquity_reference(camera: &Camera, aabb: &Aabb) -> f64 {
+    let f = camera.frustum;
+    let m = camera.world_to_view();
+    let (mut a, mut b) = (0.0f64, 0.0f64);
+    for c in aabb.corners() {
+        let v = m.transform_point3(c);
+        if v.z <= 1e-9 {
+            return f.max_obliquity();
+        }
+        a = a.max((v.x / v.z).clamp(f.tan_left, f.tan_right).abs());
+        b = b.max((v.y / v.z).clamp(-f.tan_up, -f.tan_down).abs());
+    }
+    (1.0 + a * a + b * b).sqrt()
+}
+
+#[test]
+fn skirts_reach_the_roughest_neighbour() {
+    // Level 1 node (0, 0) covers level-0 (0..2, 0..2); two level-0 nodes east of it at
+    // (2, 0) and (2, 1), and a level-0 node (3, 0) east of those; one far away.
+    let nodes = [
+        (1, 0, 0, 8.0),
+        (0, 2, 0, 1.0),
+        (0, 2, 1, 0.5),
+        (0, 3, 0, 2.0),
+        (0, 9, 9, 0.25),
+    ];
+    let m = neighbour_eps(&nodes);
+    assert_eq!(m[0], 8.0, "the coarse node is the roughest itself");
+    assert_eq!(m[1], 8.0, "fine next to coarse: T-junction");
+    assert_eq!(m[2], 8.0);
+    assert_eq!(m[3], 2.0, "same-level neighbour (2, 0) has less");
+    assert_eq!(m[4], 0.25, "no neighbours");
+    // A fine node rougher than its coarse neighbour raises the coarse one.
+    let m = neighbour_eps(&[(1, 0, 0, 1.0), (0, 2, 1, 5.0)]);
+    assert_eq!(m, vec![5.0, 5.0]);
+}
+
+#[test]
+fn curvature_lowers_the_box_by_the_far_drop() {
+    let eye = DVec3::new(0.0, 0.0, 1000.0);
+    let lo = DVec2::new(10_000.0, -500.0);
+    let hi = DVec2::new(20_000.0, 500.0);
+    let flat = tile_aabb(lo, hi, 100.0, 200.0, eye, false, 10.0);
+    let curved = tile_aabb(lo, hi, 100.0, 200.0, eye, true, 10.0);
+    assert_eq!(flat.min.z, 100.0);
+    let far = (20_000f64.powi(2) + 500f64.powi(2)) / (2.0 * EARTH_RADIUS_M);
+    let near = 10_000f64.powi(2) / (2.0 * EARTH_RADIUS_M);
+    assert!((curved.min.z - (100.0 - far - 100.0 / (8.0 * EARTH_RADIUS_M))).abs() < 1e-9);
+    assert!((curved.max.z - (200.0 - near)).abs() < 1e-9);
+    // Eye above the tile: nearest distance is 0, the top does not move.
+    let above = tile_aabb(
+        lo,
+        hi,
+        100.0,
+        200.0,
+        DVec3::new(15_000.0, 0.0, 900.0),
+        true,
+        10.0,
+    );
+    assert_eq!(above.max.z, 200.0);
+}
