@@ -92,3 +92,27 @@ pub struct UploadStats {
     pub submissions: u32,
     pub levels: u32,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_row_has_one_field_per_header_column_in_order() {
+        let s = FrameStats {
+            frame: 7,
+            tiles_by_refinement: [1, 2, 3, 4, 5, 6, 8],
+            gpu_terrain_ms: 1.5,
+            ..Default::default()
+        };
+        let header: Vec<&str> = FrameStats::CSV_HEADER.split(',').collect();
+        let row = s.csv_row();
+        let fields: Vec<&str> = row.split(',').collect();
+        assert_eq!(header.len(), fields.len());
+        let at = |name: &str| fields[header.iter().position(|h| *h == name).unwrap()];
+        assert_eq!(at("frame"), "7");
+        assert_eq!(at("refined_r0"), "1");
+        assert_eq!(at("refined_r6"), "8");
+        assert_eq!(at("gpu_terrain_ms"), "1.500");
+    }
+}
