@@ -5,7 +5,8 @@
 //!   function) into a small RGBA8 panel on an opaque dark background.
 //! - The panel is staged through the frame's staging ring and copied with
 //!   `vkCmdCopyBufferToImage` into the top-left corner of the offscreen colour target after the
-//!   terrain pass and before the read-back or the blit to the swapchain ([`record_panel_copy`]),
+//!   terrain pass and before the read-back or the blit to the swapchain
+//!   (`render::overlay_pass::record_panel_copy`),
 //!   so it appears in PNGs and on screen alike and costs one small copy per frame.
 //! - A copy cannot blend: the background is opaque (the panel covers ~1–2 % of a frame). The
 //!   statistics shown are those of the previous frame of the same channel: the panel is uploaded
@@ -13,11 +14,8 @@
 
 use std::collections::VecDeque;
 
-use ash::vk;
-
-use crate::render::frame::FrameStats;
-use crate::vk::image::transition;
-use crate::vk::Device;
+pub use crate::render::overlay_pass::Panel;
+use crate::render::stats::FrameStats;
 
 /// Glyph cell: 5 columns × 7 rows.
 pub const GLYPH_W: u32 = 5;
@@ -146,30 +144,6 @@ pub fn glyph(c: char) -> [u8; 5] {
         // En and em dashes ("no value") look like a hyphen.
         '–' | '—' => FONT['-' as usize - 0x20],
         _ => UNKNOWN,
-    }
-}
-
-/// An RGBA8 picture, rows top to bottom.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Panel {
-    pub width: u32,
-    pub height: u32,
-    pub rgba: Vec<u8>,
-}
-
-impl Panel {
-    pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {
-        let o = ((y * self.width + x) * 4) as usize;
-        [
-            self.rgba[o],
-            self.rgba[o + 1],
-            self.rgba[o + 2],
-            self.rgba[o + 3],
-        ]
-    }
-
-    pub fn bytes(&self) -> u64 {
-        self.rgba.len() as u64
     }
 }
 
@@ -370,62 +344,6 @@ impl OverlayState {
         let (w, h) = panel_size(&lines, s);
         Some(rasterise(&lines, w.min(target.0), h.min(target.1), s))
     }
-}
-
-/// Records the copy of `panel` (staged at `offset` of `src`) into the top-left corner of the
-/// colour target `image`, which is in COLOR_ATTACHMENT_OPTIMAL after the terrain pass; leaves it
-/// in that layout so the read-back or present blit that follows is unchanged. The image needs
-/// TRANSFER_DST usage. The copy is clipped to `extent`.
-pub fn record_panel_copy(
-    device: &Device,
-    cmd: vk::CommandBuffer,
-    src: vk::Buffer,
-    offset: u64,
-    image: vk::Image,
-    extent: (u32, u32),
-    panel: &Panel,
-) {
-    let (w, h) = (panel.width.min(extent.0), panel.height.min(extent.1));
-    if w == 0 || h == 0 {
-        return;
-    }
-    let colour = vk::ImageAspectFlags::COLOR;
-    let attachment = (
-        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-        vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT,
-        vk::AccessFlags::COLOR_ATTACHMENT_WRITE,
-    );
-    let transfer = (
-        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-        vk::PipelineStageFlags::TRANSFER,
-        vk::AccessFlags::TRANSFER_WRITE,
-    );
-    transition(device, cmd, image, colour, attachment, transfer);
-    let region = vk::BufferImageCopy::default()
-        .buffer_offset(offset)
-        .buffer_row_length(panel.width)
-        .buffer_image_height(panel.height)
-        .image_subresource(vk::ImageSubresourceLayers {
-            aspect_mask: colour,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        })
-        .image_extent(vk::Extent3D {
-            width: w,
-            height: h,
-            depth: 1,
-        });
-    unsafe {
-        device.raw.cmd_copy_buffer_to_image(
-            cmd,
-            src,
-            image,
-            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            &[region],
-        )
-    };
-    transition(device, cmd, image, colour, transfer, attachment);
 }
 
 #[cfg(test)]

@@ -24,7 +24,9 @@ impl Buffer {
             .size(size.max(4))
             .usage(usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: `device` is live and `info` outlives the call.
         let raw = unsafe { device.raw.create_buffer(&info, None) }.call("vkCreateBuffer")?;
+        // SAFETY: `raw` was just created on `device`.
         let requirements = unsafe { device.raw.get_buffer_memory_requirements(raw) };
         let allocation = device.allocator().allocate(&AllocationCreateDesc {
             name,
@@ -36,6 +38,7 @@ impl Buffer {
         let allocation = match allocation {
             Ok(a) => a,
             Err(source) => {
+                // SAFETY: `raw` is unbound and unused, created just above.
                 unsafe { device.raw.destroy_buffer(raw, None) };
                 return Err(VkError::Allocation {
                     what: name.into(),
@@ -43,6 +46,7 @@ impl Buffer {
                 });
             }
         };
+        // SAFETY: `allocation` was made for `raw`'s requirements and is not bound elsewhere.
         let bound = unsafe {
             device
                 .raw
@@ -50,6 +54,7 @@ impl Buffer {
         };
         if let Err(result) = bound {
             let _ = device.allocator().free(allocation);
+            // SAFETY: `raw` was never used by the GPU (binding failed).
             unsafe { device.raw.destroy_buffer(raw, None) };
             return Err(VkError::Call {
                 call: "vkBindBufferMemory",
@@ -72,9 +77,14 @@ impl Buffer {
         self.allocation.as_mut()?.mapped_slice_mut()
     }
 
+    /// Frees the buffer once no submission can use it: after the device is idle, or — for a
+    /// per-frame buffer replaced while frames are in flight — through the frame context's
+    /// deferred-destroy list (`FrameContext::defer_destroy`). Idempotent.
     pub fn destroy(&mut self, device: &Device) {
         if let Some(a) = self.allocation.take() {
             let _ = device.allocator().free(a);
+            // SAFETY: no pending submission uses the buffer (the caller's contract above), and
+            // taking the allocation makes this run once per buffer.
             unsafe { device.raw.destroy_buffer(self.raw, None) };
             self.raw = vk::Buffer::null();
         }

@@ -3,6 +3,7 @@
 
 use ash::vk;
 
+use super::frame_slot::SignalledFrame;
 use super::{Device, VkError, VkResultExt, FRAMES_IN_FLIGHT};
 
 pub struct FrameDescriptorPools {
@@ -21,6 +22,7 @@ impl FrameDescriptorPools {
             let info = vk::DescriptorPoolCreateInfo::default()
                 .max_sets(max_sets)
                 .pool_sizes(sizes);
+            // SAFETY: `device` is live and `info` (with `sizes`) outlives the call.
             match unsafe { device.raw.create_descriptor_pool(&info, None) } {
                 Ok(p) => this.pools.push(p),
                 Err(result) => {
@@ -35,33 +37,42 @@ impl FrameDescriptorPools {
         Ok(this)
     }
 
-    /// Frees every set of frame `frame`'s pool. Only call after that frame's fence signaled.
-    pub fn reset(&self, device: &Device, frame: usize) -> Result<(), VkError> {
+    /// Frees every set of `frame`'s pool: no submission that bound them is in flight.
+    pub fn reset(&self, device: &Device, frame: &SignalledFrame) -> Result<(), VkError> {
+        let pool = self.pools[frame.index()];
+        // SAFETY: `frame`'s fence has signalled (the token says so), so no command buffer that
+        // uses a set of this pool is pending; the pool is live.
         unsafe {
             device
                 .raw
-                .reset_descriptor_pool(self.pools[frame], vk::DescriptorPoolResetFlags::empty())
+                .reset_descriptor_pool(pool, vk::DescriptorPoolResetFlags::empty())
         }
         .call("vkResetDescriptorPool")
     }
 
+    /// A set of `layout` from `frame`'s pool, valid until that frame's pool is next reset.
     pub fn allocate(
         &self,
         device: &Device,
-        frame: usize,
+        frame: &SignalledFrame,
         layout: vk::DescriptorSetLayout,
     ) -> Result<vk::DescriptorSet, VkError> {
         let layouts = [layout];
         let info = vk::DescriptorSetAllocateInfo::default()
-            .descriptor_pool(self.pools[frame])
+            .descriptor_pool(self.pools[frame.index()])
             .set_layouts(&layouts);
+        // SAFETY: the pool and `layout` are live; only the thread holding `frame` allocates
+        // from this pool (pools are externally synchronised).
         unsafe { device.raw.allocate_descriptor_sets(&info) }
             .call("vkAllocateDescriptorSets")
             .map(|s| s[0])
     }
 
+    /// Call after the device is idle.
     pub fn destroy(&mut self, device: &Device) {
         for p in self.pools.drain(..) {
+            // SAFETY: the device is idle (caller), so no set of `p` is in use; `p` is dropped
+            // from the list, so it is destroyed once.
             unsafe { device.raw.destroy_descriptor_pool(p, None) };
         }
     }

@@ -1,57 +1,203 @@
-//! Per-frame-in-flight command recording state: a command pool, its one primary command buffer
-//! and the fence that says the GPU is done with everything the frame used.
+//! Frames in flight (kajiya's `DeviceFrame`, Granite's frame context): [`FrameRing`] owns every
+//! per-frame resource — command pool and buffer, fence, staging region, descriptor pool,
+//! timestamp queries and a deferred-destroy list — and [`FrameRing::begin_frame`] hands out a
+//! [`FrameContext`] for the next frame only once that frame's fence has signalled. The context
+//! is the one thing that carries the frame-in-flight index; submitting consumes it.
+//!
+//! Invariants:
+//! - a frame's staging region, descriptor pool and queries are reset only while its
+//!   [`SignalledFrame`] is held, i.e. after its fence was waited for and before its next submit;
+//! - a buffer handed to [`FrameContext::defer_destroy`] is destroyed the next time that frame's
+//!   fence is seen signalled (or at [`FrameRing::destroy`]), never while a submission may use it;
+//! - timestamps are read only from a submission that wrote them ([`FrameContext::reset_timestamps`]
+//!   marks it), once, after its fence.
 
 use ash::vk;
 
-use super::{Device, VkError, VkResultExt, FRAMES_IN_FLIGHT};
+use super::descriptors::FrameDescriptorPools;
+use super::frame_slot::SignalledFrame;
+use super::staging::StagingRing;
+use super::timestamps::{GpuTimer, Pass, PassTimes};
+use super::{Buffer, Device, VkError, VkResultExt, FRAMES_IN_FLIGHT};
 
-pub struct FrameContext {
-    pub pool: vk::CommandPool,
-    pub cmd: vk::CommandBuffer,
+/// The command recording state of one frame in flight.
+struct InFlight {
+    pool: vk::CommandPool,
+    cmd: vk::CommandBuffer,
     /// Signaled by the queue when this frame's submission completes; waited by the CPU before
-    /// the frame's command buffer, staging region, descriptor pool and queries are reused.
-    /// Created signaled so the first wait returns at once.
-    pub fence: vk::Fence,
-    /// Whether the last submission of this context wrote timestamps that were not read yet.
-    pub submitted: bool,
+    /// anything the frame used is reused. Created signaled so the first wait returns at once.
+    fence: vk::Fence,
+    /// The last submission wrote this frame's timestamp queries and they were not read yet.
+    timestamps_pending: bool,
+    /// Objects the last submission may still use, destroyed once `fence` has signalled.
+    deferred: Vec<Buffer>,
 }
 
-pub struct FrameContexts {
-    pub frames: Vec<FrameContext>,
+/// Every per-frame-in-flight resource, one set per frame.
+pub struct FrameRing {
+    frames: Vec<InFlight>,
     next: usize,
+    staging: StagingRing,
+    descriptors: FrameDescriptorPools,
+    timer: GpuTimer,
 }
 
-impl FrameContexts {
-    pub fn new(device: &Device) -> Result<Self, VkError> {
-        let mut this = Self {
-            frames: Vec::new(),
-            next: 0,
+/// A frame submitted and perhaps still in flight; [`FrameRing::wait`] blocks on it.
+#[must_use = "wait for the frame, or drop it to leave it in flight"]
+#[derive(Debug)]
+pub struct Submitted {
+    index: usize,
+}
+
+/// Exclusive access to one frame's resources, handed out once its fence has signalled.
+pub struct FrameContext<'a> {
+    ring: &'a mut FrameRing,
+    frame: SignalledFrame,
+    /// GPU pass times of this context's previous submission, when it was timed and not read.
+    previous_gpu_ms: Option<PassTimes>,
+    timed: bool,
+}
+
+impl FrameRing {
+    /// `staging_budget` bytes per frame; each frame's descriptor pool holds `max_sets` sets of
+    /// the given descriptor counts.
+    pub fn new(
+        device: &Device,
+        staging_budget: u64,
+        max_sets: u32,
+        sizes: &[vk::DescriptorPoolSize],
+    ) -> Result<Self, VkError> {
+        let mut frames = Vec::new();
+        let fail = |device: &Device, frames: &mut Vec<InFlight>| {
+            for f in frames.drain(..) {
+                f.destroy(device);
+            }
         };
         for _ in 0..FRAMES_IN_FLIGHT {
-            match Self::create_one(device) {
-                Ok(f) => this.frames.push(f),
+            match InFlight::new(device) {
+                Ok(f) => frames.push(f),
                 Err(e) => {
-                    this.destroy(device);
+                    fail(device, &mut frames);
                     return Err(e);
                 }
             }
         }
-        Ok(this)
+        let mut staging = match StagingRing::new(device, staging_budget) {
+            Ok(s) => s,
+            Err(e) => {
+                fail(device, &mut frames);
+                return Err(e);
+            }
+        };
+        let mut descriptors = match FrameDescriptorPools::new(device, max_sets, sizes) {
+            Ok(d) => d,
+            Err(e) => {
+                staging.destroy(device);
+                fail(device, &mut frames);
+                return Err(e);
+            }
+        };
+        let timer = match GpuTimer::new(device) {
+            Ok(t) => t,
+            Err(e) => {
+                descriptors.destroy(device);
+                staging.destroy(device);
+                fail(device, &mut frames);
+                return Err(e);
+            }
+        };
+        Ok(Self {
+            frames,
+            next: 0,
+            staging,
+            descriptors,
+            timer,
+        })
     }
 
-    fn create_one(device: &Device) -> Result<FrameContext, VkError> {
+    /// Bytes one frame may stage (the size of one staging region).
+    pub fn staging_budget(&self) -> u64 {
+        self.staging.budget()
+    }
+
+    /// Alignment of every staging allocation.
+    pub fn staging_alignment(&self) -> u64 {
+        self.staging.alignment()
+    }
+
+    /// Waits for the next frame's fence, then: destroys its deferred objects, reads the
+    /// timestamps its last submission wrote, opens its staging region and resets its descriptor
+    /// pool, and hands out its context.
+    pub fn begin_frame(&mut self, device: &Device) -> Result<FrameContext<'_>, VkError> {
+        let i = self.next;
+        let f = &mut self.frames[i];
+        // SAFETY: the fence is live (destroyed only in `destroy`); waiting has no other effect.
+        unsafe { device.raw.wait_for_fences(&[f.fence], true, u64::MAX) }
+            .call("vkWaitForFences")?;
+        let frame = SignalledFrame::after_fence_wait(i);
+        for mut b in f.deferred.drain(..) {
+            b.destroy(device);
+        }
+        let previous_gpu_ms = if std::mem::take(&mut f.timestamps_pending) {
+            Some(self.timer.read_ms(device, &frame)?)
+        } else {
+            None
+        };
+        self.staging.begin_frame(&frame);
+        self.descriptors.reset(device, &frame)?;
+        Ok(FrameContext {
+            ring: self,
+            frame,
+            previous_gpu_ms,
+            timed: false,
+        })
+    }
+
+    /// Blocks until `submitted` has completed; returns its GPU pass times when it was timed.
+    pub fn wait(
+        &mut self,
+        device: &Device,
+        submitted: Submitted,
+    ) -> Result<Option<PassTimes>, VkError> {
+        let f = &mut self.frames[submitted.index];
+        // SAFETY: the fence is live; waiting has no other effect.
+        unsafe { device.raw.wait_for_fences(&[f.fence], true, u64::MAX) }
+            .call("vkWaitForFences")?;
+        let frame = SignalledFrame::after_fence_wait(submitted.index);
+        if std::mem::take(&mut f.timestamps_pending) {
+            return self.timer.read_ms(device, &frame).map(Some);
+        }
+        Ok(None)
+    }
+
+    /// Waits for every frame, then destroys everything (deferred objects included).
+    pub fn destroy(&mut self, device: &Device) {
+        for f in self.frames.drain(..) {
+            f.destroy(device);
+        }
+        self.timer.destroy(device);
+        self.descriptors.destroy(device);
+        self.staging.destroy(device);
+    }
+}
+
+impl InFlight {
+    fn new(device: &Device) -> Result<Self, VkError> {
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(device.queue_family)
             .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+        // SAFETY: `device` is live and `pool_info` outlives the call.
         let pool = unsafe { device.raw.create_command_pool(&pool_info, None) }
             .call("vkCreateCommandPool")?;
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
+        // SAFETY: `pool` was just created; one buffer is asked for and one returned.
         let cmd = match unsafe { device.raw.allocate_command_buffers(&alloc) } {
             Ok(c) => c[0],
             Err(result) => {
+                // SAFETY: `pool` has no buffers in use.
                 unsafe { device.raw.destroy_command_pool(pool, None) };
                 return Err(VkError::Call {
                     call: "vkAllocateCommandBuffers",
@@ -60,9 +206,11 @@ impl FrameContexts {
             }
         };
         let fence_info = vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED);
+        // SAFETY: `device` is live and `fence_info` outlives the call.
         let fence = match unsafe { device.raw.create_fence(&fence_info, None) } {
             Ok(f) => f,
             Err(result) => {
+                // SAFETY: `cmd` was never submitted, so the pool is not in use.
                 unsafe { device.raw.destroy_command_pool(pool, None) };
                 return Err(VkError::Call {
                     call: "vkCreateFence",
@@ -70,36 +218,71 @@ impl FrameContexts {
                 });
             }
         };
-        Ok(FrameContext {
+        Ok(Self {
             pool,
             cmd,
             fence,
-            submitted: false,
+            timestamps_pending: false,
+            deferred: Vec::new(),
         })
     }
 
-    /// Index of the context the next frame will use.
-    pub fn next_index(&self) -> usize {
-        self.next
+    fn destroy(mut self, device: &Device) {
+        // SAFETY: waiting first makes the last submission complete, so the fence, the pool's
+        // command buffer and the deferred objects are unused when destroyed; `self` is consumed.
+        unsafe {
+            let _ = device.raw.wait_for_fences(&[self.fence], true, u64::MAX);
+            device.raw.destroy_fence(self.fence, None);
+            device.raw.destroy_command_pool(self.pool, None);
+        }
+        for mut b in self.deferred.drain(..) {
+            b.destroy(device);
+        }
+    }
+}
+
+impl FrameContext<'_> {
+    /// The frame-in-flight index, for per-frame objects owned elsewhere (one per index).
+    pub fn index(&self) -> usize {
+        self.frame.index()
     }
 
-    /// Waits for the next context's fence (the GPU is done with it), then returns its index.
-    /// The fence stays signaled until [`Self::begin_recording`].
-    pub fn wait_next(&mut self, device: &Device) -> Result<usize, VkError> {
-        let i = self.next;
-        let f = &self.frames[i];
-        unsafe { device.raw.wait_for_fences(&[f.fence], true, u64::MAX) }
-            .call("vkWaitForFences")?;
-        Ok(i)
+    /// This frame's staging region, open from its start.
+    pub fn staging(&mut self) -> &mut StagingRing {
+        &mut self.ring.staging
     }
 
-    /// Resets the fence and the command pool of context `i` and begins its command buffer.
-    pub fn begin_recording(
-        &mut self,
+    /// The staging buffer (the source of every upload copy).
+    pub fn staging_buffer(&self) -> vk::Buffer {
+        self.ring.staging.raw()
+    }
+
+    /// GPU pass times of the previous submission of this context, when it was timed and not
+    /// read since (frames left in flight by windowed presentation).
+    pub fn previous_gpu_ms(&self) -> Option<PassTimes> {
+        self.previous_gpu_ms
+    }
+
+    /// A descriptor set from this frame's pool, valid until this frame is next begun.
+    pub fn allocate_set(
+        &self,
         device: &Device,
-        i: usize,
-    ) -> Result<vk::CommandBuffer, VkError> {
-        let f = &self.frames[i];
+        layout: vk::DescriptorSetLayout,
+    ) -> Result<vk::DescriptorSet, VkError> {
+        self.ring.descriptors.allocate(device, &self.frame, layout)
+    }
+
+    /// Destroys `buffer` once this frame's current submission has completed (when the frame is
+    /// next begun): for per-frame buffers replaced while the GPU may still read the old one.
+    pub fn defer_destroy(&mut self, buffer: Buffer) {
+        self.ring.frames[self.frame.index()].deferred.push(buffer);
+    }
+
+    /// Resets the fence and the command pool and begins the command buffer.
+    pub fn begin_recording(&mut self, device: &Device) -> Result<vk::CommandBuffer, VkError> {
+        let f = &self.ring.frames[self.frame.index()];
+        // SAFETY: the fence has signalled (the context holds the proof), so the command buffer
+        // is not pending and the fence and pool may be reset; recording begins on a reset buffer.
         unsafe {
             device.raw.reset_fences(&[f.fence]).call("vkResetFences")?;
             device
@@ -116,22 +299,41 @@ impl FrameContexts {
         Ok(f.cmd)
     }
 
-    /// Ends and submits context `i`'s command buffer, signaling its fence; advances to the next.
-    pub fn submit(&mut self, device: &Device, i: usize) -> Result<(), VkError> {
-        self.submit_with(device, i, &[], &[], &[])
+    /// Resets this frame's timestamp queries in `cmd`; the submission then counts as timed and
+    /// must write every pass's begin and end.
+    pub fn reset_timestamps(&mut self, device: &Device, cmd: vk::CommandBuffer) {
+        self.ring.timer.reset(device, cmd, &self.frame);
+        self.timed = true;
+    }
+
+    pub fn time_begin(&self, device: &Device, cmd: vk::CommandBuffer, pass: Pass) {
+        self.ring.timer.begin(device, cmd, &self.frame, pass);
+    }
+
+    pub fn time_end(&self, device: &Device, cmd: vk::CommandBuffer, pass: Pass) {
+        self.ring.timer.end(device, cmd, &self.frame, pass);
+    }
+
+    /// Ends and submits the command buffer, signaling the frame's fence; the next
+    /// [`FrameRing::begin_frame`] gets the following frame.
+    pub fn submit(self, device: &Device) -> Result<Submitted, VkError> {
+        self.submit_with(device, &[], &[], &[])
     }
 
     /// As [`Self::submit`], waiting for `waits` (at `wait_stages`) before the work and signaling
     /// `signals` after it (e.g. a swapchain image's acquire and render-finished semaphores).
     pub fn submit_with(
-        &mut self,
+        self,
         device: &Device,
-        i: usize,
         waits: &[vk::Semaphore],
         wait_stages: &[vk::PipelineStageFlags],
         signals: &[vk::Semaphore],
-    ) -> Result<(), VkError> {
-        let f = &mut self.frames[i];
+    ) -> Result<Submitted, VkError> {
+        let i = self.frame.index();
+        let ring = self.ring;
+        let f = &mut ring.frames[i];
+        // SAFETY: `f.cmd` is recording (begun by `begin_recording`), the fence was reset there
+        // and is unsignalled, and the semaphore slices outlive the call.
         unsafe {
             device
                 .raw
@@ -148,28 +350,8 @@ impl FrameContexts {
                 .queue_submit(device.queue, &[submit], f.fence)
                 .call("vkQueueSubmit")?;
         }
-        f.submitted = true;
-        self.next = (i + 1) % self.frames.len();
-        Ok(())
-    }
-
-    /// Blocks until context `i`'s last submission has completed.
-    pub fn wait(&self, device: &Device, i: usize) -> Result<(), VkError> {
-        unsafe {
-            device
-                .raw
-                .wait_for_fences(&[self.frames[i].fence], true, u64::MAX)
-        }
-        .call("vkWaitForFences")
-    }
-
-    pub fn destroy(&mut self, device: &Device) {
-        for f in self.frames.drain(..) {
-            unsafe {
-                let _ = device.raw.wait_for_fences(&[f.fence], true, u64::MAX);
-                device.raw.destroy_fence(f.fence, None);
-                device.raw.destroy_command_pool(f.pool, None);
-            }
-        }
+        f.timestamps_pending = self.timed;
+        ring.next = (i + 1) % ring.frames.len();
+        Ok(Submitted { index: i })
     }
 }

@@ -18,6 +18,7 @@ pub mod descriptors;
 pub mod device;
 pub mod error;
 pub mod frame_context;
+pub mod frame_slot;
 pub mod image;
 pub mod instance;
 pub mod pipeline;

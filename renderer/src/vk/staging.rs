@@ -1,12 +1,13 @@
 //! The staging ring: one persistently mapped host-visible buffer split into one region per frame
 //! in flight. A region is written only after the fence of the submission that last read it has
-//! signaled ([`StagingRing::begin_frame`] checks it), and each region is a hard per-frame byte
-//! budget. Every upload in the program goes through here.
+//! signaled ([`StagingRing::begin_frame`] takes the proof), and each region is a hard per-frame
+//! byte budget. Every upload in the program goes through here.
 
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use super::{Buffer, Device, VkError, VkResultExt, FRAMES_IN_FLIGHT};
+use super::frame_slot::SignalledFrame;
+use super::{Buffer, Device, VkError, FRAMES_IN_FLIGHT};
 
 /// The pure bookkeeping of the ring (no Vulkan): which region is open and how far it is filled.
 #[derive(Debug, Clone)]
@@ -84,6 +85,10 @@ impl RingCursor {
     pub fn budget(&self) -> u64 {
         self.region_size
     }
+    /// Every offset handed out is a multiple of this, whatever smaller alignment was asked.
+    pub fn alignment(&self) -> u64 {
+        self.base_alignment
+    }
 }
 
 pub struct StagingRing {
@@ -119,22 +124,10 @@ impl StagingRing {
         self.buffer.raw
     }
 
-    /// Opens region `frame` for this frame's uploads. `fence` guards the previous use of the region
-    /// (the frame context's fence); reusing the region before it signaled is refused.
-    pub fn begin_frame(
-        &mut self,
-        device: &Device,
-        frame: usize,
-        fence: vk::Fence,
-    ) -> Result<(), VkError> {
-        let signaled = unsafe { device.raw.get_fence_status(fence) }.call("vkGetFenceStatus")?;
-        if !signaled {
-            return Err(VkError::Staging(format!(
-                "region {frame} reused before its fence signaled"
-            )));
-        }
-        self.cursor.open(frame);
-        Ok(())
+    /// Opens `frame`'s region for this frame's uploads (from its start): the submission that
+    /// last read the region has completed, which the token proves.
+    pub fn begin_frame(&mut self, frame: &SignalledFrame) {
+        self.cursor.open(frame.index());
     }
 
     /// Copies `data` into the open region; returns its offset in [`Self::raw`].
@@ -170,7 +163,12 @@ impl StagingRing {
     pub fn budget(&self) -> u64 {
         self.cursor.budget()
     }
+    /// The alignment of every allocation (see [`RingCursor::alignment`]).
+    pub fn alignment(&self) -> u64 {
+        self.cursor.alignment()
+    }
 
+    /// Call after the device is idle.
     pub fn destroy(&mut self, device: &Device) {
         self.buffer.destroy(device);
     }

@@ -2,6 +2,7 @@
 
 use ash::vk;
 
+use super::frame_slot::SignalledFrame;
 use super::{Device, VkError, VkResultExt, FRAMES_IN_FLIGHT};
 
 /// Passes timed per frame. Each has a begin and an end query.
@@ -12,6 +13,9 @@ pub enum Pass {
 }
 pub const PASS_COUNT: u32 = 2;
 const QUERIES_PER_FRAME: u32 = PASS_COUNT * 2;
+
+/// Milliseconds per [`Pass`], indexed by `Pass as usize`.
+pub type PassTimes = [f64; PASS_COUNT as usize];
 
 pub struct GpuTimer {
     pool: vk::QueryPool,
@@ -24,6 +28,7 @@ impl GpuTimer {
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(QUERIES_PER_FRAME * FRAMES_IN_FLIGHT as u32);
+        // SAFETY: `device` is live and `info` outlives the call.
         let pool =
             unsafe { device.raw.create_query_pool(&info, None) }.call("vkCreateQueryPool")?;
         Ok(Self {
@@ -32,34 +37,38 @@ impl GpuTimer {
         })
     }
 
-    /// Resets frame `frame`'s queries; recorded at the start of its command buffer.
-    pub fn reset(&self, device: &Device, cmd: vk::CommandBuffer, frame: usize) {
+    fn first_query(frame: &SignalledFrame) -> u32 {
+        frame.index() as u32 * QUERIES_PER_FRAME
+    }
+
+    /// Resets `frame`'s queries; recorded at the start of its command buffer.
+    pub fn reset(&self, device: &Device, cmd: vk::CommandBuffer, frame: &SignalledFrame) {
+        // SAFETY: `cmd` is recording; the queries reset are `frame`'s, whose previous
+        // submission has completed (the token), so no pending command writes them.
         unsafe {
             device.raw.cmd_reset_query_pool(
                 cmd,
                 self.pool,
-                frame as u32 * QUERIES_PER_FRAME,
+                Self::first_query(frame),
                 QUERIES_PER_FRAME,
             )
         };
     }
 
-    pub fn begin(&self, device: &Device, cmd: vk::CommandBuffer, frame: usize, pass: Pass) {
+    pub fn begin(&self, device: &Device, cmd: vk::CommandBuffer, frame: &SignalledFrame, p: Pass) {
         self.write(
             device,
             cmd,
-            frame,
-            pass as u32 * 2,
+            Self::first_query(frame) + p as u32 * 2,
             vk::PipelineStageFlags::TOP_OF_PIPE,
         );
     }
 
-    pub fn end(&self, device: &Device, cmd: vk::CommandBuffer, frame: usize, pass: Pass) {
+    pub fn end(&self, device: &Device, cmd: vk::CommandBuffer, frame: &SignalledFrame, p: Pass) {
         self.write(
             device,
             cmd,
-            frame,
-            pass as u32 * 2 + 1,
+            Self::first_query(frame) + p as u32 * 2 + 1,
             vk::PipelineStageFlags::BOTTOM_OF_PIPE,
         );
     }
@@ -68,35 +77,27 @@ impl GpuTimer {
         &self,
         device: &Device,
         cmd: vk::CommandBuffer,
-        frame: usize,
-        slot: u32,
+        query: u32,
         stage: vk::PipelineStageFlags,
     ) {
-        unsafe {
-            device.raw.cmd_write_timestamp(
-                cmd,
-                stage,
-                self.pool,
-                frame as u32 * QUERIES_PER_FRAME + slot,
-            )
-        };
+        // SAFETY: `cmd` is recording and `query` is inside the pool (frame index < FRAMES_IN_FLIGHT,
+        // slot < QUERIES_PER_FRAME); the query was reset earlier in the same command buffer.
+        unsafe { device.raw.cmd_write_timestamp(cmd, stage, self.pool, query) };
     }
 
-    /// Milliseconds per pass of frame `frame`. Only call after that frame's fence signaled and
-    /// when every pass's queries were written.
-    pub fn read_ms(
-        &self,
-        device: &Device,
-        frame: usize,
-    ) -> Result<[f64; PASS_COUNT as usize], VkError> {
+    /// Milliseconds per pass of `frame`'s last submission, which must have written every pass's
+    /// queries (the frame ring tracks that).
+    pub fn read_ms(&self, device: &Device, frame: &SignalledFrame) -> Result<PassTimes, VkError> {
         let Some(period) = self.period_ns else {
             return Ok([0.0; PASS_COUNT as usize]);
         };
         let mut ticks = [0u64; QUERIES_PER_FRAME as usize];
+        // SAFETY: `frame`'s fence has signalled (the token), so its queries are available;
+        // `ticks` holds exactly QUERIES_PER_FRAME 64-bit results (TYPE_64).
         unsafe {
             device.raw.get_query_pool_results(
                 self.pool,
-                frame as u32 * QUERIES_PER_FRAME,
+                Self::first_query(frame),
                 &mut ticks,
                 vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
             )
@@ -110,7 +111,10 @@ impl GpuTimer {
         Ok(ms)
     }
 
+    /// Call after the device is idle.
     pub fn destroy(&mut self, device: &Device) {
+        // SAFETY: the device is idle (caller), so no command uses the pool; it is nulled so a
+        // second destroy is a no-op (destroying VK_NULL_HANDLE is allowed).
         unsafe { device.raw.destroy_query_pool(self.pool, None) };
         self.pool = vk::QueryPool::null();
     }

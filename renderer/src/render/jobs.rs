@@ -1,0 +1,216 @@
+//! Upload jobs as plain data (no Vulkan): texture regions to fill from the dataset, the byte
+//! budget of one staging region, and how a list of jobs is split over submissions when it does
+//! not fit one. The recording code turns each [`ImageUpload`] into a `vk::BufferImageCopy`.
+
+use aerie_terrain::clipmap::{
+    toroidal_pieces, update_cache, CacheRegion, ClipmapDesc, LevelPlacement,
+};
+use aerie_terrain::pool::TileKey;
+
+/// Bytes per texel of every height texture (R32_SFLOAT).
+pub const TEXEL_BYTES: u64 = 4;
+
+/// Headroom kept free when fitting streamed rows into a region: the alignment padding the copy
+/// itself may need (staging offsets are aligned to at most 64 bytes on the devices we run on).
+pub const STREAM_ROW_SLACK_BYTES: u64 = 64;
+
+/// One region of a texture to fill from the dataset: texel rectangle in `layer`, and the
+/// dataset samples `origin + (i, j)·step`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ImageUpload {
+    pub layer: u32,
+    pub texel: [u32; 2],
+    pub size: [u32; 2],
+    pub origin_sample: [i64; 2],
+    pub step: u32,
+}
+
+impl ImageUpload {
+    pub fn bytes(&self) -> u64 {
+        self.size[0] as u64 * self.size[1] as u64 * TEXEL_BYTES
+    }
+
+    /// Splits the upload after `rows` rows (the tail starts `rows` texels and samples later).
+    pub fn split_rows(&self, rows: u32) -> (ImageUpload, Option<ImageUpload>) {
+        if rows >= self.size[1] {
+            return (*self, None);
+        }
+        let head = ImageUpload {
+            size: [self.size[0], rows],
+            ..*self
+        };
+        let tail = ImageUpload {
+            texel: [self.texel[0], self.texel[1] + rows],
+            size: [self.size[0], self.size[1] - rows],
+            origin_sample: [
+                self.origin_sample[0],
+                self.origin_sample[1] + rows as i64 * self.step as i64,
+            ],
+            ..*self
+        };
+        (head, Some(tail))
+    }
+}
+
+/// Why a plan cannot be carried out.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum PlanError {
+    /// A staging request larger than what is left of the region (the ring's own message).
+    Staging(String),
+    /// Anything else (the message says what).
+    Other(String),
+}
+
+impl std::fmt::Display for PlanError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PlanError::Staging(m) | PlanError::Other(m) => f.write_str(m),
+        }
+    }
+}
+
+/// One staging region's bytes as a plan spends them: the arithmetic of the staging ring's cursor
+/// (`vk::staging::RingCursor`: each allocation starts at the next multiple of `alignment`),
+/// without the memory. The renderer checks that staging what the plan says uses exactly
+/// [`Self::used`] bytes of the real region.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StagingBudget {
+    capacity: u64,
+    alignment: u64,
+    used: u64,
+}
+
+impl StagingBudget {
+    /// An empty region of `capacity` bytes whose allocations are aligned to `alignment` (a power
+    /// of two, at least every alignment the uploads ask for).
+    pub fn new(capacity: u64, alignment: u64) -> Self {
+        assert!(alignment.is_power_of_two(), "alignment {alignment}");
+        Self {
+            capacity,
+            alignment,
+            used: 0,
+        }
+    }
+
+    pub fn capacity(&self) -> u64 {
+        self.capacity
+    }
+    pub fn alignment(&self) -> u64 {
+        self.alignment
+    }
+    /// Bytes allocated so far, alignment padding included.
+    pub fn used(&self) -> u64 {
+        self.used
+    }
+    /// Bytes after the last allocation (the next one may lose up to `alignment − 1` to padding).
+    pub fn remaining(&self) -> u64 {
+        self.capacity.saturating_sub(self.used)
+    }
+
+    /// Spends `bytes` (after aligning the start), or says how it does not fit and spends nothing.
+    pub fn take(&mut self, bytes: u64) -> Result<(), PlanError> {
+        let start = self.used.div_ceil(self.alignment) * self.alignment;
+        if start + bytes > self.capacity {
+            return Err(PlanError::Staging(format!(
+                "upload of {bytes} bytes exceeds this frame's staging budget ({} of {} bytes left)",
+                self.capacity.saturating_sub(start),
+                self.capacity
+            )));
+        }
+        self.used = start + bytes;
+        Ok(())
+    }
+}
+
+/// Eye position (metres) → dataset sample coordinates, the unit of clipmap placement.
+pub fn eye_samples(eye: glam::DVec3, spacing: [f64; 2]) -> [f64; 2] {
+    [eye.x / spacing[0], eye.y / spacing[1]]
+}
+
+/// The level-texture regions to (re)load for these placements, recording each level's new cache
+/// region in `caches`. Levels that did not leave their cache yield nothing; a piece split at the
+/// texture's toroidal wrap becomes one upload per piece.
+pub fn strip_uploads(
+    clipmap: &ClipmapDesc,
+    caches: &mut [Option<CacheRegion>],
+    placements: &[LevelPlacement],
+) -> Vec<ImageUpload> {
+    let side = clipmap.texture_side();
+    let mut jobs = Vec::new();
+    for p in placements {
+        let (region, rects) = update_cache(clipmap, caches[p.level as usize].as_ref(), p);
+        let step = 1u32 << p.level;
+        for rect in &rects {
+            for piece in toroidal_pieces(rect, side) {
+                jobs.push(ImageUpload {
+                    layer: p.level,
+                    texel: piece.texel,
+                    size: piece.size,
+                    origin_sample: [
+                        (rect.origin[0] + piece.src_offset[0] as i64) * step as i64,
+                        (rect.origin[1] + piece.src_offset[1] as i64) * step as i64,
+                    ],
+                    step,
+                });
+            }
+        }
+        caches[p.level as usize] = Some(region);
+    }
+    jobs
+}
+
+/// Splits `jobs` over as many submissions as regions of `capacity` bytes need, in order: each
+/// submission takes whole jobs while they fit and then as many rows of the next as fit (keeping
+/// [`STREAM_ROW_SLACK_BYTES`] free), the rest going first into the next submission.
+///
+/// Invariants (tested): the rows of the output are exactly the rows of the input, in order;
+/// every submission stages within `capacity`; only the first job of a submission may be the
+/// tail of a split. A row larger than a whole region is an error.
+pub fn split_into_submissions(
+    jobs: &[ImageUpload],
+    capacity: u64,
+    alignment: u64,
+) -> Result<Vec<Vec<ImageUpload>>, PlanError> {
+    let mut pending: std::collections::VecDeque<ImageUpload> = jobs.iter().copied().collect();
+    let mut submissions = Vec::new();
+    while !pending.is_empty() {
+        let mut budget = StagingBudget::new(capacity, alignment);
+        let mut batch = Vec::new();
+        while let Some(job) = pending.pop_front() {
+            let row_bytes = job.size[0] as u64 * TEXEL_BYTES;
+            let fit_rows =
+                (budget.remaining().saturating_sub(STREAM_ROW_SLACK_BYTES) / row_bytes) as u32;
+            if fit_rows == 0 {
+                if batch.is_empty() {
+                    return Err(PlanError::Staging(format!(
+                        "one level-texture row ({row_bytes} bytes) exceeds the per-frame staging budget ({capacity} bytes)"
+                    )));
+                }
+                pending.push_front(job);
+                break;
+            }
+            let (head, tail) = job.split_rows(fit_rows.min(job.size[1]));
+            budget.take(head.bytes())?;
+            batch.push(head);
+            if let Some(tail) = tail {
+                pending.push_front(tail);
+                break;
+            }
+        }
+        submissions.push(batch);
+    }
+    Ok(submissions)
+}
+
+/// The upload of refined tile `key` into pool slot `slot` of a pool with `side` samples per slot
+/// side: (2^r q + 1)² samples at stride 2^(L−r) from the tile's south-west corner.
+pub fn refined_upload(tile_quads: u32, key: &TileKey, slot: u32, side: u32) -> ImageUpload {
+    let tile = (tile_quads as i64) << key.level;
+    ImageUpload {
+        layer: slot,
+        texel: [0, 0],
+        size: [side, side],
+        origin_sample: [key.tx as i64 * tile, key.ty as i64 * tile],
+        step: 1 << (key.level - key.refinement),
+    }
+}

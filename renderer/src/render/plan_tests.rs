@@ -1,0 +1,586 @@
+//! The frame plan's invariants (see `plan.rs`), checked without a GPU.
+
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use aerie_terrain::bake::{bake, BakeParams};
+use aerie_terrain::camera::{Attitude, Camera, Frustum};
+use aerie_terrain::clipmap::ClipmapDesc;
+use aerie_terrain::dataset::Dataset;
+use aerie_terrain::pool::TileKey;
+use aerie_terrain::select::{DrawItem, SelectParams, Selection};
+use aerie_terrain::Heightfield;
+
+use super::*;
+use crate::render::jobs::{split_into_submissions, ImageUpload, StagingBudget};
+
+const N: usize = 257;
+const Q: u32 = 16;
+/// Indices of one skirted 17×17 tile (any multiple of 3 does for the arithmetic).
+const INDICES: (u32, u32) = (0, 1734);
+const ALIGN: u64 = 64;
+
+fn rough_bake() -> Arc<ErrorBake> {
+    let hf = Heightfield {
+        width: N,
+        height: N,
+        spacing_x: 10.0,
+        spacing_y: 10.0,
+        heights: (0..N * N)
+            .map(|k| {
+                let (c, r) = ((k % N) as f32, (k / N) as f32);
+                40.0 * (c * 0.9).sin() + 35.0 * (r * 1.3).cos() + 3.0 * c
+            })
+            .collect(),
+        geo: None,
+        voids_filled: 0,
+        spacing_note: String::new(),
+    };
+    let ds = Dataset::from_heightfield(hf, "plan test".into());
+    Arc::new(bake(&ds, BakeParams::default(), &|_, _| {}))
+}
+
+fn clipmap() -> ClipmapDesc {
+    ClipmapDesc {
+        tile_quads: Q,
+        patch_tiles: 8,
+        margin_tiles: 2,
+        width: N as u32,
+        height: N as u32,
+    }
+}
+
+fn state(pool_capacity: &[u32]) -> PlanState {
+    PlanState::new(rough_bake(), [10.0, 10.0], clipmap(), pool_capacity)
+}
+
+fn camera(x: f64, y: f64, z: f64, heading: f64) -> Camera {
+    Camera::new(
+        DVec3::new(x, y, z),
+        Attitude::from_degrees(heading, -20.0, 0.0),
+        Frustum::symmetric(90f64.to_radians(), 320, 180),
+    )
+}
+
+fn inputs<'a>(
+    frame: u64,
+    camera: &'a Camera,
+    select: &'a SelectParams,
+    capacity: u64,
+) -> FrameInputs<'a> {
+    FrameInputs {
+        frame,
+        camera,
+        viewport: (320, 180),
+        channels: &[],
+        select,
+        prefetch_frames: 0.0,
+        skirt_factor: 2.0,
+        skirt_min_m: 1.0,
+        overlay_bytes: None,
+        tile_indices: INDICES,
+        staging: StagingBudget::new(capacity, ALIGN),
+    }
+}
+
+/// Every node of ring tile (level, tx, ty) split `r` times: 4^r nodes at level − r.
+fn refined_tile(level: u32, tx: u32, ty: u32, r: u32) -> Vec<DrawItem> {
+    let n = 1u32 << r;
+    let mut v = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            v.push(DrawItem {
+                refinement: r,
+                node_level: level - r,
+                node_tx: tx * n + i,
+                node_ty: ty * n + j,
+                ..DrawItem::whole(level, tx, ty, 0.5, 0.5)
+            });
+        }
+    }
+    v
+}
+
+fn selection(items: Vec<DrawItem>) -> Selection {
+    Selection {
+        items,
+        ..Default::default()
+    }
+}
+
+/// Bytes of the fixed pushes staged after the uploads for `instances` records, aligned.
+fn fixed_pushes(used: u64, instances: usize) -> u64 {
+    let mut b = StagingBudget::new(u64::MAX / 2, ALIGN);
+    b.take(used).unwrap();
+    b.take(std::mem::size_of::<FrameUniforms>() as u64).unwrap();
+    b.take((std::mem::size_of::<DrawIndexedIndirect>() * RESOLUTIONS) as u64)
+        .unwrap();
+    if instances > 0 {
+        b.take((instances * std::mem::size_of::<TileInstance>()) as u64)
+            .unwrap();
+    }
+    b.used() - used
+}
+
+fn strip(layer: u32, rows: u32) -> ImageUpload {
+    ImageUpload {
+        layer,
+        texel: [0, 0],
+        size: [65, rows],
+        origin_sample: [0, 0],
+        step: 1 << layer,
+    }
+}
+
+#[test]
+fn staging_budget_aligns_like_the_ring_and_refuses_without_spending() {
+    let mut b = StagingBudget::new(256, 64);
+    b.take(3).unwrap();
+    b.take(5).unwrap();
+    assert_eq!(b.used(), 69, "second allocation starts at 64");
+    assert_eq!(b.remaining(), 187);
+    let err = b.take(150).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "upload of 150 bytes exceeds this frame's staging budget (128 of 256 bytes left)"
+    );
+    assert_eq!(b.used(), 69, "a refused request spends nothing");
+    b.take(128).unwrap();
+    assert_eq!(b.remaining(), 0);
+}
+
+#[test]
+fn strips_come_first_and_pool_misses_get_what_is_left() {
+    let mut st = state(&[8, 8, 8, 8, 8, 0]);
+    let select = SelectParams::default();
+    let cam = camera(1280.0, 1280.0, 400.0, 0.0);
+    // Three refined tiles of r = 1 (4 nodes each) and one unrefined tile.
+    let mut items = refined_tile(2, 0, 1, 1);
+    items.extend(refined_tile(2, 1, 1, 1));
+    items.push(DrawItem::whole(2, 2, 1, 0.5, 0.5));
+    items.extend(refined_tile(2, 3, 1, 1));
+    let sel = selection(items);
+    let strips = vec![strip(0, 10), strip(1, 7)];
+    let strip_bytes: u64 = strips.iter().map(ImageUpload::bytes).sum();
+    let slot = st.pools[0].slot_bytes();
+    assert_eq!(slot, 33 * 33 * 4);
+    let reserve = fixed_reserve(sel.items.len(), None);
+    // Room for the strips, the reserve and exactly two slots with their slack.
+    let capacity = 2 * ALIGN + strip_bytes + reserve + 2 * (slot + ALIGN) + POOL_UPLOAD_SLACK_BYTES;
+    let inp = inputs(0, &cam, &select, capacity);
+    let plan = plan_frame(&mut st, &inp, &sel, strips.clone()).unwrap();
+
+    assert_eq!(plan.strips, strips, "strips fit: staged in the frame");
+    assert!(plan.spilled_strips.is_empty());
+    assert_eq!(plan.stats.bytes_clipmap, strip_bytes);
+    assert_eq!((plan.stats.pool_misses, plan.stats.tiles_late), (2, 1));
+    let uploaded: Vec<_> = plan
+        .pool_uploads
+        .iter()
+        .map(|p| (p.key.tx, p.upload.layer))
+        .collect();
+    assert_eq!(
+        uploaded,
+        [(0, 0), (1, 1)],
+        "misses in selection order, free slots in order"
+    );
+    assert_eq!(plan.late[0].key.tx, 3);
+    assert_eq!(plan.late[0].drawn_refinement, 0);
+    assert_eq!(plan.stats.bytes_refined, 2 * slot);
+    // Staged = strips, two slots, the fixed pushes, each aligned; within the region.
+    let mut b = StagingBudget::new(capacity, ALIGN);
+    for s in &strips {
+        b.take(s.bytes()).unwrap();
+    }
+    b.take(slot).unwrap();
+    b.take(slot).unwrap();
+    let instances = plan.instances.len();
+    assert_eq!(
+        instances,
+        4 + 4 + 1 + 1,
+        "late tile drawn as its one level-2 node"
+    );
+    assert_eq!(
+        plan.staged_bytes,
+        b.used() + fixed_pushes(b.used(), instances)
+    );
+    assert_eq!(plan.stats.bytes_uploaded, plan.staged_bytes);
+    assert!(plan.staged_bytes <= capacity);
+}
+
+#[test]
+fn strips_that_do_not_fit_spill_and_leave_the_region_to_the_pools() {
+    let mut st = state(&[8, 8, 8, 8, 8, 0]);
+    let select = SelectParams::default();
+    let cam = camera(1280.0, 1280.0, 400.0, 0.0);
+    let sel = selection(refined_tile(2, 1, 1, 1));
+    let strips = vec![strip(0, 60), strip(1, 60), strip(2, 60)];
+    let slot = st.pools[0].slot_bytes();
+    let reserve = fixed_reserve(sel.items.len(), None);
+    // One strip fits with the reserve, three do not; one slot fits after the reserve.
+    let capacity = reserve + slot + POOL_UPLOAD_SLACK_BYTES + 2 * ALIGN + strips[0].bytes();
+    let plan = plan_frame(
+        &mut st,
+        &inputs(0, &cam, &select, capacity),
+        &sel,
+        strips.clone(),
+    );
+    let plan = plan.unwrap();
+    assert!(
+        plan.strips.is_empty(),
+        "all or nothing: strips are one update"
+    );
+    assert_eq!(plan.stats.budget_spills as usize, plan.spilled_strips.len());
+    assert!(plan.spilled_strips.len() > 1);
+    let rows: u32 = plan
+        .spilled_strips
+        .iter()
+        .flatten()
+        .map(|j| j.size[1])
+        .sum();
+    assert_eq!(rows, 180);
+    assert_eq!(
+        plan.stats.bytes_clipmap,
+        strips.iter().map(ImageUpload::bytes).sum::<u64>()
+    );
+    assert_eq!(
+        plan.stats.pool_misses, 1,
+        "the pools get the frame's whole region"
+    );
+    assert!(plan.staged_bytes <= capacity);
+}
+
+#[test]
+fn split_into_submissions_keeps_every_row_in_order_within_each_region() {
+    let jobs = [strip(0, 50), strip(1, 3), strip(2, 41)];
+    let capacity = 20 * 65 * 4 + STREAM_SLACK;
+    let subs = split_into_submissions(&jobs, capacity, ALIGN).unwrap();
+    // Rows in order: (layer, first texel row) walks each job's rows without gaps.
+    let mut next = [0u32; 3];
+    for s in &subs {
+        let mut b = StagingBudget::new(capacity, ALIGN);
+        for (k, j) in s.iter().enumerate() {
+            assert_eq!(j.texel[1], next[j.layer as usize], "{j:?}");
+            assert_eq!(j.origin_sample[1], (j.texel[1] * j.step) as i64);
+            next[j.layer as usize] += j.size[1];
+            b.take(j.bytes()).unwrap();
+            assert!(
+                k == 0 || j.texel[1] == 0,
+                "only a submission's first job is a tail"
+            );
+        }
+    }
+    assert_eq!(next, [50, 3, 41]);
+    assert_eq!(
+        split_into_submissions(&[], capacity, ALIGN).unwrap().len(),
+        0
+    );
+    let err = split_into_submissions(&jobs, 65 * 4, ALIGN).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("one level-texture row (260 bytes)"),
+        "{err}"
+    );
+}
+
+const STREAM_SLACK: u64 = crate::render::jobs::STREAM_ROW_SLACK_BYTES;
+
+#[test]
+fn a_late_tile_is_drawn_at_its_best_resident_resolution_coarsened_once() {
+    let mut st = state(&[8, 8, 8, 8, 8, 0]);
+    let select = SelectParams::default();
+    let cam = camera(1280.0, 1280.0, 400.0, 0.0);
+    // Frame 0: tile (3, 1, 1) at r = 1 is uploaded.
+    let sel0 = selection(refined_tile(3, 1, 1, 1));
+    let plan0 = plan_frame(&mut st, &inputs(0, &cam, &select, 1 << 20), &sel0, vec![]).unwrap();
+    assert_eq!(plan0.stats.pool_misses, 1);
+    let r1_slot = plan0.pool_uploads[0].upload.layer;
+    // Frame 1: it needs r = 2 (16 nodes at level 1) but nothing fits: drawn at r = 1.
+    let sel1 = selection(refined_tile(3, 1, 1, 2));
+    let tight = fixed_reserve(16, None) + POOL_UPLOAD_SLACK_BYTES;
+    let plan1 = plan_frame(&mut st, &inputs(1, &cam, &select, tight), &sel1, vec![]).unwrap();
+    assert_eq!((plan1.stats.tiles_late, plan1.stats.pool_misses), (1, 0));
+    let key = TileKey {
+        level: 3,
+        tx: 1,
+        ty: 1,
+        refinement: 2,
+    };
+    assert_eq!(
+        plan1.late,
+        [LateTile {
+            key,
+            drawn_refinement: 1
+        }]
+    );
+    let nodes: Vec<_> = plan1
+        .draw_list
+        .iter()
+        .map(|(d, slot)| (d.refinement, d.node_level, d.node_tx, d.node_ty, *slot))
+        .collect();
+    assert_eq!(
+        nodes,
+        [
+            (1, 2, 2, 2, r1_slot),
+            (1, 2, 3, 2, r1_slot),
+            (1, 2, 2, 3, r1_slot),
+            (1, 2, 3, 3, r1_slot)
+        ],
+        "16 level-1 nodes become their 4 level-2 ancestors, each once"
+    );
+    for (d, _) in &plan1.draw_list {
+        assert_eq!(d.eps_m, st.bake.eps(d.node_level, d.node_tx, d.node_ty));
+    }
+    // Another tile with nothing resident collapses to the tile itself from the clipmap.
+    let sel2 = selection(refined_tile(3, 0, 1, 2));
+    let plan2 = plan_frame(&mut st, &inputs(2, &cam, &select, tight), &sel2, vec![]).unwrap();
+    let (d, slot) = plan2.draw_list[0];
+    assert_eq!(plan2.draw_list.len(), 1);
+    assert_eq!(
+        (d.refinement, d.node_level, d.node_tx, d.node_ty, slot),
+        (0, 3, 0, 1, 0)
+    );
+}
+
+#[test]
+fn nodes_address_their_part_of_the_slot() {
+    // Level-3 tile (1, 2) at r = 2: its slot holds the tile at level 1, 4q + 1 samples a side.
+    let item = DrawItem {
+        refinement: 2,
+        node_level: 2,
+        node_tx: 3,
+        node_ty: 4,
+        ..DrawItem::whole(3, 1, 2, 0.0, 0.0)
+    };
+    assert_eq!(slot_placement(&item, Q), (32, 0, 2));
+    assert_eq!(
+        slot_placement(&DrawItem::whole(3, 1, 2, 0.0, 0.0), Q),
+        (0, 0, 1)
+    );
+    // Every node of every split depth lies inside the slot, and the nodes of one depth tile it.
+    for r in 1..=4u32 {
+        let side = (Q << r) + 1;
+        for depth in 0..=r {
+            let level = 5;
+            let n = 1u32 << depth;
+            let mut covered = 0u64;
+            for j in 0..n {
+                for i in 0..n {
+                    let node = DrawItem {
+                        refinement: r,
+                        node_level: level - depth,
+                        node_tx: 3 * n + i,
+                        node_ty: 2 * n + j,
+                        ..DrawItem::whole(level, 3, 2, 0.0, 0.0)
+                    };
+                    let (x, y, stride) = slot_placement(&node, Q);
+                    assert_eq!(stride, 1 << (r - depth));
+                    assert!(x + stride * Q < side && y + stride * Q < side);
+                    assert_eq!((x, y), (i * stride * Q, j * stride * Q));
+                    covered += (stride as u64 * Q as u64).pow(2);
+                }
+            }
+            assert_eq!(covered, ((side - 1) as u64).pow(2));
+        }
+    }
+}
+
+#[test]
+fn instances_are_grouped_by_refinement_and_commands_follow_each_other() {
+    let mut st = state(&[8, 8, 8, 8, 8, 0]);
+    let select = SelectParams::default();
+    let cam = camera(1280.0, 1280.0, 400.0, 0.0);
+    let mut items = vec![DrawItem::whole(2, 0, 0, 0.5, 0.5)];
+    items.extend(refined_tile(3, 1, 1, 2));
+    items.push(DrawItem::whole(2, 1, 0, 0.5, 0.5));
+    items.extend(refined_tile(2, 3, 3, 1));
+    let plan = plan_frame(
+        &mut st,
+        &inputs(0, &cam, &select, 1 << 20),
+        &selection(items),
+        vec![],
+    );
+    let plan = plan.unwrap();
+    let r: Vec<u32> = plan.instances.iter().map(|i| i.refinement).collect();
+    let mut sorted = r.clone();
+    sorted.sort();
+    assert_eq!(r, sorted, "grouped by refinement");
+    assert_eq!(r.len(), 1 + 16 + 1 + 4);
+    let counts = [2u32, 4, 16, 0, 0, 0, 0];
+    let mut first = 0;
+    for (k, d) in plan.draws.iter().enumerate() {
+        assert_eq!(
+            (d.instance_count, d.first_instance),
+            (counts[k], first),
+            "command {k}"
+        );
+        assert_eq!((d.first_index, d.index_count), INDICES);
+        first += counts[k];
+    }
+    // Selection order inside a group: the two unrefined tiles, west first.
+    assert_eq!(plan.instances[0].origin_sample, [0, 0]);
+    assert_eq!(plan.instances[1].origin_sample, [(Q << 2) as i32, 0]);
+    // The eye-relative origin is the sample origin in metres minus the eye.
+    let i = &plan.instances[1];
+    assert_eq!(i.origin_rel, [(640.0 - 1280.0) as f32, -1280.0]);
+    assert_eq!(plan.stats.instances, 22);
+    assert_eq!(plan.stats.triangles, 22 * (INDICES.1 as u64 / 3));
+    assert_eq!(
+        (plan.draw_count, plan.stats.draw_calls),
+        (RESOLUTIONS as u32, 1)
+    );
+    // Nothing selected: no commands issued, no instances staged.
+    let empty = plan_frame(
+        &mut st,
+        &inputs(1, &cam, &select, 1 << 20),
+        &selection(vec![]),
+        vec![],
+    );
+    let empty = empty.unwrap();
+    assert_eq!((empty.draw_count, empty.stats.draw_calls), (0, 0));
+    assert_eq!(empty.staged_bytes, fixed_pushes(0, 0));
+    // A tile without indices draws nothing, whatever the instances.
+    let (draws, tris) = indirect_draws(&[3, 1, 0, 0, 0, 0, 0], (0, 0));
+    assert!(draws.iter().all(|d| d.instance_count == 0) && tris == 0);
+    assert_eq!(draws[1].first_instance, 3);
+}
+
+/// A real selection that refines: low over the rough terrain, looking along +x. `cap` None:
+/// a region with room for the fixed pushes only.
+fn refining_frame(
+    st: &mut PlanState,
+    frame: u64,
+    cam: &Camera,
+    prefetch: f64,
+    cap: Option<u64>,
+) -> FramePlan {
+    let select = SelectParams {
+        tau_px: 0.5,
+        ..SelectParams::default()
+    };
+    let mut inp = inputs(frame, cam, &select, 0);
+    inp.prefetch_frames = prefetch;
+    let mut sel = Selection::default();
+    let strips = select_frame(st, &inp, &mut sel);
+    let fixed = fixed_reserve(sel.items.len(), None) + POOL_UPLOAD_SLACK_BYTES;
+    inp.staging = StagingBudget::new(cap.unwrap_or(fixed), ALIGN);
+    let plan = plan_frame(st, &inp, &sel, strips).unwrap();
+    assert!(plan.staged_bytes <= inp.staging.capacity());
+    plan
+}
+
+/// Refined tiles drawn at their own refinement (not late) in a plan.
+fn drawn_keys(p: &FramePlan) -> Vec<TileKey> {
+    let mut keys: Vec<TileKey> = p
+        .draw_list
+        .iter()
+        .filter(|(d, _)| d.refinement > 0)
+        .map(|(d, _)| TileKey {
+            level: d.level,
+            tx: d.tx,
+            ty: d.ty,
+            refinement: d.refinement,
+        })
+        .collect();
+    keys.dedup();
+    keys
+}
+
+const BIG: Option<u64> = Some(64 << 20);
+
+#[test]
+fn prefetch_follows_the_motion_only_and_spares_recent_draws() {
+    let mut st = state(&[64, 64, 64, 64, 64, 0]);
+    let cam = |x: f64| camera(x, 1280.0, 300.0, 90.0);
+    // Backing away westwards while looking east: the refined band ahead moves west.
+    let first = refining_frame(&mut st, 0, &cam(600.0), 20.0, BIG);
+    assert!(first.stats.pool_misses > 0, "the fixture must refine");
+    assert_eq!(first.stats.prefetched, 0, "no previous eye, no motion");
+    let still = refining_frame(&mut st, 1, &cam(600.0), 20.0, BIG);
+    assert_eq!(still.stats.prefetched, 0, "no motion, nothing ahead");
+    let moving = refining_frame(&mut st, 2, &cam(560.0), 20.0, BIG);
+    assert!(
+        moving.stats.prefetched > 0,
+        "moving prefetches what lies ahead"
+    );
+    let ahead = moving.pool_uploads.iter().filter(|p| p.prefetch);
+    let drawn = drawn_keys(&moving);
+    assert!(
+        ahead.clone().all(|p| !drawn.contains(&p.key)),
+        "prefetch uploads only tiles not drawn this frame"
+    );
+    assert_eq!(ahead.count() as u32, moving.stats.prefetched);
+
+    // Pools exactly as large as one frame needs: after that frame every slot was drawn in the
+    // last two frames, so a prefetch finds no victim.
+    let mut st = state(&[0, 0, 0, 0, 0, 0]);
+    let probe = refining_frame(&mut st, 0, &cam(600.0), 0.0, BIG);
+    let mut caps = [0u32; 6];
+    for l in &probe.late {
+        caps[l.key.refinement as usize - 1] += 1;
+    }
+    let mut st = state(&caps);
+    let full = refining_frame(&mut st, 0, &cam(600.0), 0.0, BIG);
+    assert_eq!(full.stats.tiles_late, 0);
+    let recent = drawn_keys(&full);
+    let next = refining_frame(&mut st, 1, &cam(610.0), 50.0, BIG);
+    assert_eq!(next.stats.prefetched, 0, "every slot is protected");
+    for p in next.pool_uploads.iter().filter(|p| p.prefetch) {
+        assert!(!p.evicted.is_some_and(|e| recent.contains(&e)), "{p:?}");
+    }
+    assert!(st.pools.iter().all(|p| p.lru.counters().prefetches == 0));
+
+    // No budget beyond the frame's fixed pushes: nothing is uploaded, nothing prefetched.
+    let mut st = state(&[64, 64, 64, 64, 64, 0]);
+    refining_frame(&mut st, 0, &cam(600.0), 20.0, BIG);
+    let tight = refining_frame(&mut st, 1, &cam(640.0), 20.0, None);
+    assert_eq!((tight.stats.prefetched, tight.stats.pool_misses), (0, 0));
+    assert!(tight.pool_uploads.is_empty());
+}
+
+#[test]
+fn channels_share_one_selection_whichever_is_drawn() {
+    let select = SelectParams {
+        tau_px: 0.5,
+        ..SelectParams::default()
+    };
+    let left = camera(1280.0, 1280.0, 300.0, 45.0);
+    let right = camera(1280.0, 1280.0, 300.0, 135.0);
+    let channels = vec![(left, (320, 180), 0.5), (right, (320, 180), 0.5)];
+    let run = |drawn: &Camera| {
+        let mut st = state(&[64, 64, 64, 64, 64, 0]);
+        let mut inp = inputs(0, drawn, &select, 8 << 20);
+        inp.channels = &channels;
+        let mut sel = Selection::default();
+        let strips = select_frame(&mut st, &inp, &mut sel);
+        let plan = plan_frame(&mut st, &inp, &sel, strips).unwrap();
+        (sel.items, plan.stats.selection_digest)
+    };
+    let (a, da) = run(&left);
+    let (b, db) = run(&right);
+    assert_eq!(a, b);
+    assert_eq!(da, db);
+    // The shared selection draws each tile at least as fine as either channel alone.
+    let single = |cam: &Camera| {
+        let mut st = state(&[64, 64, 64, 64, 64, 0]);
+        let inp = inputs(0, cam, &select, 8 << 20);
+        let mut sel = Selection::default();
+        select_frame(&mut st, &inp, &mut sel);
+        sel.items
+    };
+    for alone in [single(&left), single(&right)] {
+        for i in alone.iter().filter(|i| i.refinement > 0) {
+            let shared = a
+                .iter()
+                .filter(|s| (s.level, s.tx, s.ty) == (i.level, i.tx, i.ty))
+                .map(|s| s.refinement)
+                .max();
+            assert!(shared >= Some(i.refinement), "{i:?} coarser when shared");
+        }
+    }
+    assert!(
+        a.iter().any(|i| i.refinement > 0),
+        "the fixture must refine"
+    );
+}

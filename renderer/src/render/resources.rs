@@ -1,0 +1,224 @@
+//! The dataset's GPU objects: level textures (one array layer per level, toroidal), one texture
+//! array per refined-tile pool, and the per-frame-in-flight buffers the frame's pushes land in —
+//! with the CPU plan state that decides what they hold.
+
+use std::sync::Arc;
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use aerie_terrain::bake::ErrorBake;
+use aerie_terrain::clipmap::ClipmapDesc;
+use aerie_terrain::dataset::Dataset;
+use aerie_terrain::select::MAX_REFINEMENT;
+
+use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, TileInstance};
+use crate::render::plan::{PlanState, MAX_INSTANCES};
+use crate::render::stats::RESOLUTIONS;
+use crate::vk::frame_context::FrameContext;
+use crate::vk::image::{Image2d, ImageDesc};
+use crate::vk::{Buffer, Device, VkError, FRAMES_IN_FLIGHT};
+
+/// Initial instance capacity cap: what every LOD mode but `full` needs at most in practice.
+const INITIAL_MAX_INSTANCES: usize = 1 << 16;
+/// Initial instance capacity per ring tile: a refined tile draws up to 4^r nodes, but few are.
+const INITIAL_INSTANCES_PER_TILE: usize = 16;
+/// Initial instance capacity floor, for tiny datasets.
+const MIN_INITIAL_INSTANCES: usize = 4096;
+
+/// Per-frame-in-flight device buffers, filled from the staging region each frame.
+pub struct FrameBuffers {
+    pub uniforms: Buffer,
+    pub instances: Buffer,
+    pub indirect: Buffer,
+    /// TileInstance slots in `instances`.
+    pub instance_capacity: usize,
+}
+
+impl FrameBuffers {
+    pub fn new(d: &Device, max_instances: usize) -> Result<FrameBuffers, VkError> {
+        let dst = vk::BufferUsageFlags::TRANSFER_DST;
+        let mut uniforms = Buffer::new(
+            d,
+            "frame uniforms",
+            std::mem::size_of::<FrameUniforms>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER | dst,
+            MemoryLocation::GpuOnly,
+        )?;
+        let mut instances = match Buffer::new(
+            d,
+            "tile instances",
+            (max_instances.max(1) * std::mem::size_of::<TileInstance>()) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER | dst,
+            MemoryLocation::GpuOnly,
+        ) {
+            Ok(b) => b,
+            Err(e) => {
+                uniforms.destroy(d);
+                return Err(e);
+            }
+        };
+        let indirect = match Buffer::new(
+            d,
+            "indirect draws",
+            (std::mem::size_of::<DrawIndexedIndirect>() * RESOLUTIONS) as u64,
+            vk::BufferUsageFlags::INDIRECT_BUFFER | dst,
+            MemoryLocation::GpuOnly,
+        ) {
+            Ok(b) => b,
+            Err(e) => {
+                instances.destroy(d);
+                uniforms.destroy(d);
+                return Err(e);
+            }
+        };
+        Ok(FrameBuffers {
+            uniforms,
+            instances,
+            indirect,
+            instance_capacity: max_instances.max(1),
+        })
+    }
+
+    /// Call after the device is idle.
+    pub fn destroy(&mut self, device: &Device) {
+        self.indirect.destroy(device);
+        self.instances.destroy(device);
+        self.uniforms.destroy(device);
+    }
+}
+
+/// The dataset on the GPU and the plan state deciding its contents.
+pub struct GpuTerrain {
+    pub dataset: Arc<Dataset>,
+    pub levels: Image2d,
+    /// One texture array per pool r = 1..=MAX_REFINEMENT (a 1×1 placeholder when r has none).
+    pub pool_images: Vec<Image2d>,
+    /// One per frame in flight, indexed by the frame context.
+    pub frame_buffers: Vec<FrameBuffers>,
+    pub plan: PlanState,
+}
+
+impl GpuTerrain {
+    /// Creates the textures and per-frame buffers for `dataset` (checked against the device's
+    /// limits); their contents are undefined until initialised and filled.
+    pub fn new(
+        d: &Device,
+        dataset: Arc<Dataset>,
+        bake: Arc<ErrorBake>,
+        clipmap: ClipmapDesc,
+        pool_capacity: &[u32; MAX_REFINEMENT as usize],
+    ) -> Result<Self, VkError> {
+        Self::check_level_limits(d, &clipmap)?;
+        let level_count = clipmap.level_count();
+        let side = clipmap.texture_side();
+        let max = d.properties.limits.max_image_dimension2_d;
+        let max_layers = d.properties.limits.max_image_array_layers;
+        let spacing = [dataset.hf.spacing_x, dataset.hf.spacing_y];
+        let plan = PlanState::new(bake, spacing, clipmap, pool_capacity);
+        let image_desc = |w: u32, layers: u32| ImageDesc {
+            width: w,
+            height: w,
+            format: vk::Format::R32_SFLOAT,
+            usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+            aspect: vk::ImageAspectFlags::COLOR,
+            layers,
+        };
+        let levels = Image2d::new(d, "level textures", image_desc(side, level_count))?;
+        let mut this = Self {
+            dataset,
+            levels,
+            pool_images: Vec::new(),
+            frame_buffers: Vec::new(),
+            plan,
+        };
+        for (r, pool) in (1..).zip(&this.plan.pools) {
+            let capacity = pool.lru.capacity();
+            let (w, layers) = if capacity == 0 {
+                (1, 1) // a placeholder so every binding is valid
+            } else {
+                (pool.side, capacity)
+            };
+            if w > max || layers > max_layers {
+                this.destroy(d);
+                return Err(VkError::Other(format!(
+                    "pool r={r}: {layers} slots of {w}² exceed this device's limits"
+                )));
+            }
+            match Image2d::new(d, "refined-tile pool", image_desc(w, layers)) {
+                Ok(image) => this.pool_images.push(image),
+                Err(e) => {
+                    this.destroy(d);
+                    return Err(e);
+                }
+            }
+        }
+        // Nodes per frame: every ring tile of every level plus the coarsest grid when nothing is
+        // refined, a few nodes per refined tile — grown on demand up to MAX_INSTANCES.
+        let clipmap = &this.plan.clipmap;
+        let [cx, cy] = clipmap.dataset_tiles(level_count - 1);
+        let ring_tiles =
+            (level_count * clipmap.patch_tiles * clipmap.patch_tiles + cx * cy) as usize;
+        let max_instances = (ring_tiles * INITIAL_INSTANCES_PER_TILE)
+            .clamp(MIN_INITIAL_INSTANCES, INITIAL_MAX_INSTANCES);
+        for _ in 0..FRAMES_IN_FLIGHT {
+            match FrameBuffers::new(d, max_instances) {
+                Ok(b) => this.frame_buffers.push(b),
+                Err(e) => {
+                    this.destroy(d);
+                    return Err(e);
+                }
+            }
+        }
+        Ok(this)
+    }
+
+    /// Whether this device can hold the level textures of `clipmap`.
+    pub fn check_level_limits(d: &Device, clipmap: &ClipmapDesc) -> Result<(), VkError> {
+        let (level_count, side) = (clipmap.level_count(), clipmap.texture_side());
+        let max = d.properties.limits.max_image_dimension2_d;
+        let max_layers = d.properties.limits.max_image_array_layers;
+        if side > max || level_count > max_layers {
+            return Err(VkError::Other(format!(
+                "level textures of {side}² × {level_count} exceed this device's limits ({max}², {max_layers} layers)"
+            )));
+        }
+        Ok(())
+    }
+
+    /// Every height texture: the levels, then the pools.
+    pub fn images(&self) -> impl Iterator<Item = vk::Image> + '_ {
+        std::iter::once(self.levels.raw).chain(self.pool_images.iter().map(|p| p.raw))
+    }
+
+    /// Makes `frame`'s buffers hold `instances` records: a larger set replaces them, the old
+    /// one destroyed once this frame's submission has completed.
+    pub fn reserve_instances(
+        &mut self,
+        d: &Device,
+        frame: &mut FrameContext,
+        instances: usize,
+    ) -> Result<(), VkError> {
+        let i = frame.index();
+        if instances <= self.frame_buffers[i].instance_capacity {
+            return Ok(());
+        }
+        let grown = FrameBuffers::new(d, instances.next_power_of_two().min(MAX_INSTANCES))?;
+        let old = std::mem::replace(&mut self.frame_buffers[i], grown);
+        frame.defer_destroy(old.indirect);
+        frame.defer_destroy(old.instances);
+        frame.defer_destroy(old.uniforms);
+        Ok(())
+    }
+
+    /// Call after the device is idle.
+    pub fn destroy(&mut self, device: &Device) {
+        for b in &mut self.frame_buffers {
+            b.destroy(device);
+        }
+        for p in &mut self.pool_images {
+            p.destroy(device);
+        }
+        self.levels.destroy(device);
+    }
+}

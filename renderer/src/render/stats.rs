@@ -1,0 +1,118 @@
+//! What a frame and a dataset upload did (DESIGN.md "Every stage reports what it did"), and the
+//! CSV row every headless run writes per frame.
+
+use aerie_terrain::select::MAX_REFINEMENT;
+
+/// Instance groups drawn: unrefined (r = 0) and r = 1..=MAX_REFINEMENT.
+pub const RESOLUTIONS: usize = MAX_REFINEMENT as usize + 1;
+
+/// What one frame did.
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+pub struct FrameStats {
+    pub frame: u64,
+    pub finest_level: u32,
+    pub tiles_considered: u32,
+    pub tiles_culled: u32,
+    /// Ring tiles drawn (considered − culled).
+    pub tiles_drawn: u32,
+    /// Drawn ring tiles per refinement r chosen by the bound (index r; 0 = unrefined).
+    pub tiles_by_refinement: [u32; RESOLUTIONS],
+    /// m×m instances drawn: one per unrefined tile, one per quadtree node of a refined tile.
+    pub instances: u32,
+    /// Tiles drawn coarser than the bound asked because their upload did not fit this frame.
+    pub tiles_late: u32,
+    /// Tiles whose bound could not be met within the refinement cap.
+    pub tiles_unbounded: u32,
+    pub triangles: u64,
+    pub draw_calls: u32,
+    pub bytes_clipmap: u64,
+    pub bytes_refined: u64,
+    /// Everything through the staging ring this frame (uniforms, instances, indirect included).
+    pub bytes_uploaded: u64,
+    /// Clipmap uploads that exceeded the frame's budget and were streamed in extra submissions.
+    pub budget_spills: u32,
+    pub pool_hits: u32,
+    pub pool_misses: u32,
+    pub prefetched: u32,
+    /// A hash of the selection (nodes and refinements): equal for channels sharing one.
+    #[serde(skip)]
+    pub selection_digest: u64,
+    pub cpu_select_us: f64,
+    pub cpu_upload_us: f64,
+    pub cpu_record_us: f64,
+    pub gpu_upload_ms: f64,
+    pub gpu_terrain_ms: f64,
+}
+
+impl FrameStats {
+    pub const CSV_HEADER: &'static str = "frame,finest_level,tiles_considered,tiles_culled,tiles_drawn,refined_r0,refined_r1,refined_r2,refined_r3,refined_r4,refined_r5,refined_r6,instances,tiles_late,tiles_unbounded,triangles,draw_calls,bytes_clipmap,bytes_refined,bytes_uploaded,budget_spills,pool_hits,pool_misses,prefetched,cpu_select_us,cpu_upload_us,cpu_record_us,gpu_upload_ms,gpu_terrain_ms";
+
+    pub fn csv_row(&self) -> String {
+        let r = &self.tiles_by_refinement;
+        format!(
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1},{:.1},{:.1},{:.3},{:.3}",
+            self.frame,
+            self.finest_level,
+            self.tiles_considered,
+            self.tiles_culled,
+            self.tiles_drawn,
+            r[0],
+            r[1],
+            r[2],
+            r[3],
+            r[4],
+            r[5],
+            r[6],
+            self.instances,
+            self.tiles_late,
+            self.tiles_unbounded,
+            self.triangles,
+            self.draw_calls,
+            self.bytes_clipmap,
+            self.bytes_refined,
+            self.bytes_uploaded,
+            self.budget_spills,
+            self.pool_hits,
+            self.pool_misses,
+            self.prefetched,
+            self.cpu_select_us,
+            self.cpu_upload_us,
+            self.cpu_record_us,
+            self.gpu_upload_ms,
+            self.gpu_terrain_ms
+        )
+    }
+}
+
+/// What loading a dataset onto the GPU did.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct UploadStats {
+    pub bytes: u64,
+    /// Submissions the upload was split into (by the per-frame staging budget).
+    pub submissions: u32,
+    pub levels: u32,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_row_has_one_field_per_header_column_in_order() {
+        let s = FrameStats {
+            frame: 7,
+            tiles_by_refinement: [1, 2, 3, 4, 5, 6, 8],
+            gpu_terrain_ms: 1.5,
+            ..Default::default()
+        };
+        let header: Vec<&str> = FrameStats::CSV_HEADER.split(',').collect();
+        let row = s.csv_row();
+        let fields: Vec<&str> = row.split(',').collect();
+        assert_eq!(header.len(), fields.len());
+        let at = |name: &str| fields[header.iter().position(|h| *h == name).unwrap()];
+        assert_eq!(at("frame"), "7");
+        assert_eq!(at("refined_r0"), "1");
+        assert_eq!(at("refined_r6"), "8");
+        assert_eq!(at("gpu_terrain_ms"), "1.500");
+    }
+}

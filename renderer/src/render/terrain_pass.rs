@@ -1,0 +1,178 @@
+//! The terrain pass: the frame's descriptor set and one multi-draw indirect into the offscreen
+//! target (one command per refinement group).
+
+use ash::vk;
+
+use crate::render::gpu::DrawIndexedIndirect;
+use crate::render::resources::{FrameBuffers, GpuTerrain};
+use crate::render::uniforms::SKY_LINEAR;
+use crate::vk::pipeline::{
+    TerrainPipeline, BINDING_CLIPMAP, BINDING_FRAME, BINDING_INSTANCES, BINDING_POOLS,
+};
+use crate::vk::target::{OffscreenTarget, DEPTH_CLEAR};
+use crate::vk::Device;
+
+/// Descriptors one frame's set needs (its pool holds [`DESCRIPTOR_SETS`] such sets).
+pub fn descriptor_pool_sizes() -> [vk::DescriptorPoolSize; 3] {
+    [
+        vk::DescriptorPoolSize {
+            ty: vk::DescriptorType::UNIFORM_BUFFER,
+            descriptor_count: DESCRIPTOR_SETS,
+        },
+        vk::DescriptorPoolSize {
+            ty: vk::DescriptorType::STORAGE_BUFFER,
+            descriptor_count: DESCRIPTOR_SETS,
+        },
+        vk::DescriptorPoolSize {
+            ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            descriptor_count: DESCRIPTOR_SETS * (1 + aerie_terrain::select::MAX_REFINEMENT),
+        },
+    ]
+}
+
+/// Sets per frame's descriptor pool: one is used; the rest is headroom.
+pub const DESCRIPTOR_SETS: u32 = 4;
+
+/// Points `set` at this frame's buffers and every height texture (sampled with `sampler`).
+pub fn write_descriptors(
+    d: &Device,
+    set: vk::DescriptorSet,
+    fb: &FrameBuffers,
+    t: &GpuTerrain,
+    sampler: vk::Sampler,
+) {
+    let uniform_info = [vk::DescriptorBufferInfo {
+        buffer: fb.uniforms.raw,
+        offset: 0,
+        range: vk::WHOLE_SIZE,
+    }];
+    let instance_info = [vk::DescriptorBufferInfo {
+        buffer: fb.instances.raw,
+        offset: 0,
+        range: vk::WHOLE_SIZE,
+    }];
+    let image = |view| vk::DescriptorImageInfo {
+        sampler,
+        image_view: view,
+        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+    };
+    let clipmap_info = [image(t.levels.view)];
+    let pool_info: Vec<_> = t.pool_images.iter().map(|p| image(p.view)).collect();
+    let writes = [
+        vk::WriteDescriptorSet::default()
+            .dst_set(set)
+            .dst_binding(BINDING_FRAME)
+            .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+            .buffer_info(&uniform_info),
+        vk::WriteDescriptorSet::default()
+            .dst_set(set)
+            .dst_binding(BINDING_INSTANCES)
+            .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+            .buffer_info(&instance_info),
+        vk::WriteDescriptorSet::default()
+            .dst_set(set)
+            .dst_binding(BINDING_CLIPMAP)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .image_info(&clipmap_info),
+        vk::WriteDescriptorSet::default()
+            .dst_set(set)
+            .dst_binding(BINDING_POOLS)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .image_info(&pool_info),
+    ];
+    // SAFETY: `set` was allocated from this frame's pool, whose previous submission has
+    // completed (the frame context), so no pending command buffer uses it; every buffer, view
+    // and the sampler written are live, and the info arrays outlive the call.
+    unsafe { d.raw.update_descriptor_sets(&writes, &[]) };
+}
+
+/// The terrain pass: clear, bind, one multi-draw indirect (one command per resolution).
+#[allow(clippy::too_many_arguments)]
+pub fn record_terrain_pass(
+    d: &Device,
+    cmd: vk::CommandBuffer,
+    target: &OffscreenTarget,
+    pipeline: &TerrainPipeline,
+    set: vk::DescriptorSet,
+    index_buffer: vk::Buffer,
+    indirect: vk::Buffer,
+    draw_count: u32,
+) {
+    let (w, h) = (target.width, target.height);
+    let colour_attachment = [vk::RenderingAttachmentInfo::default()
+        .image_view(target.colour.view)
+        .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(vk::AttachmentStoreOp::STORE)
+        .clear_value(vk::ClearValue {
+            color: vk::ClearColorValue {
+                float32: [SKY_LINEAR[0], SKY_LINEAR[1], SKY_LINEAR[2], 1.0],
+            },
+        })];
+    let depth_attachment = vk::RenderingAttachmentInfo::default()
+        .image_view(target.depth.view)
+        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(vk::AttachmentStoreOp::STORE)
+        .clear_value(vk::ClearValue {
+            depth_stencil: vk::ClearDepthStencilValue {
+                depth: DEPTH_CLEAR,
+                stencil: 0,
+            },
+        });
+    let area = vk::Rect2D {
+        offset: vk::Offset2D { x: 0, y: 0 },
+        extent: vk::Extent2D {
+            width: w,
+            height: h,
+        },
+    };
+    let rendering = vk::RenderingInfo::default()
+        .render_area(area)
+        .layer_count(1)
+        .color_attachments(&colour_attachment)
+        .depth_attachment(&depth_attachment);
+    // SAFETY: `cmd` is recording outside any rendering; the target's views are live and in the
+    // attachment layouts named (its `record_begin` put them there); the pipeline, `set` (written
+    // for this frame), the index buffer and `indirect` (draw_count commands of the stride
+    // given, staged this frame) are live.
+    unsafe {
+        d.raw.cmd_begin_rendering(cmd, &rendering);
+        d.raw.cmd_set_viewport(
+            cmd,
+            0,
+            &[vk::Viewport {
+                x: 0.0,
+                y: 0.0,
+                width: w as f32,
+                height: h as f32,
+                min_depth: 0.0,
+                max_depth: 1.0,
+            }],
+        );
+        d.raw.cmd_set_scissor(cmd, 0, &[area]);
+        if draw_count > 0 {
+            d.raw
+                .cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
+            d.raw.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                pipeline.layout,
+                0,
+                &[set],
+                &[],
+            );
+            d.raw
+                .cmd_bind_index_buffer(cmd, index_buffer, 0, vk::IndexType::UINT32);
+            // One multi-draw indirect for every tile: no per-tile Vulkan calls.
+            d.raw.cmd_draw_indexed_indirect(
+                cmd,
+                indirect,
+                0,
+                draw_count,
+                std::mem::size_of::<DrawIndexedIndirect>() as u32,
+            );
+        }
+        d.raw.cmd_end_rendering(cmd);
+    }
+}

@@ -1,0 +1,235 @@
+//! Carrying out upload jobs: gathering dataset samples into the staging region, recording the
+//! copies into the height textures, and streaming uploads larger than one frame's budget over
+//! several submissions (the first fill of a dataset, a spill after a jump, the index buffer).
+
+use ash::vk;
+
+use aerie_terrain::gather::gather;
+use aerie_terrain::select::MAX_REFINEMENT;
+use aerie_terrain::Heightfield;
+
+use crate::render::gpu::FrameUniforms;
+use crate::render::jobs::ImageUpload;
+use crate::render::overlay_pass::Panel;
+use crate::render::plan::FramePlan;
+use crate::vk::access::{image_barrier, memory_barrier, Access};
+use crate::vk::frame_context::FrameRing;
+use crate::vk::staging::StagingRing;
+use crate::vk::{Device, VkError};
+
+/// Where a sampled height texture rests between uploads.
+const SAMPLED: [Access; 1] = [Access::VertexShaderReadSampledImage];
+const COPY_DST: [Access; 1] = [Access::TransferWrite];
+
+/// Gathers one upload's samples straight into the open staging region; returns its copy region.
+pub fn stage_gather(
+    staging: &mut StagingRing,
+    hf: &Heightfield,
+    job: &ImageUpload,
+) -> Result<vk::BufferImageCopy, VkError> {
+    let (offset, bytes) = staging.alloc(job.bytes(), 4)?;
+    gather(
+        hf,
+        job.origin_sample,
+        job.step,
+        job.size,
+        bytemuck::cast_slice_mut(bytes),
+    );
+    Ok(buffer_image_copy(offset, job))
+}
+
+/// The copy of `job`, staged at `offset`, into its texel rectangle and layer.
+pub fn buffer_image_copy(offset: u64, job: &ImageUpload) -> vk::BufferImageCopy {
+    vk::BufferImageCopy::default()
+        .buffer_offset(offset)
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: job.layer,
+            layer_count: 1,
+        })
+        .image_offset(vk::Offset3D {
+            x: job.texel[0] as i32,
+            y: job.texel[1] as i32,
+            z: 0,
+        })
+        .image_extent(vk::Extent3D {
+            width: job.size[0],
+            height: job.size[1],
+            depth: 1,
+        })
+}
+
+/// Copies staged regions into a sampled texture: SHADER_READ_ONLY → TRANSFER_DST (contents kept,
+/// after earlier frames' vertex-shader reads), the copies, then back to SHADER_READ_ONLY.
+pub fn record_image_copies(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    staging: vk::Buffer,
+    image: vk::Image,
+    copies: &[vk::BufferImageCopy],
+) {
+    if copies.is_empty() {
+        return;
+    }
+    let colour = vk::ImageAspectFlags::COLOR;
+    image_barrier(device, cmd, image, colour, &SAMPLED, &COPY_DST, false);
+    // SAFETY: `cmd` is recording; `image` is live and in TRANSFER_DST_OPTIMAL after the barrier;
+    // every region was staged inside `staging` by `stage_gather` and lies inside the image
+    // (the plan's texel rectangles are within the texture side and its layers).
+    unsafe {
+        device.raw.cmd_copy_buffer_to_image(
+            cmd,
+            staging,
+            image,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            copies,
+        )
+    };
+    image_barrier(device, cmd, image, colour, &COPY_DST, &SAMPLED, false);
+}
+
+/// Moves every texture from nothing into SHADER_READ_ONLY, the layout it rests in between
+/// uploads, in one submission.
+pub fn initialise_images(
+    device: &Device,
+    ring: &mut FrameRing,
+    images: impl IntoIterator<Item = vk::Image>,
+) -> Result<(), VkError> {
+    let mut frame = ring.begin_frame(device)?;
+    let cmd = frame.begin_recording(device)?;
+    for image in images {
+        let colour = vk::ImageAspectFlags::COLOR;
+        image_barrier(
+            device,
+            cmd,
+            image,
+            colour,
+            &[Access::Nothing],
+            &SAMPLED,
+            true,
+        );
+    }
+    let _in_flight = frame.submit(device)?;
+    Ok(())
+}
+
+/// Uploads bytes into a device buffer read as indices and by vertex shaders, in as many
+/// submissions as the per-frame budget requires.
+pub fn stream_buffer(
+    device: &Device,
+    ring: &mut FrameRing,
+    bytes: &[u8],
+    dst: vk::Buffer,
+) -> Result<(), VkError> {
+    let chunk = (ring.staging_budget() / 2).max(4) / 4 * 4;
+    let mut done = 0usize;
+    while done < bytes.len() {
+        let n = (bytes.len() - done).min(chunk as usize);
+        let mut frame = ring.begin_frame(device)?;
+        let offset = frame.staging().push(&bytes[done..done + n], 4)?;
+        let src = frame.staging_buffer();
+        let cmd = frame.begin_recording(device)?;
+        let region = vk::BufferCopy {
+            src_offset: offset,
+            dst_offset: done as u64,
+            size: n as u64,
+        };
+        // SAFETY: `cmd` is recording; `n` bytes were staged at `offset` of the live staging
+        // buffer, and `dst` (live, TRANSFER_DST) is at least `bytes.len()` long (the caller's).
+        unsafe { device.raw.cmd_copy_buffer(cmd, src, dst, &[region]) };
+        memory_barrier(
+            device,
+            cmd,
+            &[Access::TransferWrite],
+            &[Access::IndexBuffer, Access::VertexShaderReadStorageBuffer],
+        );
+        let _in_flight = frame.submit(device)?;
+        done += n;
+    }
+    Ok(())
+}
+
+/// Streams level-texture uploads into `image`, one submission per inner list (as the plan split
+/// them). Returns the submission count.
+pub fn stream_image_uploads(
+    device: &Device,
+    ring: &mut FrameRing,
+    hf: &Heightfield,
+    image: vk::Image,
+    submissions: &[Vec<ImageUpload>],
+) -> Result<u32, VkError> {
+    for jobs in submissions {
+        let mut frame = ring.begin_frame(device)?;
+        let copies = jobs
+            .iter()
+            .map(|job| stage_gather(frame.staging(), hf, job))
+            .collect::<Result<Vec<_>, _>>()?;
+        let src = frame.staging_buffer();
+        let cmd = frame.begin_recording(device)?;
+        record_image_copies(device, cmd, src, image, &copies);
+        let _in_flight = frame.submit(device)?;
+    }
+    Ok(submissions.len() as u32)
+}
+
+/// Where a frame's plan landed in its staging region.
+pub struct StagedFrame {
+    pub strip_copies: Vec<vk::BufferImageCopy>,
+    /// Copies per pool r = 1..=MAX_REFINEMENT (index r − 1), in the plan's order.
+    pub pool_copies: Vec<Vec<vk::BufferImageCopy>>,
+    pub uniforms: u64,
+    pub draws: u64,
+    /// None when nothing is drawn.
+    pub instances: Option<u64>,
+    /// None without an overlay (or an empty one).
+    pub overlay: Option<u64>,
+}
+
+/// Stages everything `plan` says, in its order — strips, pool uploads, uniforms, indirect
+/// commands, instances, overlay — into the frame's open region, and checks that it took
+/// exactly the bytes the plan counted (so the plan's budget decisions were about this region).
+pub fn stage_frame(
+    staging: &mut StagingRing,
+    hf: &Heightfield,
+    plan: &FramePlan,
+    uniforms: &FrameUniforms,
+    overlay: Option<&Panel>,
+) -> Result<StagedFrame, VkError> {
+    let strip_copies = plan
+        .strips
+        .iter()
+        .map(|job| stage_gather(staging, hf, job))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut pool_copies = vec![Vec::new(); MAX_REFINEMENT as usize];
+    for p in &plan.pool_uploads {
+        let copy = stage_gather(staging, hf, &p.upload)?;
+        pool_copies[p.key.refinement as usize - 1].push(copy);
+    }
+    let uniforms = staging.push(std::slice::from_ref(uniforms), 16)?;
+    let draws = staging.push(&plan.draws, 4)?;
+    let instances = if plan.instances.is_empty() {
+        None
+    } else {
+        Some(staging.push(&plan.instances, 16)?)
+    };
+    let overlay = match overlay {
+        Some(p) if p.bytes() > 0 => Some(staging.push(&p.rgba, 16)?),
+        _ => None,
+    };
+    if staging.used() != plan.staged_bytes {
+        return Err(VkError::Staging(format!(
+            "staging the frame took {} bytes, its plan counted {}",
+            staging.used(),
+            plan.staged_bytes
+        )));
+    }
+    Ok(StagedFrame {
+        strip_copies,
+        pool_copies,
+        uniforms,
+        draws,
+        instances,
+        overlay,
+    })
+}
