@@ -307,6 +307,8 @@ fn uses(path: &[String], m: &Module) -> Vec<Vec<String>> {
         // may import anything, they are not part of the architecture.
         if !line.starts_with(' ') {
             if let Some(rest) = t
+                .trim_start_matches("pub(crate) ")
+                .trim_start_matches("pub(super) ")
                 .trim_start_matches("pub ")
                 .strip_prefix("mod ")
                 .filter(|r| r.trim_end().ends_with('{'))
@@ -585,7 +587,7 @@ mod tests {
                 ("a_tests.rs", "use super::*;\nuse crate::b::B;\n"),
                 (
                     "b.rs",
-                    "pub struct B;\n#[cfg(test)]\nmod tests {\n    use crate::a::A;\n}\n",
+                    "pub struct B;\n#[cfg(test)]\npub(crate) mod tests {\n    use crate::a::A;\n}\n",
                 ),
             ],
         );

@@ -135,39 +135,3 @@ impl Image2d {
         }
     }
 }
-
-/// A layout transition of the whole image with explicit stages and accesses.
-// Last callers move to access::image_barrier; remove then.
-#[doc(hidden)]
-#[allow(clippy::too_many_arguments)]
-pub fn transition(
-    device: &Device,
-    cmd: vk::CommandBuffer,
-    image: vk::Image,
-    aspect: vk::ImageAspectFlags,
-    from: (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags),
-    to: (vk::ImageLayout, vk::PipelineStageFlags, vk::AccessFlags),
-) {
-    let barrier = vk::ImageMemoryBarrier::default()
-        .old_layout(from.0)
-        .new_layout(to.0)
-        .src_access_mask(from.2)
-        .dst_access_mask(to.2)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(image)
-        .subresource_range(subresource_range(aspect));
-    // SAFETY: as in `access::image_barrier`: the device is live, `cmd` is recording on it and
-    // `image` is one of its images (the callers' frame command buffer and their own images).
-    unsafe {
-        device.raw.cmd_pipeline_barrier(
-            cmd,
-            from.1,
-            to.1,
-            vk::DependencyFlags::empty(),
-            &[],
-            &[],
-            &[barrier],
-        )
-    };
-}
