@@ -32,7 +32,7 @@ use crate::render::upload::{
 use crate::vk::access::{memory_barrier, Access};
 use crate::vk::frame_context::{FrameContext, FrameRing};
 use crate::vk::pipeline::TerrainPipeline;
-use crate::vk::swapchain::PresentTarget;
+use crate::vk::swapchain::{PresentTarget, ACQUIRE_WAIT_STAGE};
 use crate::vk::target::OffscreenTarget;
 use crate::vk::timestamps::Pass;
 use crate::vk::{Buffer, Device, Instance, ValidationCounters, VkError, VkResultExt};
@@ -369,7 +369,7 @@ impl TerrainRenderer {
             }
             Some(p) => {
                 self.target.record_blit_to(d, cmd, p.image, p.extent);
-                let stage = [vk::PipelineStageFlags::TRANSFER];
+                let stage = [ACQUIRE_WAIT_STAGE];
                 let _in_flight = frame.submit_with(d, &[p.acquired], &stage, &[p.rendered])?;
                 stats.cpu_record_us = t2.elapsed().as_secs_f64() * 1e6;
                 previous_gpu
