@@ -7,8 +7,9 @@ use std::time::Instant;
 
 use clap::Args;
 
-use super::{check_out_folder, human_bytes, progress_bar};
 use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::out_path::prepare_out_file;
+use crate::app::progress::{human_bytes, progress_bar};
 use aerie_terrain::bake::{
     bake, bake_path_for, check_existing, report_csv, write_bake, BakeError, BakeParams, ErrorBake,
     Existing,
@@ -57,7 +58,7 @@ pub fn run(a: BakeArgs) -> Result<(), Failure> {
     let t = Instant::now();
     let ds = load_dataset(&a.dataset).map_err(bad_input)?;
     let out = a.out.clone().unwrap_or_else(|| bake_path_for(&a.dataset));
-    check_out_folder("--out", &out)?;
+    prepare_out_file("--out", &out)?;
     eprintln!(
         "loaded {}: {}, {} voids filled; {} ({:.2} s)",
         ds.source,

@@ -27,19 +27,23 @@ use std::time::Instant;
 use clap::Args;
 use glam::DVec3;
 
+use crate::app::args::{read_waypoints, PassArgs};
 use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::flight_plan::FlightPlan;
+use crate::app::out_path::prepare_out_folder;
 use crate::app::prepare::prepare_terrain;
+use crate::app::progress::count_bar;
+use crate::app::renderer_setup::{parse_view, patch_tiles, renderer_desc, RendererChoice, View};
 use crate::render::frame::{FrameStats, RendererDesc, TerrainRenderer};
-use crate::sim::flight::{StraightPass, Waypoints};
+use crate::sim::flight::Waypoints;
 use crate::tools::image_error::{
     heatmap_rgba, measure, oracle_selection, ImageError, MeasureParams, OracleResult,
 };
 use crate::tools::output::{write_png, write_text};
-use crate::vk::DeviceDesc;
-use aerie_terrain::camera::{parse_size_arg, Attitude, Camera, Frustum};
+use aerie_terrain::camera::{Attitude, Camera};
 use aerie_terrain::clipmap::{place_levels, ClipmapDesc};
 use aerie_terrain::dataset::Dataset;
-use aerie_terrain::select::{select_tiles, LodMode, SelectParams, Selection, MAX_REFINEMENT};
+use aerie_terrain::select::{select_tiles, LodMode, Selection};
 
 pub use report::{pareto_front, Quantiles};
 
@@ -48,7 +52,7 @@ pub struct BenchArgs {
     /// Elevation model (any format `render` reads); its bake is read from or written next to it.
     #[arg(long)]
     pub dem: PathBuf,
-    /// Output folder (created): results.csv, summary.csv, summary.md, time_vs_error.png, ...
+    /// Output folder (created, with the folders above it): results.csv, summary.csv, summary.md, time_vs_error.png, ...
     #[arg(long)]
     pub out: PathBuf,
     /// Timed waypoints (`t_s,x_m,y_m,z_m,heading,pitch,roll` per line) instead of the built-in
@@ -64,21 +68,8 @@ pub struct BenchArgs {
     /// Simulated frame rate: frame k is the pose at k / fps seconds.
     #[arg(long, default_value_t = 30.0)]
     pub fps: f64,
-    /// Built-in pass: ground speed, m/s.
-    #[arg(long, default_value_t = 340.0)]
-    pub speed: f64,
-    /// Built-in pass: metres above the highest sample (with --follow-terrain: above the ground).
-    #[arg(long, default_value_t = 600.0)]
-    pub agl: f64,
-    /// Built-in pass: fly --agl above the ground under the aircraft.
-    #[arg(long)]
-    pub follow_terrain: bool,
-    /// Built-in pass: heading, degrees clockwise from north.
-    #[arg(long, default_value_t = 70.0, allow_hyphen_values = true)]
-    pub heading: f64,
-    /// Built-in pass: camera pitch, degrees (negative looks down).
-    #[arg(long, default_value_t = -12.0, allow_hyphen_values = true)]
-    pub pitch: f64,
+    #[command(flatten)]
+    pub pass: PassArgs,
     /// Output size, WxH pixels.
     #[arg(long, default_value = "1920x1080")]
     pub size: String,
@@ -216,24 +207,14 @@ pub fn configurations(modes: &[LodMode], taus: &[f64]) -> Vec<BenchConfig> {
 
 /// Validated arguments.
 struct Plan {
-    width: u32,
-    height: u32,
-    frustum: Frustum,
+    view: View,
     configs: Vec<BenchConfig>,
     patch_tiles: u32,
     waypoints: Option<Waypoints>,
 }
 
 fn plan(a: &BenchArgs) -> Result<Plan, Failure> {
-    let (width, height) = parse_size_arg(&a.size).map_err(|e| bad_input(format!("--size: {e}")))?;
-    if !(a.fov.is_finite() && a.fov > 0.0 && a.fov < 180.0) {
-        return Err(bad_input(format!(
-            "--fov: {} is outside (0, 180) degrees",
-            a.fov
-        )));
-    }
-    let frustum = Frustum::try_symmetric(a.fov.to_radians(), width, height)
-        .map_err(|e| bad_input(format!("--fov: {e}")))?;
+    let view = parse_view(&a.size, a.fov)?;
     let modes = parse_modes(&a.modes).map_err(bad_input)?;
     let taus = parse_taus(&a.tau).map_err(bad_input)?;
     if a.frames == 0 {
@@ -245,75 +226,31 @@ fn plan(a: &BenchArgs) -> Result<Plan, Failure> {
             a.oracle_nodes
         )));
     }
-    for (name, v) in [("--fps", a.fps), ("--speed", a.speed), ("--agl", a.agl)] {
-        if !v.is_finite() || v < 0.0 || (name == "--fps" && v == 0.0) {
-            return Err(bad_input(format!(
-                "{name}: {v} must be a finite positive number"
-            )));
-        }
-    }
-    for (name, v) in [("--heading", a.heading), ("--pitch", a.pitch)] {
-        if !v.is_finite() {
-            return Err(bad_input(format!("{name}: {v} is not finite")));
-        }
-    }
-    let q = RendererDesc::default().tile_size - 1;
-    if a.patch < 8 * q + 1 || !(a.patch - 1).is_multiple_of(2 * q) {
-        return Err(bad_input(format!(
-            "--patch: {} must be P·{q}+1 with P even and ≥ 8 (e.g. 129 or 257)",
-            a.patch
-        )));
-    }
-    let waypoints = match &a.flight {
-        Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .map_err(|e| bad_input(format!("--flight {}: {e}", p.display())))?;
-            Some(Waypoints::parse(&text, &p.display().to_string()).map_err(bad_input)?)
-        }
-        None => None,
-    };
+    a.pass.check(a.fps)?;
+    let patch_tiles = patch_tiles(a.patch)?;
+    let waypoints = read_waypoints("--flight", a.flight.as_ref())?;
     Ok(Plan {
-        width,
-        height,
-        frustum,
+        view,
         configs: configurations(&modes, &taus),
-        patch_tiles: (a.patch - 1) / q,
+        patch_tiles,
         waypoints,
     })
 }
 
 /// The renderer of one configuration: `full` gets pools large enough to draw every visible
 /// tile at full resolution (as `aerie render --lod full`).
-fn renderer_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> RendererDesc {
-    let defaults = RendererDesc::default();
-    let full = config.mode == LodMode::Full;
-    RendererDesc {
-        validation: a.validate || cfg!(debug_assertions),
-        device: DeviceDesc {
-            name_filter: a.gpu.clone(),
-            ..DeviceDesc::default()
-        },
-        width: p.width,
-        height: p.height,
+fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> RendererDesc {
+    renderer_desc(&RendererChoice {
+        gpu: a.gpu.clone(),
+        validate: a.validate,
+        width: p.view.width,
+        height: p.view.height,
         patch_tiles: p.patch_tiles,
-        pool_capacity: if full {
-            [1024, 512, 256, 128, 48, 16]
-        } else {
-            defaults.pool_capacity
-        },
-        select: SelectParams {
-            mode: config.mode,
-            tau_px: config.tau_px.unwrap_or(1.0),
-            curvature: !a.no_curvature,
-            max_refinement: if full {
-                MAX_REFINEMENT
-            } else {
-                SelectParams::default().max_refinement
-            },
-            ..SelectParams::default()
-        },
-        ..defaults
-    }
+        mode: config.mode,
+        tau_px: config.tau_px.unwrap_or(1.0),
+        curvature: !a.no_curvature,
+        debug_tiles: false,
+    })
 }
 
 /// One frame of one configuration, as written to `results.csv`.
@@ -380,28 +317,13 @@ struct Lane {
 }
 
 pub fn run(a: BenchArgs) -> Result<(), Failure> {
-    let p = plan(&a)?;
-    std::fs::create_dir_all(&a.out).map_err(|e| {
-        bad_input(format!(
-            "--out {}: cannot create folder: {e}",
-            a.out.display()
-        ))
-    })?;
+    let mut p = plan(&a)?;
+    prepare_out_folder("--out", &a.out)?;
     let tile_size = RendererDesc::default().tile_size;
     let (ds, bake) = prepare_terrain(&a.dem, tile_size)?;
     let total_frames = a.warmup + a.frames;
     let duration = total_frames as f64 / a.fps;
-    let pass = StraightPass::over(&ds, a.heading, a.pitch, a.speed, a.agl, duration);
-    let pose_at = |t: f64| -> (DVec3, Attitude) {
-        if let Some(w) = &p.waypoints {
-            return w.pose_at(t);
-        }
-        let (mut pos, att) = pass.pose_at(t);
-        if a.follow_terrain {
-            pos.z = ds.hf.height_at_m(pos.x, pos.y) + a.agl;
-        }
-        (pos, att)
-    };
+    let flight = FlightPlan::new(&ds, &a.pass, p.waypoints.take(), duration);
     let image_error = !a.no_image_error;
     let mut lane_configs: Vec<(BenchConfig, bool)> = p.configs.iter().map(|&c| (c, true)).collect();
     let has_full = p.configs.iter().any(|c| c.mode == LodMode::Full);
@@ -414,11 +336,11 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             false,
         ));
     }
-    let eye0 = pose_at(0.0).0;
+    let eye0 = flight.pose_at(0.0).0;
     let t_setup = Instant::now();
     let mut lanes: Vec<Lane> = Vec::new();
     for &(config, reported) in &lane_configs {
-        let desc = renderer_desc(&a, &p, config);
+        let desc = lane_desc(&a, &p, config);
         let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
         renderer
             .load_terrain(ds.clone(), bake.clone(), eye0)
@@ -464,13 +386,9 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
         .iter()
         .position(|l| l.config.mode == LodMode::Full)
         .filter(|_| image_error);
-    let bar = indicatif::ProgressBar::new(total_frames as u64 * lanes.len() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} renders, eta {eta}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
+    let bar = count_bar(total_frames as u64 * lanes.len() as u64, "renders", "");
     let mut rows: Vec<FrameRow> = Vec::new();
-    let size = (p.width, p.height);
+    let size = (p.view.width, p.view.height);
     let n = lanes.len();
     // indicatif draws nothing when stderr is not a terminal (CI logs, nohup): print a plain
     // line per ~10 % of the frames there instead.
@@ -492,8 +410,8 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             format!("frame {}/{}", k - a.warmup + 1, a.frames)
         });
         let t = k as f64 / a.fps;
-        let (pos, att) = pose_at(t);
-        let camera = Camera::new(pos, att, p.frustum);
+        let (pos, att) = flight.pose_at(t);
+        let camera = Camera::new(pos, att, p.view.frustum);
         let mut results: Vec<Option<(f64, FrameStats)>> = vec![None; n];
         for j in 0..n {
             let i = (j + k as usize) % n;
@@ -609,11 +527,11 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             Some(f) => format!("waypoints {}", f.display()),
             None => format!(
                 "built-in straight pass, heading {}°, pitch {}°, {} m/s, {} m {}, {} fps",
-                a.heading,
-                a.pitch,
-                a.speed,
-                a.agl,
-                if a.follow_terrain {
+                a.pass.heading,
+                a.pass.pitch,
+                a.pass.speed,
+                a.pass.agl,
+                if a.pass.follow_terrain {
                     "above the ground"
                 } else {
                     "above the highest sample"
@@ -643,8 +561,8 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             let path = out.join(format!("heatmap_{}_frame{frame:04}.png", lane.config.key()));
             write_png(
                 &path,
-                p.width,
-                p.height,
+                p.view.width,
+                p.view.height,
                 &heatmap_rgba(&lane.worst_heat, scale),
             )
             .map_err(runtime)?;

@@ -9,8 +9,9 @@ use std::time::Instant;
 
 use clap::Args;
 
-use super::{check_out_folder, human_bytes, progress_bar};
 use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::out_path::prepare_out_file;
+use crate::app::progress::{human_bytes, progress_bar};
 use aerie_terrain::gen::{generate_into, DemKind, GenParams};
 
 /// Largest side accepted (32769² f32 = 4.3 GB).
@@ -73,7 +74,7 @@ pub fn run(a: GenDemArgs) -> Result<(), Failure> {
             a.out.display()
         )));
     }
-    check_out_folder("--out", &a.out)?;
+    prepare_out_file("--out", &a.out)?;
     let p = GenParams {
         size: a.size,
         spacing: a.spacing,
