@@ -278,7 +278,12 @@ fn render_and_fly_create_nested_output_folders() {
         flight.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    for f in ["frame_0000.png", "frame_0001.png", "frames.csv", "summary.json"] {
+    for f in [
+        "frame_0000.png",
+        "frame_0001.png",
+        "frames.csv",
+        "summary.json",
+    ] {
         assert!(flight.join(f).is_file(), "{f} written");
     }
 }

@@ -38,8 +38,7 @@ pub enum Command {
     /// Send a recording's datagrams to a UDP address (original timing or --fast).
     Replay(replay::ReplayArgs),
     /// The image generator, driven by a simulator or flying the built-in pass: one window or
-    /// fullscreen display per channel of a config (all in this process, or only --channel
-    /// NAME), or headless.
+    /// fullscreen display per channel of a config (or only --channel NAME), or headless.
     Run(run_cmd::RunArgs),
 }
 

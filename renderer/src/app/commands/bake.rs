@@ -34,7 +34,8 @@ pub struct BakeArgs {
     /// Overwrite whatever is at the output path, and re-bake an up-to-date bake.
     #[arg(long)]
     pub force: bool,
-    /// Bake file (default: `<dataset>.aerie-bake` next to the dataset file or folder).
+    /// Bake file (default: `<dataset>.aerie-bake` next to the dataset file or folder); its
+    /// folder is created.
     #[arg(long)]
     pub out: Option<PathBuf>,
 }

@@ -32,6 +32,7 @@ use aerie_terrain::camera::{Attitude, Camera};
 
 #[derive(Debug, Args)]
 pub struct FlyArgs {
+    /// Elevation model (any format `render` reads); its bake is read from or written next to it.
     #[arg(long)]
     pub dem: PathBuf,
     /// Number of frames.

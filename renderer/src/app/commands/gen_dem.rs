@@ -32,7 +32,8 @@ pub struct GenDemArgs {
     /// Seed: the same seed (and size, spacing, kind) always gives the same bytes.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Output raw f32 file (.f32, .r32 or .raw); the sidecar `<out>.json` is written next to it.
+    /// Output raw f32 file (.f32, .r32 or .raw; its folder is created); the sidecar `<out>.json`
+    /// is written next to it.
     #[arg(long)]
     pub out: PathBuf,
 }
