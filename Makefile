@@ -24,8 +24,9 @@ demo: setup
 	    --frames 24 --every 4 --size 640x360 --out $(DEMO_OUT)
 	@echo "demo: $(DEMO_OUT)-still.png, $(DEMO_OUT)-tiles.png, $(DEMO_OUT)/frame_*.png, $(DEMO_OUT)/frames.csv, $(DEMO_OUT)/summary.json"
 
-# `make test` is CI's second command (after `make demo`): formatting, then every test. Clippy is `make lint` (a second full
-# compilation would double the CI time on 2 cores); run it before committing.
+# `make test` is CI's second command (after `make demo`): formatting, then every test. Clippy is
+# `make lint` (a second full compilation would double the CI time on 2 cores); run it before
+# committing.
 lint:
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
