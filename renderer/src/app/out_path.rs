@@ -1,7 +1,7 @@
 //! Output paths: every command creates the folders it writes into, so a fresh checkout's
 //! `--out out/demo-still.png` works, and names the folder when it cannot.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::app::failure::{bad_input, Failure};
 
@@ -45,6 +45,14 @@ pub fn require_out_folder(flag: &str, out: &Path) -> Result<(), Failure> {
         )));
     }
     Ok(())
+}
+
+/// `path` with `suffix` appended to its file name: the file written next to it
+/// (`big.f32` → `big.f32.json`).
+pub fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(suffix);
+    PathBuf::from(s)
 }
 
 fn create_folder(flag: &str, out: &Path, folder: &Path) -> Result<(), Failure> {
@@ -95,6 +103,18 @@ mod tests {
         assert!(e.message.starts_with("--record "), "{}", e.message);
         let e = prepare_out_file("--out", dir.path()).unwrap_err();
         assert!(e.message.contains("is a folder"), "{}", e.message);
+    }
+
+    #[test]
+    fn suffixes_are_appended_to_the_whole_name() {
+        assert_eq!(
+            with_suffix(Path::new("d/big.f32"), ".json"),
+            PathBuf::from("d/big.f32.json")
+        );
+        assert_eq!(
+            with_suffix(Path::new("x.aerie-bake"), ".csv"),
+            PathBuf::from("x.aerie-bake.csv")
+        );
     }
 
     #[test]

@@ -8,7 +8,7 @@ use std::time::Instant;
 use clap::Args;
 
 use crate::app::failure::{bad_input, runtime, Failure};
-use crate::app::out_path::prepare_out_file;
+use crate::app::out_path::{prepare_out_file, with_suffix};
 use crate::app::progress::{human_bytes, progress_bar};
 use aerie_terrain::bake::{
     bake, bake_path_for, check_existing, report_csv, write_bake, BakeError, BakeParams, ErrorBake,
@@ -176,9 +176,7 @@ fn report(b: &ErrorBake, out: &std::path::Path) -> Result<(), Failure> {
             trim(l.median)
         );
     }
-    let mut csv = out.as_os_str().to_owned();
-    csv.push(".csv");
-    let csv = PathBuf::from(csv);
+    let csv = with_suffix(out, ".csv");
     std::fs::write(&csv, report_csv(&stats))
         .map_err(|e| runtime(format!("{}: cannot write: {e}", csv.display())))?;
     println!("report: {}", csv.display());

@@ -16,8 +16,10 @@
 //! `summary.csv`, `summary.md`, `time_vs_error.png`, `triangles_vs_error.png` and one error
 //! heat map per configuration (its worst frame).
 
+mod config;
 mod plot;
 mod report;
+mod rows;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -25,7 +27,6 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use clap::Args;
-use glam::DVec3;
 
 use crate::app::args::{read_waypoints, PassArgs};
 use crate::app::failure::{bad_input, runtime, Failure};
@@ -37,15 +38,17 @@ use crate::app::renderer_setup::{parse_view, patch_tiles, renderer_desc, Rendere
 use crate::render::frame::{FrameStats, RendererDesc, TerrainRenderer};
 use crate::sim::flight::Waypoints;
 use crate::tools::image_error::{
-    heatmap_rgba, measure, oracle_selection, ImageError, MeasureParams, OracleResult,
+    heatmap_rgba, measure, oracle_selection, ImageError, MeasureParams,
 };
 use crate::tools::output::{write_png, write_text};
-use aerie_terrain::camera::{Attitude, Camera};
+use aerie_terrain::camera::Camera;
 use aerie_terrain::clipmap::{place_levels, ClipmapDesc};
 use aerie_terrain::dataset::Dataset;
 use aerie_terrain::select::{select_tiles, LodMode, Selection};
 
+pub use config::{configurations, mode_name, parse_modes, parse_taus, BenchConfig};
 pub use report::{pareto_front, Quantiles};
+use rows::{FrameRow, ImageRow};
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
@@ -102,109 +105,6 @@ pub struct BenchArgs {
     pub validate: bool,
 }
 
-/// One configuration of the run: a mode, and τ for `bounded`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BenchConfig {
-    pub mode: LodMode,
-    /// τ (px) for `bounded`; None for the modes that do not use it.
-    pub tau_px: Option<f64>,
-}
-
-impl BenchConfig {
-    pub fn mode_name(&self) -> &'static str {
-        mode_name(self.mode)
-    }
-
-    /// "bounded τ=0.5", "clipmap".
-    pub fn label(&self) -> String {
-        match self.tau_px {
-            Some(t) => format!("{} τ={t}", self.mode_name()),
-            None => self.mode_name().to_string(),
-        }
-    }
-
-    /// ASCII key for CSV cells and file names: "bounded_tau0.5", "clipmap".
-    pub fn key(&self) -> String {
-        match self.tau_px {
-            Some(t) => format!("{}_tau{t}", self.mode_name()),
-            None => self.mode_name().to_string(),
-        }
-    }
-
-    /// τ the image error's "fraction above τ" and heat map use: the configuration's own, 1 px
-    /// for the modes without one.
-    pub fn tau_for_error(&self) -> f64 {
-        self.tau_px.unwrap_or(1.0)
-    }
-}
-
-pub fn mode_name(mode: LodMode) -> &'static str {
-    match mode {
-        LodMode::Bounded => "bounded",
-        LodMode::Clipmap => "clipmap",
-        LodMode::Full => "full",
-        LodMode::Distance => "distance",
-    }
-}
-
-/// Parses `--modes`: a comma-separated list of mode names, duplicates dropped, order kept.
-pub fn parse_modes(s: &str) -> Result<Vec<LodMode>, String> {
-    let mut out = Vec::new();
-    for part in s.split(',').map(str::trim) {
-        let mode = match part {
-            "bounded" => LodMode::Bounded,
-            "clipmap" => LodMode::Clipmap,
-            "distance" => LodMode::Distance,
-            "full" => LodMode::Full,
-            "" => return Err(format!("--modes {s:?}: empty mode name")),
-            other => {
-                return Err(format!(
-                "--modes {s:?}: unknown mode {other:?} (expected bounded, clipmap, distance, full)"
-            ))
-            }
-        };
-        if !out.contains(&mode) {
-            out.push(mode);
-        }
-    }
-    Ok(out)
-}
-
-/// Parses `--tau`: comma-separated positive pixel values, duplicates dropped, order kept.
-pub fn parse_taus(s: &str) -> Result<Vec<f64>, String> {
-    let mut out: Vec<f64> = Vec::new();
-    for part in s.split(',').map(str::trim) {
-        let t: f64 = part
-            .parse()
-            .map_err(|_| format!("--tau {s:?}: {part:?} is not a number"))?;
-        if !(t.is_finite() && t > 0.0) {
-            return Err(format!(
-                "--tau {s:?}: {part} must be a positive number of pixels"
-            ));
-        }
-        if !out.contains(&t) {
-            out.push(t);
-        }
-    }
-    Ok(out)
-}
-
-/// Every mode × τ for `bounded`, each other mode once, in the order of `modes`.
-pub fn configurations(modes: &[LodMode], taus: &[f64]) -> Vec<BenchConfig> {
-    let mut out = Vec::new();
-    for &mode in modes {
-        if mode == LodMode::Bounded {
-            out.extend(taus.iter().map(|&t| BenchConfig {
-                mode,
-                tau_px: Some(t),
-            }));
-        } else {
-            out.push(BenchConfig { mode, tau_px: None });
-        }
-    }
-    out
-}
-
 /// Validated arguments.
 struct Plan {
     view: View,
@@ -251,54 +151,6 @@ fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> RendererDesc {
         curvature: !a.no_curvature,
         debug_tiles: false,
     })
-}
-
-/// One frame of one configuration, as written to `results.csv`.
-#[derive(Debug, Clone)]
-pub(crate) struct FrameRow {
-    pub frame: u32,
-    pub warmup: bool,
-    pub time_s: f64,
-    pub position: DVec3,
-    pub attitude: Attitude,
-    pub config: usize,
-    pub wall_ms: f64,
-    pub stats: FrameStats,
-    pub image: Option<ImageRow>,
-    pub oracle: Option<OracleResult>,
-}
-
-/// The image error of one frame, reduced to what a CSV row holds.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct ImageRow {
-    pub max_px: f64,
-    /// Largest error confirmed by a neighbouring pixel ([`ImageError::confirmed`]).
-    pub confirmed_max_px: f64,
-    pub p99_px: f64,
-    pub mean_px: f64,
-    pub fraction_over_tau: f64,
-    pub measured_px: u64,
-    pub holes_px: u64,
-    pub hole_max_px: f64,
-    pub extra_px: u64,
-    pub max_at: Option<(u32, u32)>,
-}
-
-impl ImageRow {
-    fn of(e: &ImageError) -> Self {
-        Self {
-            max_px: e.max_px(),
-            confirmed_max_px: e.confirmed_max_px(),
-            p99_px: e.p99_px(),
-            mean_px: e.mean_px(),
-            fraction_over_tau: e.fraction_over_tau(),
-            measured_px: e.hist.count(),
-            holes_px: e.holes_px,
-            hole_max_px: e.hole_max_px,
-            extra_px: e.extra_px,
-            max_at: e.max_at,
-        }
-    }
 }
 
 /// A configuration's renderer with its CPU mirror of the selection (for the oracle) and its
@@ -622,39 +474,4 @@ fn measure_lane(
         }
     }
     ImageRow::of(&e)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn modes_and_taus_parse_and_expand() {
-        let modes = parse_modes("bounded, clipmap,full,bounded").unwrap();
-        assert_eq!(
-            modes,
-            vec![LodMode::Bounded, LodMode::Clipmap, LodMode::Full]
-        );
-        let taus = parse_taus("0.5,1,2,1").unwrap();
-        assert_eq!(taus, vec![0.5, 1.0, 2.0]);
-        let c = configurations(&modes, &taus);
-        assert_eq!(c.len(), 5);
-        assert_eq!(c[0].label(), "bounded τ=0.5");
-        assert_eq!(c[0].key(), "bounded_tau0.5");
-        assert_eq!(c[3].key(), "clipmap");
-        assert_eq!(c[4].tau_for_error(), 1.0);
-        for (bad, word) in [("bounded,fast", "fast"), ("", "empty"), ("full,,", "empty")] {
-            let e = parse_modes(bad).unwrap_err();
-            assert!(e.contains(word) && e.contains("--modes"), "{e}");
-        }
-        for (bad, word) in [
-            ("1,x", "\"x\""),
-            ("0", "positive"),
-            ("-1", "positive"),
-            ("nan", "positive"),
-        ] {
-            let e = parse_taus(bad).unwrap_err();
-            assert!(e.contains(word) && e.contains("--tau"), "{e}");
-        }
-    }
 }

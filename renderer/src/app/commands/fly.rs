@@ -178,9 +178,9 @@ fn fly_one_camera(
         "frames": a.frames,
         "pngs": pngs,
         "size": [width, height],
-        "gpu_ms": {"median": percentile(&gpu_ms, 0.5), "p99": percentile(&gpu_ms, 0.99), "max": percentile(&gpu_ms, 1.0)},
-        "frame_ms": {"median": percentile(&frame_ms, 0.5), "p99": percentile(&frame_ms, 0.99), "max": percentile(&frame_ms, 1.0)},
-        "triangles": {"median": percentile(&triangles, 0.5), "max": percentile(&triangles, 1.0)},
+        "gpu_ms": median_p99_max(&gpu_ms),
+        "frame_ms": median_p99_max(&frame_ms),
+        "triangles": median_max(&triangles),
         "lod": s.desc.select.mode,
         "tau_px": s.desc.select.tau_px,
         "tiles_refined": refined,
@@ -214,6 +214,20 @@ pub fn frames_csv_header() -> String {
         "time_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg,{}\n",
         FrameStats::CSV_HEADER
     )
+}
+
+/// `summary.json`'s spread of sorted samples: median, p99 and max.
+fn median_p99_max(sorted: &[f64]) -> serde_json::Value {
+    serde_json::json!({
+        "median": percentile(sorted, 0.5),
+        "p99": percentile(sorted, 0.99),
+        "max": percentile(sorted, 1.0),
+    })
+}
+
+/// `summary.json`'s median and max of sorted samples.
+fn median_max(sorted: &[f64]) -> serde_json::Value {
+    serde_json::json!({"median": percentile(sorted, 0.5), "max": percentile(sorted, 1.0)})
 }
 
 /// One CSV row per frame: the pose, then every frame statistic.
@@ -435,7 +449,7 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
                 "tau_px": c.channel.tau_px,
                 "view_deg": [c.channel.view.heading_deg, c.channel.view.pitch_deg, c.channel.view.roll_deg],
                 "frustum_deg": frustum_json(&pano_chans[k]),
-                "triangles": {"median": percentile(&tri, 0.5), "max": percentile(&tri, 1.0)},
+                "triangles": median_max(&tri),
                 "tiles_late": late[k],
                 "panorama_pixels": coverage[k],
             })
@@ -458,7 +472,7 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
             "uncovered_pixels": uncovered,
         },
         "overlay": a.overlay,
-        "frame_ms": {"median": percentile(&frame_ms, 0.5), "p99": percentile(&frame_ms, 0.99), "max": percentile(&frame_ms, 1.0)},
+        "frame_ms": median_p99_max(&frame_ms),
         "validation": {"enabled": validation, "errors": counters.errors(), "warnings": counters.warnings()},
     });
     write_text(&a.out.join("summary.json"), &format!("{summary:#}\n")).map_err(runtime)?;

@@ -10,7 +10,7 @@ use std::time::Instant;
 use clap::Args;
 
 use crate::app::failure::{bad_input, runtime, Failure};
-use crate::app::out_path::prepare_out_file;
+use crate::app::out_path::{prepare_out_file, with_suffix};
 use crate::app::progress::{human_bytes, progress_bar};
 use aerie_terrain::gen::{generate_into, DemKind, GenParams};
 
@@ -40,9 +40,7 @@ pub struct GenDemArgs {
 
 /// The sidecar path the raw loader looks for.
 fn sidecar(out: &Path) -> PathBuf {
-    let mut s = out.as_os_str().to_owned();
-    s.push(".json");
-    PathBuf::from(s)
+    with_suffix(out, ".json")
 }
 
 pub fn run(a: GenDemArgs) -> Result<(), Failure> {
