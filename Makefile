@@ -2,24 +2,31 @@
 # `make test` passes every check. Both install missing system packages first (Debian).
 SHELL := /bin/bash
 DEMO_OUT ?= out/demo
+DEM ?= assets/dem/N47E011.hgt.zip
+# Where cargo puts the binaries: CARGO_TARGET_DIR when set (shared build folders), else target/.
+TARGET_DIR := $(or $(CARGO_TARGET_DIR),target)
+AERIE := $(TARGET_DIR)/debug/aerie
+AERIE_RELEASE := $(TARGET_DIR)/release/aerie
 
 .PHONY: setup demo test lint fmt bench bench-run
 
 setup:
 	@scripts/setup-debian.sh
 
+# Every command creates the folders it writes into (out/ does not exist in a fresh clone).
 demo: setup
 	cargo build -p aerie
-	./target/debug/aerie render --dem assets/dem/N47E011.hgt.zip \
+	$(AERIE) render --dem $(DEM) \
 	    --camera 30500,12000,4500,0,-15,0 --size 1280x720 --out $(DEMO_OUT)-still.png
-	./target/debug/aerie render --dem assets/dem/N47E011.hgt.zip --debug-tiles \
+	$(AERIE) render --dem $(DEM) --debug-tiles \
 	    --camera 30500,12000,4500,0,-15,0 --size 1280x720 --out $(DEMO_OUT)-tiles.png
-	./target/debug/aerie fly --dem assets/dem/N47E011.hgt.zip \
+	$(AERIE) fly --dem $(DEM) \
 	    --frames 24 --every 4 --size 640x360 --out $(DEMO_OUT)
 	@echo "demo: $(DEMO_OUT)-still.png, $(DEMO_OUT)-tiles.png, $(DEMO_OUT)/frame_*.png, $(DEMO_OUT)/frames.csv, $(DEMO_OUT)/summary.json"
 
-# `make test` is what CI runs: formatting, then every test. Clippy is `make lint` (a second full
-# compilation would double the CI time on 2 cores); run it before committing.
+# `make test` is CI's second command (after `make demo`): formatting, then every test. Clippy is
+# `make lint` (a second full compilation would double the CI time on 2 cores); run it before
+# committing.
 lint:
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
@@ -41,5 +48,5 @@ bench: setup
 BENCH_OUT ?= out/bench
 bench-run: setup
 	cargo build --release -p aerie
-	./target/release/aerie bench --dem assets/dem/N47E011.hgt.zip --out $(BENCH_OUT) \
+	$(AERIE_RELEASE) bench --dem $(DEM) --out $(BENCH_OUT) \
 	    --size 1280x720 --frames 60 --modes bounded,clipmap,distance,full --tau 0.5,1,2,5

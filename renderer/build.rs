@@ -1,10 +1,12 @@
 //! Compiles every GLSL shader in `../shaders` to SPIR-V with shaderc.
 //! A compile error fails the build and names the file and line.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 fn main() {
-    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+    // Read at run time, not with env!(): a build script compiled for one checkout can be reused
+    // by another sharing the target folder, and must look at that checkout's shaders.
+    let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("CARGO_MANIFEST_DIR"));
     let shader_dir = manifest
         .parent()
         .expect("renderer/ has a parent")

@@ -234,3 +234,82 @@ fn fly_follows_waypoints_and_names_bad_lines() {
     let err = stderr(&o);
     assert!(err.contains("path.csv:2:") && err.contains("y_m"), "{err}");
 }
+
+/// A temporary copy of the embedded Inn valley tile: the CLI writes its `.aerie-bake` next to
+/// the dataset, which must not be the repository's assets folder.
+fn inn_valley_copy(dir: &Path) -> PathBuf {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/dem/N47E011.hgt.zip");
+    let dst = dir.join("N47E011.hgt.zip");
+    std::fs::copy(&src, &dst).expect("copy the Inn valley DEM");
+    dst
+}
+
+#[test]
+fn render_and_fly_create_nested_output_folders() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = inn_valley_copy(dir.path());
+    let still = dir.path().join("out/a/b/still.png");
+    let o = aerie(&[
+        "render",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--camera",
+        "30500,12000,4500,0,-15,0",
+        "--size",
+        "64x36",
+        "--out",
+        still.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = image::open(&still).unwrap().to_rgba8();
+    assert_eq!((img.width(), img.height()), (64, 36));
+    assert!(dir.path().join("out/a/b/still.json").is_file());
+
+    let flight = dir.path().join("out/c/d/flight");
+    let o = aerie(&[
+        "fly",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--frames",
+        "2",
+        "--size",
+        "64x36",
+        "--out",
+        flight.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in [
+        "frame_0000.png",
+        "frame_0001.png",
+        "frames.csv",
+        "summary.json",
+    ] {
+        assert!(flight.join(f).is_file(), "{f} written");
+    }
+}
+
+#[test]
+fn an_output_folder_that_cannot_be_made_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = raw_dem(dir.path());
+    let blocker = dir.path().join("not-a-folder");
+    std::fs::write(&blocker, b"x").unwrap();
+    let out = blocker.join("x.png");
+    let o = aerie(&[
+        "render",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--camera",
+        "800,-400,900,0,-30,0",
+        "--size",
+        "64x36",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!("cannot create folder {}", blocker.display())),
+        "{err}"
+    );
+}

@@ -11,9 +11,6 @@ use glam::{DMat3, DMat4, DVec2, DVec3, DVec4, Mat4};
 /// almost all depth precision near the eye, so this can stay small without z-fighting far away.
 pub const DEFAULT_NEAR_M: f64 = 0.5;
 
-/// Largest accepted viewport side for [`parse_size_arg`] (Vulkan's common `maxImageDimension2D`).
-pub const MAX_VIEWPORT_PX: u32 = 16384;
-
 /// Why a camera, frustum or command-line argument was refused; one line each, naming the bad part
 /// (DESIGN.md "Conventions": bad input stops with a message that names the key and the reason).
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
@@ -27,9 +24,6 @@ pub enum CameraError {
     /// The `x,y,z,heading,pitch,roll` camera argument.
     #[error("camera argument {arg:?}: {reason}")]
     CameraArg { arg: String, reason: String },
-    /// The `WxH` size argument.
-    #[error("size argument {arg:?}: {reason}")]
-    SizeArg { arg: String, reason: String },
 }
 
 /// Aircraft attitude in radians: heading ψ (clockwise from north), pitch θ (nose up +), roll φ
@@ -314,29 +308,6 @@ pub fn parse_camera_arg(s: &str) -> Result<(DVec3, Attitude), CameraError> {
         DVec3::new(v[0], v[1], v[2]),
         Attitude::from_degrees(v[3], v[4], v[5]),
     ))
-}
-
-/// Parses `"WxH"` (e.g. `1920x1080`), each side in 1..=[`MAX_VIEWPORT_PX`], so a typo cannot ask
-/// for an image the device refuses or a zero-sized viewport.
-pub fn parse_size_arg(s: &str) -> Result<(u32, u32), CameraError> {
-    let err = |reason: String| CameraError::SizeArg {
-        arg: s.to_string(),
-        reason,
-    };
-    let (w, h) = s
-        .trim()
-        .split_once(['x', 'X'])
-        .ok_or_else(|| err("expected WxH, e.g. 1920x1080".to_string()))?;
-    let side = |name: &str, text: &str| -> Result<u32, CameraError> {
-        let v: u64 = text
-            .parse()
-            .map_err(|_| err(format!("{name} {text:?} is not a whole number")))?;
-        if v == 0 || v > MAX_VIEWPORT_PX as u64 {
-            return Err(err(format!("{name} {v} is outside 1..={MAX_VIEWPORT_PX}")));
-        }
-        Ok(v as u32)
-    };
-    Ok((side("width", w)?, side("height", h)?))
 }
 
 #[cfg(test)]

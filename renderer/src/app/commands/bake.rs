@@ -7,8 +7,9 @@ use std::time::Instant;
 
 use clap::Args;
 
-use super::{check_out_folder, human_bytes, progress_bar};
 use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::out_path::{prepare_out_file, with_suffix};
+use crate::app::progress::{human_bytes, progress_bar};
 use aerie_terrain::bake::{
     bake, bake_path_for, check_existing, report_csv, write_bake, BakeError, BakeParams, ErrorBake,
     Existing,
@@ -33,7 +34,8 @@ pub struct BakeArgs {
     /// Overwrite whatever is at the output path, and re-bake an up-to-date bake.
     #[arg(long)]
     pub force: bool,
-    /// Bake file (default: `<dataset>.aerie-bake` next to the dataset file or folder).
+    /// Bake file (default: `<dataset>.aerie-bake` next to the dataset file or folder); its
+    /// folder is created.
     #[arg(long)]
     pub out: Option<PathBuf>,
 }
@@ -57,7 +59,7 @@ pub fn run(a: BakeArgs) -> Result<(), Failure> {
     let t = Instant::now();
     let ds = load_dataset(&a.dataset).map_err(bad_input)?;
     let out = a.out.clone().unwrap_or_else(|| bake_path_for(&a.dataset));
-    check_out_folder("--out", &out)?;
+    prepare_out_file("--out", &out)?;
     eprintln!(
         "loaded {}: {}, {} voids filled; {} ({:.2} s)",
         ds.source,
@@ -174,9 +176,7 @@ fn report(b: &ErrorBake, out: &std::path::Path) -> Result<(), Failure> {
             trim(l.median)
         );
     }
-    let mut csv = out.as_os_str().to_owned();
-    csv.push(".csv");
-    let csv = PathBuf::from(csv);
+    let csv = with_suffix(out, ".csv");
     std::fs::write(&csv, report_csv(&stats))
         .map_err(|e| runtime(format!("{}: cannot write: {e}", csv.display())))?;
     println!("report: {}", csv.display());

@@ -16,8 +16,10 @@
 //! `summary.csv`, `summary.md`, `time_vs_error.png`, `triangles_vs_error.png` and one error
 //! heat map per configuration (its worst frame).
 
+mod config;
 mod plot;
 mod report;
+mod rows;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -25,30 +27,35 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use clap::Args;
-use glam::DVec3;
 
+use crate::app::args::{read_waypoints, PassArgs};
 use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::flight_plan::FlightPlan;
+use crate::app::out_path::prepare_out_folder;
 use crate::app::prepare::prepare_terrain;
+use crate::app::progress::count_bar;
+use crate::app::renderer_setup::{parse_view, patch_tiles, renderer_desc, RendererChoice, View};
 use crate::render::frame::{FrameStats, RendererDesc, TerrainRenderer};
-use crate::sim::flight::{StraightPass, Waypoints};
+use crate::sim::flight::Waypoints;
 use crate::tools::image_error::{
-    heatmap_rgba, measure, oracle_selection, ImageError, MeasureParams, OracleResult,
+    heatmap_rgba, measure, oracle_selection, ImageError, MeasureParams,
 };
 use crate::tools::output::{write_png, write_text};
-use crate::vk::DeviceDesc;
-use aerie_terrain::camera::{parse_size_arg, Attitude, Camera, Frustum};
+use aerie_terrain::camera::Camera;
 use aerie_terrain::clipmap::{place_levels, ClipmapDesc};
 use aerie_terrain::dataset::Dataset;
-use aerie_terrain::select::{select_tiles, LodMode, SelectParams, Selection, MAX_REFINEMENT};
+use aerie_terrain::select::{select_tiles, LodMode, Selection};
 
+pub use config::{configurations, mode_name, parse_modes, parse_taus, BenchConfig};
 pub use report::{pareto_front, Quantiles};
+use rows::{FrameRow, ImageRow};
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
     /// Elevation model (any format `render` reads); its bake is read from or written next to it.
     #[arg(long)]
     pub dem: PathBuf,
-    /// Output folder (created): results.csv, summary.csv, summary.md, time_vs_error.png, ...
+    /// Output folder (created, with the folders above it): results.csv, summary.csv, summary.md, time_vs_error.png, ...
     #[arg(long)]
     pub out: PathBuf,
     /// Timed waypoints (`t_s,x_m,y_m,z_m,heading,pitch,roll` per line) instead of the built-in
@@ -64,21 +71,8 @@ pub struct BenchArgs {
     /// Simulated frame rate: frame k is the pose at k / fps seconds.
     #[arg(long, default_value_t = 30.0)]
     pub fps: f64,
-    /// Built-in pass: ground speed, m/s.
-    #[arg(long, default_value_t = 340.0)]
-    pub speed: f64,
-    /// Built-in pass: metres above the highest sample (with --follow-terrain: above the ground).
-    #[arg(long, default_value_t = 600.0)]
-    pub agl: f64,
-    /// Built-in pass: fly --agl above the ground under the aircraft.
-    #[arg(long)]
-    pub follow_terrain: bool,
-    /// Built-in pass: heading, degrees clockwise from north.
-    #[arg(long, default_value_t = 70.0, allow_hyphen_values = true)]
-    pub heading: f64,
-    /// Built-in pass: camera pitch, degrees (negative looks down).
-    #[arg(long, default_value_t = -12.0, allow_hyphen_values = true)]
-    pub pitch: f64,
+    #[command(flatten)]
+    pub pass: PassArgs,
     /// Output size, WxH pixels.
     #[arg(long, default_value = "1920x1080")]
     pub size: String,
@@ -111,129 +105,16 @@ pub struct BenchArgs {
     pub validate: bool,
 }
 
-/// One configuration of the run: a mode, and τ for `bounded`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BenchConfig {
-    pub mode: LodMode,
-    /// τ (px) for `bounded`; None for the modes that do not use it.
-    pub tau_px: Option<f64>,
-}
-
-impl BenchConfig {
-    pub fn mode_name(&self) -> &'static str {
-        mode_name(self.mode)
-    }
-
-    /// "bounded τ=0.5", "clipmap".
-    pub fn label(&self) -> String {
-        match self.tau_px {
-            Some(t) => format!("{} τ={t}", self.mode_name()),
-            None => self.mode_name().to_string(),
-        }
-    }
-
-    /// ASCII key for CSV cells and file names: "bounded_tau0.5", "clipmap".
-    pub fn key(&self) -> String {
-        match self.tau_px {
-            Some(t) => format!("{}_tau{t}", self.mode_name()),
-            None => self.mode_name().to_string(),
-        }
-    }
-
-    /// τ the image error's "fraction above τ" and heat map use: the configuration's own, 1 px
-    /// for the modes without one.
-    pub fn tau_for_error(&self) -> f64 {
-        self.tau_px.unwrap_or(1.0)
-    }
-}
-
-pub fn mode_name(mode: LodMode) -> &'static str {
-    match mode {
-        LodMode::Bounded => "bounded",
-        LodMode::Clipmap => "clipmap",
-        LodMode::Full => "full",
-        LodMode::Distance => "distance",
-    }
-}
-
-/// Parses `--modes`: a comma-separated list of mode names, duplicates dropped, order kept.
-pub fn parse_modes(s: &str) -> Result<Vec<LodMode>, String> {
-    let mut out = Vec::new();
-    for part in s.split(',').map(str::trim) {
-        let mode = match part {
-            "bounded" => LodMode::Bounded,
-            "clipmap" => LodMode::Clipmap,
-            "distance" => LodMode::Distance,
-            "full" => LodMode::Full,
-            "" => return Err(format!("--modes {s:?}: empty mode name")),
-            other => {
-                return Err(format!(
-                "--modes {s:?}: unknown mode {other:?} (expected bounded, clipmap, distance, full)"
-            ))
-            }
-        };
-        if !out.contains(&mode) {
-            out.push(mode);
-        }
-    }
-    Ok(out)
-}
-
-/// Parses `--tau`: comma-separated positive pixel values, duplicates dropped, order kept.
-pub fn parse_taus(s: &str) -> Result<Vec<f64>, String> {
-    let mut out: Vec<f64> = Vec::new();
-    for part in s.split(',').map(str::trim) {
-        let t: f64 = part
-            .parse()
-            .map_err(|_| format!("--tau {s:?}: {part:?} is not a number"))?;
-        if !(t.is_finite() && t > 0.0) {
-            return Err(format!(
-                "--tau {s:?}: {part} must be a positive number of pixels"
-            ));
-        }
-        if !out.contains(&t) {
-            out.push(t);
-        }
-    }
-    Ok(out)
-}
-
-/// Every mode × τ for `bounded`, each other mode once, in the order of `modes`.
-pub fn configurations(modes: &[LodMode], taus: &[f64]) -> Vec<BenchConfig> {
-    let mut out = Vec::new();
-    for &mode in modes {
-        if mode == LodMode::Bounded {
-            out.extend(taus.iter().map(|&t| BenchConfig {
-                mode,
-                tau_px: Some(t),
-            }));
-        } else {
-            out.push(BenchConfig { mode, tau_px: None });
-        }
-    }
-    out
-}
-
 /// Validated arguments.
 struct Plan {
-    width: u32,
-    height: u32,
-    frustum: Frustum,
+    view: View,
     configs: Vec<BenchConfig>,
     patch_tiles: u32,
     waypoints: Option<Waypoints>,
 }
 
 fn plan(a: &BenchArgs) -> Result<Plan, Failure> {
-    let (width, height) = parse_size_arg(&a.size).map_err(|e| bad_input(format!("--size: {e}")))?;
-    if !(a.fov.is_finite() && a.fov > 0.0 && a.fov < 180.0) {
-        return Err(bad_input(format!(
-            "--fov: {} is outside (0, 180) degrees",
-            a.fov
-        )));
-    }
-    let frustum = Frustum::try_symmetric(a.fov.to_radians(), width, height)
-        .map_err(|e| bad_input(format!("--fov: {e}")))?;
+    let view = parse_view(&a.size, a.fov)?;
     let modes = parse_modes(&a.modes).map_err(bad_input)?;
     let taus = parse_taus(&a.tau).map_err(bad_input)?;
     if a.frames == 0 {
@@ -245,123 +126,31 @@ fn plan(a: &BenchArgs) -> Result<Plan, Failure> {
             a.oracle_nodes
         )));
     }
-    for (name, v) in [("--fps", a.fps), ("--speed", a.speed), ("--agl", a.agl)] {
-        if !v.is_finite() || v < 0.0 || (name == "--fps" && v == 0.0) {
-            return Err(bad_input(format!(
-                "{name}: {v} must be a finite positive number"
-            )));
-        }
-    }
-    for (name, v) in [("--heading", a.heading), ("--pitch", a.pitch)] {
-        if !v.is_finite() {
-            return Err(bad_input(format!("{name}: {v} is not finite")));
-        }
-    }
-    let q = RendererDesc::default().tile_size - 1;
-    if a.patch < 8 * q + 1 || !(a.patch - 1).is_multiple_of(2 * q) {
-        return Err(bad_input(format!(
-            "--patch: {} must be P·{q}+1 with P even and ≥ 8 (e.g. 129 or 257)",
-            a.patch
-        )));
-    }
-    let waypoints = match &a.flight {
-        Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .map_err(|e| bad_input(format!("--flight {}: {e}", p.display())))?;
-            Some(Waypoints::parse(&text, &p.display().to_string()).map_err(bad_input)?)
-        }
-        None => None,
-    };
+    a.pass.check(a.fps)?;
+    let patch_tiles = patch_tiles(a.patch)?;
+    let waypoints = read_waypoints("--flight", a.flight.as_ref())?;
     Ok(Plan {
-        width,
-        height,
-        frustum,
+        view,
         configs: configurations(&modes, &taus),
-        patch_tiles: (a.patch - 1) / q,
+        patch_tiles,
         waypoints,
     })
 }
 
 /// The renderer of one configuration: `full` gets pools large enough to draw every visible
 /// tile at full resolution (as `aerie render --lod full`).
-fn renderer_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> RendererDesc {
-    let defaults = RendererDesc::default();
-    let full = config.mode == LodMode::Full;
-    RendererDesc {
-        validation: a.validate || cfg!(debug_assertions),
-        device: DeviceDesc {
-            name_filter: a.gpu.clone(),
-            ..DeviceDesc::default()
-        },
-        width: p.width,
-        height: p.height,
+fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> RendererDesc {
+    renderer_desc(&RendererChoice {
+        gpu: a.gpu.clone(),
+        validate: a.validate,
+        width: p.view.width,
+        height: p.view.height,
         patch_tiles: p.patch_tiles,
-        pool_capacity: if full {
-            [1024, 512, 256, 128, 48, 16]
-        } else {
-            defaults.pool_capacity
-        },
-        select: SelectParams {
-            mode: config.mode,
-            tau_px: config.tau_px.unwrap_or(1.0),
-            curvature: !a.no_curvature,
-            max_refinement: if full {
-                MAX_REFINEMENT
-            } else {
-                SelectParams::default().max_refinement
-            },
-            ..SelectParams::default()
-        },
-        ..defaults
-    }
-}
-
-/// One frame of one configuration, as written to `results.csv`.
-#[derive(Debug, Clone)]
-pub(crate) struct FrameRow {
-    pub frame: u32,
-    pub warmup: bool,
-    pub time_s: f64,
-    pub position: DVec3,
-    pub attitude: Attitude,
-    pub config: usize,
-    pub wall_ms: f64,
-    pub stats: FrameStats,
-    pub image: Option<ImageRow>,
-    pub oracle: Option<OracleResult>,
-}
-
-/// The image error of one frame, reduced to what a CSV row holds.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct ImageRow {
-    pub max_px: f64,
-    /// Largest error confirmed by a neighbouring pixel ([`ImageError::confirmed`]).
-    pub confirmed_max_px: f64,
-    pub p99_px: f64,
-    pub mean_px: f64,
-    pub fraction_over_tau: f64,
-    pub measured_px: u64,
-    pub holes_px: u64,
-    pub hole_max_px: f64,
-    pub extra_px: u64,
-    pub max_at: Option<(u32, u32)>,
-}
-
-impl ImageRow {
-    fn of(e: &ImageError) -> Self {
-        Self {
-            max_px: e.max_px(),
-            confirmed_max_px: e.confirmed_max_px(),
-            p99_px: e.p99_px(),
-            mean_px: e.mean_px(),
-            fraction_over_tau: e.fraction_over_tau(),
-            measured_px: e.hist.count(),
-            holes_px: e.holes_px,
-            hole_max_px: e.hole_max_px,
-            extra_px: e.extra_px,
-            max_at: e.max_at,
-        }
-    }
+        mode: config.mode,
+        tau_px: config.tau_px.unwrap_or(1.0),
+        curvature: !a.no_curvature,
+        debug_tiles: false,
+    })
 }
 
 /// A configuration's renderer with its CPU mirror of the selection (for the oracle) and its
@@ -380,28 +169,13 @@ struct Lane {
 }
 
 pub fn run(a: BenchArgs) -> Result<(), Failure> {
-    let p = plan(&a)?;
-    std::fs::create_dir_all(&a.out).map_err(|e| {
-        bad_input(format!(
-            "--out {}: cannot create folder: {e}",
-            a.out.display()
-        ))
-    })?;
+    let mut p = plan(&a)?;
+    prepare_out_folder("--out", &a.out)?;
     let tile_size = RendererDesc::default().tile_size;
     let (ds, bake) = prepare_terrain(&a.dem, tile_size)?;
     let total_frames = a.warmup + a.frames;
     let duration = total_frames as f64 / a.fps;
-    let pass = StraightPass::over(&ds, a.heading, a.pitch, a.speed, a.agl, duration);
-    let pose_at = |t: f64| -> (DVec3, Attitude) {
-        if let Some(w) = &p.waypoints {
-            return w.pose_at(t);
-        }
-        let (mut pos, att) = pass.pose_at(t);
-        if a.follow_terrain {
-            pos.z = ds.hf.height_at_m(pos.x, pos.y) + a.agl;
-        }
-        (pos, att)
-    };
+    let flight = FlightPlan::new(&ds, &a.pass, p.waypoints.take(), duration);
     let image_error = !a.no_image_error;
     let mut lane_configs: Vec<(BenchConfig, bool)> = p.configs.iter().map(|&c| (c, true)).collect();
     let has_full = p.configs.iter().any(|c| c.mode == LodMode::Full);
@@ -414,11 +188,11 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             false,
         ));
     }
-    let eye0 = pose_at(0.0).0;
+    let eye0 = flight.pose_at(0.0).0;
     let t_setup = Instant::now();
     let mut lanes: Vec<Lane> = Vec::new();
     for &(config, reported) in &lane_configs {
-        let desc = renderer_desc(&a, &p, config);
+        let desc = lane_desc(&a, &p, config);
         let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
         renderer
             .load_terrain(ds.clone(), bake.clone(), eye0)
@@ -464,13 +238,9 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
         .iter()
         .position(|l| l.config.mode == LodMode::Full)
         .filter(|_| image_error);
-    let bar = indicatif::ProgressBar::new(total_frames as u64 * lanes.len() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} renders, eta {eta}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
+    let bar = count_bar(total_frames as u64 * lanes.len() as u64, "renders", "");
     let mut rows: Vec<FrameRow> = Vec::new();
-    let size = (p.width, p.height);
+    let size = (p.view.width, p.view.height);
     let n = lanes.len();
     // indicatif draws nothing when stderr is not a terminal (CI logs, nohup): print a plain
     // line per ~10 % of the frames there instead.
@@ -492,8 +262,8 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             format!("frame {}/{}", k - a.warmup + 1, a.frames)
         });
         let t = k as f64 / a.fps;
-        let (pos, att) = pose_at(t);
-        let camera = Camera::new(pos, att, p.frustum);
+        let (pos, att) = flight.pose_at(t);
+        let camera = Camera::new(pos, att, p.view.frustum);
         let mut results: Vec<Option<(f64, FrameStats)>> = vec![None; n];
         for j in 0..n {
             let i = (j + k as usize) % n;
@@ -609,11 +379,11 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             Some(f) => format!("waypoints {}", f.display()),
             None => format!(
                 "built-in straight pass, heading {}°, pitch {}°, {} m/s, {} m {}, {} fps",
-                a.heading,
-                a.pitch,
-                a.speed,
-                a.agl,
-                if a.follow_terrain {
+                a.pass.heading,
+                a.pass.pitch,
+                a.pass.speed,
+                a.pass.agl,
+                if a.pass.follow_terrain {
                     "above the ground"
                 } else {
                     "above the highest sample"
@@ -643,8 +413,8 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             let path = out.join(format!("heatmap_{}_frame{frame:04}.png", lane.config.key()));
             write_png(
                 &path,
-                p.width,
-                p.height,
+                p.view.width,
+                p.view.height,
                 &heatmap_rgba(&lane.worst_heat, scale),
             )
             .map_err(runtime)?;
@@ -704,39 +474,4 @@ fn measure_lane(
         }
     }
     ImageRow::of(&e)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn modes_and_taus_parse_and_expand() {
-        let modes = parse_modes("bounded, clipmap,full,bounded").unwrap();
-        assert_eq!(
-            modes,
-            vec![LodMode::Bounded, LodMode::Clipmap, LodMode::Full]
-        );
-        let taus = parse_taus("0.5,1,2,1").unwrap();
-        assert_eq!(taus, vec![0.5, 1.0, 2.0]);
-        let c = configurations(&modes, &taus);
-        assert_eq!(c.len(), 5);
-        assert_eq!(c[0].label(), "bounded τ=0.5");
-        assert_eq!(c[0].key(), "bounded_tau0.5");
-        assert_eq!(c[3].key(), "clipmap");
-        assert_eq!(c[4].tau_for_error(), 1.0);
-        for (bad, word) in [("bounded,fast", "fast"), ("", "empty"), ("full,,", "empty")] {
-            let e = parse_modes(bad).unwrap_err();
-            assert!(e.contains(word) && e.contains("--modes"), "{e}");
-        }
-        for (bad, word) in [
-            ("1,x", "\"x\""),
-            ("0", "positive"),
-            ("-1", "positive"),
-            ("nan", "positive"),
-        ] {
-            let e = parse_taus(bad).unwrap_err();
-            assert!(e.contains(word) && e.contains("--tau"), "{e}");
-        }
-    }
 }

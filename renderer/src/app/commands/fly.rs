@@ -1,5 +1,9 @@
-//! `aerie fly --channels <preset.toml>`: every display channel of a config rendered offscreen
-//! from one aircraft pose per frame (one tile selection for all of them, as on screen), each
+//! `aerie fly`: a scripted flight over a DEM, headless. The built-in straight pass (or timed
+//! waypoints) flown by one camera writes every `--every`-th frame as `<out>/frame_NNNN.png`, one
+//! `frames.csv` row per frame and `summary.json`.
+//!
+//! With `--channels <preset.toml>` every display channel of a config is rendered offscreen from
+//! one aircraft pose per frame (one tile selection for all of them, as on screen), each
 //! channel's frames in `<out>/<channel>/frame_NNNN.png`, and a stitched review panorama
 //! `<out>/panorama_NNNN.png` ([`crate::tools::panorama`]). `frames.csv` has one row per frame per
 //! channel (first column `channel`); `summary.json` lists the channels and the panorama canvas.
@@ -8,10 +12,16 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use aerie_config::{Channel, RenderConfig};
+use clap::Args;
 use glam::DVec3;
 
-use crate::app::cli::{frames_csv_header, FlyArgs};
+use crate::app::args::{read_waypoints, GpuArgs, PassArgs};
 use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::flight_plan::FlightPlan;
+use crate::app::out_path::prepare_out_folder;
+use crate::app::prepare::prepare_terrain;
+use crate::app::progress::count_bar;
+use crate::app::renderer_setup::{setup, Setup};
 use crate::render::frame::{FrameStats, TerrainRenderer};
 use crate::sim::channel::channel_camera;
 use crate::tools::output::{write_png, write_text};
@@ -19,6 +29,221 @@ use crate::tools::overlay::{OverlayInfo, OverlayState};
 use crate::tools::panorama::{canvas_for, PanoramaChannel, PanoramaMap, MAX_CANVAS};
 use crate::tools::percentile::percentile;
 use aerie_terrain::camera::{Attitude, Camera};
+
+#[derive(Debug, Args)]
+pub struct FlyArgs {
+    /// Elevation model (any format `render` reads); its bake is read from or written next to it.
+    #[arg(long)]
+    pub dem: PathBuf,
+    /// Number of frames.
+    #[arg(long, default_value_t = 24)]
+    pub frames: u32,
+    /// Simulated frame rate (frames per second of flight time).
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f64,
+    #[command(flatten)]
+    pub pass: PassArgs,
+    /// Timed waypoints instead of the built-in pass: lines `t_s,x_m,y_m,z_m,heading,pitch,roll`.
+    #[arg(long)]
+    pub path: Option<PathBuf>,
+    /// Write every k-th frame as PNG (stats are written for every frame).
+    #[arg(long, default_value_t = 1)]
+    pub every: u32,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+    /// Render every `[[channel]]` of this config (e.g. config/presets/wall3.toml) offscreen from
+    /// the one aircraft pose: `<out>/<channel>/frame_NNNN.png` and a stitched
+    /// `<out>/panorama_NNNN.png`. Sizes, views, frusta and τ come from the config.
+    #[arg(long)]
+    pub channels: Option<PathBuf>,
+    /// With --channels: multiply every channel's resolution by this (e.g. 0.1 for quick runs).
+    #[arg(long, default_value_t = 1.0)]
+    pub channel_scale: f64,
+    /// With --channels: no line along the borders between channels in the panorama.
+    #[arg(long)]
+    pub no_panorama_borders: bool,
+    /// Draw the statistics overlay (frame time, τ, tiles, late tiles, triangles, pose age)
+    /// into the top-left corner of every frame.
+    #[arg(long)]
+    pub overlay: bool,
+    /// Output folder (created, with the folders above it): frame_NNNN.png, frames.csv,
+    /// summary.json.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+pub fn run(a: FlyArgs) -> Result<(), Failure> {
+    let s = setup(&a.gpu)?;
+    if a.frames == 0 {
+        return Err(bad_input("--frames: must be at least 1"));
+    }
+    if a.every == 0 {
+        return Err(bad_input("--every: must be at least 1"));
+    }
+    a.pass.check(a.fps)?;
+    // The channel config is checked before any data is loaded.
+    let channel_plan = match &a.channels {
+        Some(p) => Some(plan_channels(p, a.channel_scale)?),
+        None => None,
+    };
+    prepare_out_folder("--out", &a.out)?;
+    let (ds, b) = prepare_terrain(&a.dem, s.desc.tile_size)?;
+    let waypoints = read_waypoints("--path", a.path.as_ref())?;
+    let flight = FlightPlan::new(&ds, &a.pass, waypoints, a.frames as f64 / a.fps);
+    let mut desc = s.desc.clone();
+    if let Some((_, chans)) = &channel_plan {
+        (desc.width, desc.height) = chans[0].size;
+    }
+    let mut r = TerrainRenderer::new(&desc).map_err(runtime)?;
+    let t_upload = Instant::now();
+    let up = r
+        .load_terrain(ds, b, flight.pose_at(0.0).0)
+        .map_err(runtime)?;
+    eprintln!(
+        "{} clipmap levels filled: {:.1} MB in {} submissions ({:.2} s) on {}",
+        up.levels,
+        up.bytes as f64 / 1e6,
+        up.submissions,
+        t_upload.elapsed().as_secs_f64(),
+        r.device_name()
+    );
+    match channel_plan {
+        Some((_, channels)) => {
+            let job = ChannelFlight {
+                args: &a,
+                config_path: a.channels.clone().unwrap_or_default(),
+                channels,
+                flight: &flight,
+            };
+            fly_channels(&mut r, job)
+        }
+        None => fly_one_camera(&mut r, &a, &s, &flight),
+    }
+}
+
+/// Flies the one camera of `s`: `r` has its terrain loaded. Writes the PNGs, `frames.csv` and
+/// `summary.json`, prints a one-line summary; destroys the renderer and fails on any
+/// validation message.
+fn fly_one_camera(
+    r: &mut TerrainRenderer,
+    a: &FlyArgs,
+    s: &Setup,
+    flight: &FlightPlan,
+) -> Result<(), Failure> {
+    let (width, height) = (s.view.width, s.view.height);
+    let mut overlay = OverlayState::new(a.overlay);
+    let bar = count_bar(a.frames as u64, "frames", "flying");
+    let mut csv = frames_csv_header();
+    let mut late = 0u64;
+    let mut refined = 0u64;
+    let mut gpu_ms = Vec::new();
+    let mut frame_ms = Vec::new();
+    let mut triangles = Vec::new();
+    let mut pngs = 0u32;
+    for f in 0..a.frames {
+        let t = f as f64 / a.fps;
+        let (pos, att) = flight.pose_at(t);
+        let camera = Camera::new(pos, att, s.view.frustum);
+        r.set_overlay(overlay.panel((width, height), None));
+        let wall = Instant::now();
+        let stats = r.render(&camera).map_err(runtime)?;
+        frame_ms.push(wall.elapsed().as_secs_f64() * 1e3);
+        overlay.record(
+            wall.elapsed().as_secs_f64() * 1e3,
+            OverlayInfo::from_stats(&stats, s.desc.select.tau_px),
+        );
+        gpu_ms.push(stats.gpu_upload_ms + stats.gpu_terrain_ms);
+        triangles.push(stats.triangles as f64);
+        late += stats.tiles_late as u64;
+        refined += stats.tiles_drawn as u64 - stats.tiles_by_refinement[0] as u64;
+        csv.push_str(&csv_row(&stats, t, pos, att));
+        if f % a.every == 0 {
+            let path = a.out.join(format!("frame_{f:04}.png"));
+            write_png(&path, width, height, &r.colour_rgba()).map_err(runtime)?;
+            pngs += 1;
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let device = r.device_name().to_string();
+    r.destroy();
+    r.validation_counters().verdict().map_err(runtime)?;
+    write_text(&a.out.join("frames.csv"), &csv).map_err(runtime)?;
+    for v in [&mut gpu_ms, &mut frame_ms, &mut triangles] {
+        v.sort_by(f64::total_cmp);
+    }
+    let summary = serde_json::json!({
+        "device": device,
+        "dem": a.dem.display().to_string(),
+        "frames": a.frames,
+        "pngs": pngs,
+        "size": [width, height],
+        "gpu_ms": median_p99_max(&gpu_ms),
+        "frame_ms": median_p99_max(&frame_ms),
+        "triangles": median_max(&triangles),
+        "lod": s.desc.select.mode,
+        "tau_px": s.desc.select.tau_px,
+        "tiles_refined": refined,
+        "tiles_late": late,
+        "validation": {
+            "enabled": s.desc.validation,
+            "errors": r.validation_counters().errors(),
+            "warnings": r.validation_counters().warnings(),
+        },
+    });
+    write_text(&a.out.join("summary.json"), &format!("{summary:#}\n")).map_err(runtime)?;
+    println!(
+        "{} frames ({} PNGs) in {}: frame median {:.1} ms, p99 {:.1} ms, max {:.1} ms (GPU median {:.1} ms); triangles median {:.0}; {} tiles refined, {} late; validation clean",
+        a.frames,
+        pngs,
+        a.out.display(),
+        percentile(&frame_ms, 0.5),
+        percentile(&frame_ms, 0.99),
+        percentile(&frame_ms, 1.0),
+        percentile(&gpu_ms, 0.5),
+        percentile(&triangles, 0.5),
+        refined,
+        late
+    );
+    Ok(())
+}
+
+/// Header of `frames.csv`.
+pub fn frames_csv_header() -> String {
+    format!(
+        "time_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg,{}\n",
+        FrameStats::CSV_HEADER
+    )
+}
+
+/// `summary.json`'s spread of sorted samples: median, p99 and max.
+fn median_p99_max(sorted: &[f64]) -> serde_json::Value {
+    serde_json::json!({
+        "median": percentile(sorted, 0.5),
+        "p99": percentile(sorted, 0.99),
+        "max": percentile(sorted, 1.0),
+    })
+}
+
+/// `summary.json`'s median and max of sorted samples.
+fn median_max(sorted: &[f64]) -> serde_json::Value {
+    serde_json::json!({"median": percentile(sorted, 0.5), "max": percentile(sorted, 1.0)})
+}
+
+/// One CSV row per frame: the pose, then every frame statistic.
+fn csv_row(s: &FrameStats, t: f64, pos: DVec3, att: Attitude) -> String {
+    format!(
+        "{:.4},{:.2},{:.2},{:.2},{:.3},{:.3},{:.3},{}\n",
+        t,
+        pos.x,
+        pos.y,
+        pos.z,
+        att.heading.to_degrees(),
+        att.pitch.to_degrees(),
+        att.roll.to_degrees(),
+        s.csv_row()
+    )
+}
 
 /// One channel as flown: its config, render size and output folder name.
 #[derive(Debug, Clone)]
@@ -95,7 +320,7 @@ pub struct ChannelFlight<'a> {
     pub args: &'a FlyArgs,
     pub config_path: PathBuf,
     pub channels: Vec<FlyChannel>,
-    pub pose_at: &'a dyn Fn(f64) -> (DVec3, Attitude),
+    pub flight: &'a FlightPlan,
 }
 
 /// Flies every channel: `r` has its terrain loaded. Writes the PNGs, `frames.csv` and
@@ -128,12 +353,11 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
         t_map.elapsed().as_secs_f64()
     );
     let sizes: Vec<(u32, u32)> = chans.iter().map(|c| c.size).collect();
-    let bar = indicatif::ProgressBar::new(a.frames as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, eta {eta}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    let bar = count_bar(
+        a.frames as u64,
+        "frames",
+        &format!("flying {} channels", chans.len()),
     );
-    bar.set_message(format!("flying {} channels", chans.len()));
     let mut csv = format!("channel,{}", frames_csv_header());
     let mut frame_ms = Vec::new();
     let mut per_channel_triangles: Vec<Vec<f64>> = vec![Vec::new(); chans.len()];
@@ -145,7 +369,7 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
         chans.iter().map(|_| OverlayState::new(a.overlay)).collect();
     for f in 0..a.frames {
         let t = f as f64 / a.fps;
-        let (pos, att) = (job.pose_at)(t);
+        let (pos, att) = job.flight.pose_at(t);
         let cams: Vec<Camera> = chans
             .iter()
             .map(|c| channel_camera((pos, att), &c.channel, c.size.0 as f64 / c.size.1 as f64))
@@ -182,18 +406,9 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
             }
             per_channel_triangles[k].push(stats.triangles as f64);
             late[k] += stats.tiles_late as u64;
-            csv.push_str(&format!(
-                "{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.3},{:.3},{}\n",
-                c.channel.name.replace([',', '\n'], "_"),
-                t,
-                cam.position.x,
-                cam.position.y,
-                cam.position.z,
-                cam.attitude.heading.to_degrees(),
-                cam.attitude.pitch.to_degrees(),
-                cam.attitude.roll.to_degrees(),
-                stats.csv_row()
-            ));
+            csv.push_str(&c.channel.name.replace([',', '\n'], "_"));
+            csv.push(',');
+            csv.push_str(&csv_row(&stats, t, cam.position, cam.attitude));
             if write {
                 let rgba = r.colour_rgba();
                 let path = a.out.join(&c.folder).join(format!("frame_{f:04}.png"));
@@ -234,7 +449,7 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
                 "tau_px": c.channel.tau_px,
                 "view_deg": [c.channel.view.heading_deg, c.channel.view.pitch_deg, c.channel.view.roll_deg],
                 "frustum_deg": frustum_json(&pano_chans[k]),
-                "triangles": {"median": percentile(&tri, 0.5), "max": percentile(&tri, 1.0)},
+                "triangles": median_max(&tri),
                 "tiles_late": late[k],
                 "panorama_pixels": coverage[k],
             })
@@ -257,7 +472,7 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
             "uncovered_pixels": uncovered,
         },
         "overlay": a.overlay,
-        "frame_ms": {"median": percentile(&frame_ms, 0.5), "p99": percentile(&frame_ms, 0.99), "max": percentile(&frame_ms, 1.0)},
+        "frame_ms": median_p99_max(&frame_ms),
         "validation": {"enabled": validation, "errors": counters.errors(), "warnings": counters.warnings()},
     });
     write_text(&a.out.join("summary.json"), &format!("{summary:#}\n")).map_err(runtime)?;

@@ -9,8 +9,9 @@ use std::time::Instant;
 
 use clap::Args;
 
-use super::{check_out_folder, human_bytes, progress_bar};
 use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::out_path::{prepare_out_file, with_suffix};
+use crate::app::progress::{human_bytes, progress_bar};
 use aerie_terrain::gen::{generate_into, DemKind, GenParams};
 
 /// Largest side accepted (32769² f32 = 4.3 GB).
@@ -31,16 +32,15 @@ pub struct GenDemArgs {
     /// Seed: the same seed (and size, spacing, kind) always gives the same bytes.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Output raw f32 file (.f32, .r32 or .raw); the sidecar `<out>.json` is written next to it.
+    /// Output raw f32 file (.f32, .r32 or .raw; its folder is created); the sidecar `<out>.json`
+    /// is written next to it.
     #[arg(long)]
     pub out: PathBuf,
 }
 
 /// The sidecar path the raw loader looks for.
 fn sidecar(out: &Path) -> PathBuf {
-    let mut s = out.as_os_str().to_owned();
-    s.push(".json");
-    PathBuf::from(s)
+    with_suffix(out, ".json")
 }
 
 pub fn run(a: GenDemArgs) -> Result<(), Failure> {
@@ -73,7 +73,7 @@ pub fn run(a: GenDemArgs) -> Result<(), Failure> {
             a.out.display()
         )));
     }
-    check_out_folder("--out", &a.out)?;
+    prepare_out_file("--out", &a.out)?;
     let p = GenParams {
         size: a.size,
         spacing: a.spacing,

@@ -16,9 +16,9 @@ use aerie_sim_bridge::udp::{CigiReply, RposRequest, UdpConfig, UdpReceiver};
 use aerie_sim_bridge::{DropReason, PosePosition, PoseReader, StatsSnapshot};
 use clap::Args;
 
-use crate::app::commands::check_out_folder;
 use crate::app::commands::input_args::InputArgs;
 use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::out_path::prepare_out_file;
 use crate::sim::pose_input::InputProtocol;
 use crate::tools::output::write_text;
 
@@ -123,10 +123,10 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
         )));
     }
     if let Some(j) = &a.json {
-        check_out_folder("--json", j)?;
+        prepare_out_file("--json", j)?;
     }
     if let Some(r) = &a.record {
-        check_out_folder("--record", r)?;
+        prepare_out_file("--record", r)?;
     }
     let input = &a.input;
     input.check(&[

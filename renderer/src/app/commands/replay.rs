@@ -8,8 +8,8 @@ use std::path::PathBuf;
 use aerie_sim_bridge::record::{read_recording, replay, ReplayTiming};
 use clap::Args;
 
-use super::human_bytes;
 use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::progress::human_bytes;
 
 #[derive(Debug, Args)]
 pub struct ReplayArgs {

@@ -11,6 +11,7 @@ use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
+use super::config::mode_name;
 use super::report::{pareto_front, Summary};
 use crate::tools::output::write_png;
 use aerie_terrain::select::LodMode;
@@ -186,7 +187,7 @@ where
                         + Text::new(label, (9, -18), (FAMILY, 15))
                 }))
                 .map_err(|e| err(&e))?
-                .label(super::mode_name(mode))
+                .label(mode_name(mode))
                 .legend(move |(x, y)| Circle::new((x + 8, y), 6, col.filled()));
             }
             let front = pareto_front(&pts.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>());

@@ -4,7 +4,8 @@
 
 use std::fmt::Write as _;
 
-use super::{BenchConfig, FrameRow};
+use super::config::BenchConfig;
+use super::rows::FrameRow;
 use crate::render::frame::FrameStats;
 use crate::tools::image_error::ImageError;
 use aerie_terrain::select::LodMode;

@@ -26,7 +26,7 @@ use crate::tools::overlay::{OverlayInfo, OverlayState};
 use crate::tools::percentile::percentile;
 use crate::tools::stats_csv::FrameRow;
 use crate::vk::DeviceDesc;
-use aerie_terrain::camera::parse_size_arg;
+use aerie_config::parse_size;
 use aerie_terrain::select::SelectParams;
 
 /// How often the input is polled while a paced loop waits for the next frame: often enough that
@@ -76,7 +76,7 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
     let size = a
         .size
         .as_deref()
-        .map(parse_size_arg)
+        .map(parse_size)
         .transpose()
         .map_err(|e| bad_input(format!("--size: {e}")))?;
     let sizes = channel_sizes(&plan.channels, size, (cfg.width, cfg.height));

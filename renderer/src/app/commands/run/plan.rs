@@ -3,11 +3,11 @@
 
 use aerie_config::{Channel, ChannelDisplay, RenderConfig};
 
-use crate::app::commands::check_out_folder;
 use crate::app::commands::run::args::RunArgs;
 use crate::app::commands::run::settings::{resolve_settings, RunSettings};
 use crate::app::failure::{bad_input, Failure};
-use aerie_terrain::camera::parse_size_arg;
+use crate::app::out_path::prepare_out_file;
+use aerie_config::parse_size;
 
 /// Window size of a fullscreen channel shown with `--windowed` when it has no resolution.
 const WINDOWED_DEFAULT: (u32, u32) = (960, 540);
@@ -48,10 +48,10 @@ fn check_args(a: &RunArgs) -> Result<(), Failure> {
         return Err(bad_input("--window-size: only with --windowed"));
     }
     if let Some(j) = &a.json {
-        check_out_folder("--json", j)?;
+        prepare_out_file("--json", j)?;
     }
     if let Some(p) = &a.stats {
-        check_out_folder("--stats", p)?;
+        prepare_out_file("--stats", p)?;
     }
     if let Some(ms) = a.input.max_extrapolation_ms {
         if !(ms.is_finite() && ms >= 0.0) {
@@ -88,7 +88,7 @@ fn check_args(a: &RunArgs) -> Result<(), Failure> {
         }
     }
     if let Some(s) = &a.size {
-        parse_size_arg(s).map_err(|e| bad_input(format!("--size: {e}")))?;
+        parse_size(s).map_err(|e| bad_input(format!("--size: {e}")))?;
     }
     // Flag combinations that contradict each other (flags over config keys: resolve_settings).
     a.input.check(&[])?;
@@ -131,7 +131,7 @@ pub(crate) fn plan(a: &RunArgs) -> Result<Plan, Failure> {
         let size = a
             .window_size
             .as_deref()
-            .map(parse_size_arg)
+            .map(parse_size)
             .transpose()
             .map_err(|e| bad_input(format!("--window-size: {e}")))?;
         let mut x = 0i32;

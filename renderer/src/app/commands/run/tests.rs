@@ -97,8 +97,9 @@ fn bad_input_flag_combinations_stop_before_anything_opens() {
             "only with --multicast",
         ),
         (
-            &["--stats", "/nonexistent-dir/s.csv"],
-            "--stats /nonexistent-dir/s.csv",
+            // A folder that cannot be made (under a file): named in the error.
+            &["--stats", "/dev/null/sub/s.csv"],
+            "--stats /dev/null/sub/s.csv: cannot create folder /dev/null/sub",
         ),
     ] {
         let Err(f) = plan_of(args) else {

@@ -1,0 +1,200 @@
+//! The one place a [`RendererDesc`] is assembled from command-line choices (`render`, `fly`,
+//! every configuration of `bench`), and the checks of the size, field of view and patch side
+//! that come with it.
+
+use crate::app::args::GpuArgs;
+use crate::app::failure::{bad_input, Failure};
+use crate::render::frame::RendererDesc;
+use crate::vk::DeviceDesc;
+use aerie_config::parse_size;
+use aerie_terrain::camera::Frustum;
+use aerie_terrain::select::{LodMode, SelectParams, MAX_REFINEMENT};
+
+/// Refined-tile pools of a `full` renderer: brute force draws every visible tile at full
+/// resolution, so it needs room for all of them.
+const FULL_POOL_CAPACITY: [u32; MAX_REFINEMENT as usize] = [1024, 512, 256, 128, 48, 16];
+
+/// The output image: its size and symmetric frustum.
+#[derive(Debug, Clone, Copy)]
+pub struct View {
+    pub width: u32,
+    pub height: u32,
+    pub frustum: Frustum,
+}
+
+/// Checks `--size WxH` and `--fov` (degrees) and makes the frustum.
+pub fn parse_view(size: &str, fov_deg: f64) -> Result<View, Failure> {
+    let (width, height) = parse_size(size).map_err(|e| bad_input(format!("--size: {e}")))?;
+    if !(fov_deg.is_finite() && fov_deg > 0.0 && fov_deg < 180.0) {
+        return Err(bad_input(format!(
+            "--fov: {fov_deg} is outside (0, 180) degrees"
+        )));
+    }
+    let frustum = Frustum::try_symmetric(fov_deg.to_radians(), width, height)
+        .map_err(|e| bad_input(format!("--fov: {e}")))?;
+    Ok(View {
+        width,
+        height,
+        frustum,
+    })
+}
+
+/// Tiles per clipmap patch side for `--patch n`: n must be P·(m−1)+1 with P even and ≥ 8.
+pub fn patch_tiles(patch: u32) -> Result<u32, Failure> {
+    let q = RendererDesc::default().tile_size - 1;
+    if patch < 8 * q + 1 || !(patch - 1).is_multiple_of(2 * q) {
+        return Err(bad_input(format!(
+            "--patch: {patch} must be P·{q}+1 with P even and ≥ 8 (e.g. 129 or 257)"
+        )));
+    }
+    Ok((patch - 1) / q)
+}
+
+/// What a command chose for one renderer.
+#[derive(Debug, Clone)]
+pub struct RendererChoice {
+    pub gpu: Option<String>,
+    pub validate: bool,
+    pub width: u32,
+    pub height: u32,
+    pub patch_tiles: u32,
+    pub mode: LodMode,
+    pub tau_px: f64,
+    pub curvature: bool,
+    pub debug_tiles: bool,
+}
+
+/// The offscreen renderer for `c`: validation always on in debug builds; `full` gets pools
+/// large enough for every visible tile and the deepest refinement.
+pub fn renderer_desc(c: &RendererChoice) -> RendererDesc {
+    let defaults = RendererDesc::default();
+    let full = c.mode == LodMode::Full;
+    RendererDesc {
+        validation: c.validate || cfg!(debug_assertions),
+        device: DeviceDesc {
+            name_filter: c.gpu.clone(),
+            swapchain: false,
+        },
+        width: c.width,
+        height: c.height,
+        patch_tiles: c.patch_tiles,
+        pool_capacity: if full {
+            FULL_POOL_CAPACITY
+        } else {
+            defaults.pool_capacity
+        },
+        debug_tiles: c.debug_tiles,
+        select: SelectParams {
+            mode: c.mode,
+            tau_px: c.tau_px,
+            curvature: c.curvature,
+            max_refinement: if full {
+                MAX_REFINEMENT
+            } else {
+                SelectParams::default().max_refinement
+            },
+            ..SelectParams::default()
+        },
+        ..defaults
+    }
+}
+
+/// A checked [`GpuArgs`]: the view and the renderer it asks for.
+#[derive(Debug, Clone)]
+pub struct Setup {
+    pub view: View,
+    pub desc: RendererDesc,
+}
+
+/// Checks every option of `g` (size, field of view, τ, patch) and assembles the renderer.
+pub fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
+    let view = parse_view(&g.size, g.fov)?;
+    if !(g.tau.is_finite() && g.tau > 0.0) {
+        return Err(bad_input(format!(
+            "--tau: {} must be a positive number of pixels",
+            g.tau
+        )));
+    }
+    let patch_tiles = patch_tiles(g.patch)?;
+    let desc = renderer_desc(&RendererChoice {
+        gpu: g.gpu.clone(),
+        validate: g.validate,
+        width: view.width,
+        height: view.height,
+        patch_tiles,
+        mode: g.lod.mode(),
+        tau_px: g.tau,
+        curvature: !g.no_curvature,
+        debug_tiles: g.debug_tiles,
+    });
+    Ok(Setup { view, desc })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn choice(mode: LodMode) -> RendererChoice {
+        RendererChoice {
+            gpu: Some("llvmpipe".into()),
+            validate: true,
+            width: 320,
+            height: 200,
+            patch_tiles: 16,
+            mode,
+            tau_px: 0.5,
+            curvature: false,
+            debug_tiles: true,
+        }
+    }
+
+    #[test]
+    fn the_choice_reaches_the_descriptor() {
+        let d = renderer_desc(&choice(LodMode::Bounded));
+        let defaults = RendererDesc::default();
+        assert!(d.validation);
+        assert_eq!(d.device.name_filter.as_deref(), Some("llvmpipe"));
+        assert!(!d.device.swapchain);
+        assert_eq!((d.width, d.height, d.patch_tiles), (320, 200, 16));
+        assert!(d.debug_tiles);
+        assert_eq!(d.select.mode, LodMode::Bounded);
+        assert_eq!(d.select.tau_px, 0.5);
+        assert!(!d.select.curvature);
+        assert_eq!(d.pool_capacity, defaults.pool_capacity);
+        assert_eq!(
+            d.select.max_refinement,
+            SelectParams::default().max_refinement
+        );
+        assert_eq!(d.tile_size, defaults.tile_size);
+        assert_eq!(d.staging_budget, defaults.staging_budget);
+    }
+
+    #[test]
+    fn full_gets_room_for_every_tile() {
+        let d = renderer_desc(&choice(LodMode::Full));
+        assert_eq!(d.pool_capacity, FULL_POOL_CAPACITY);
+        assert_eq!(d.select.max_refinement, MAX_REFINEMENT);
+    }
+
+    #[test]
+    fn bad_views_and_patches_name_their_flag() {
+        let v = parse_view("64x36", 90.0).unwrap();
+        assert_eq!((v.width, v.height), (64, 36));
+        for (size, fov, flag) in [
+            ("64x0", 90.0, "--size"),
+            ("wide", 90.0, "--size"),
+            ("64x36", 0.0, "--fov"),
+            ("64x36", 180.0, "--fov"),
+            ("64x36", f64::NAN, "--fov"),
+        ] {
+            let e = parse_view(size, fov).unwrap_err();
+            assert_eq!(e.code, 2);
+            assert!(e.message.starts_with(flag), "{}", e.message);
+        }
+        assert_eq!(patch_tiles(129).unwrap(), 8);
+        assert_eq!(patch_tiles(257).unwrap(), 16);
+        for bad in [0, 1, 65, 130, 145] {
+            assert!(patch_tiles(bad).unwrap_err().message.starts_with("--patch"));
+        }
+    }
+}
