@@ -6,7 +6,7 @@ frame into /dev/shm/<name> (layout: sim-bridge/PROTOCOL.md, C header:
 sim-bridge/include/aerie_pose.h). Watch it with:
 
     python3 sim-bridge/examples/shm_writer.py --seconds 10 &
-    aerie listen --shm aerie-pose --seconds 5
+    aerie listen --protocol shm --shm-name aerie-pose --seconds 5
 
 The seqlock: `seq` is made odd, the fields are written, `seq` is made even. CPython performs
 these stores in program order and x86-64 keeps stores in order (TSO); on weakly ordered CPUs

@@ -2,7 +2,7 @@
  * aerie_pose.h — shared-memory pose input for the aerie image generator.
  *
  * A simulator on the same host writes its ownship pose into a 136-byte file, by default
- * /dev/shm/aerie-pose (aerie: `aerie listen --shm aerie-pose`). One writer; any number of
+ * /dev/shm/aerie-pose (aerie: `aerie listen --protocol shm --shm-name aerie-pose`). One writer; any number of
  * readers. A seqlock guards the fields: `seq` is odd while a write is in progress and even
  * when the fields are stable (0 = never written). Readers never block the writer; they retry
  * a read that overlapped a write.

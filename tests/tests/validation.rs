@@ -14,7 +14,10 @@ fn validation_layer_counts_a_deliberate_error() {
     let info = vk::BufferCreateInfo::default()
         .size(0)
         .usage(vk::BufferUsageFlags::TRANSFER_SRC);
+    // SAFETY: `device` is live; the invalid size is the point (the layer must report it), and a
+    // buffer the driver made anyway is destroyed at once, before the device.
     if let Ok(b) = unsafe { device.raw.create_buffer(&info, None) } {
+        // SAFETY: `b` was created by `device` above and is used by nothing.
         unsafe { device.raw.destroy_buffer(b, None) };
     }
     assert!(
@@ -36,6 +39,7 @@ fn leaked_object_is_reported_at_teardown() {
     let mut device = Device::new(&instance, &DeviceDesc::default()).expect("device");
     let counters = instance.counters();
     let info = vk::SamplerCreateInfo::default();
+    // SAFETY: `device` is live and the create info valid; leaking the sampler is the point.
     let _leaked = unsafe { device.raw.create_sampler(&info, None) }.unwrap();
     device.destroy(); // without destroying the sampler
     instance.destroy();

@@ -661,6 +661,7 @@ impl FakeUser {
     fn open() -> FakeUser {
         let xlib = x11_dl::xlib::Xlib::open().expect("libX11");
         let xtest = x11_dl::xtest::Xf86vmode::open().expect("libXtst");
+        // SAFETY: libX11 is loaded; a null name opens $DISPLAY (our private Xvfb), checked below.
         let display = unsafe { (xlib.XOpenDisplay)(std::ptr::null()) };
         assert!(!display.is_null(), "second connection to the X server");
         FakeUser {
@@ -673,6 +674,9 @@ impl FakeUser {
     /// The mapped top-level window at (x, y) of size w×h.
     fn find(&self, x: i32, y: i32, w: i32, h: i32) -> Option<u64> {
         use x11_dl::xlib;
+        // SAFETY: `display` is an open connection (checked non-null in `open`, closed only in
+        // Drop); XQueryTree's `children` holds `n` windows until XFree, which we copy first;
+        // XWindowAttributes is plain data that XGetWindowAttributes fills.
         unsafe {
             let root = (self.xlib.XDefaultRootWindow)(self.display);
             let (mut r, mut p, mut children, mut n) = (0, 0, std::ptr::null_mut(), 0);
@@ -701,6 +705,7 @@ impl FakeUser {
     /// Focuses `window` and presses and releases the key of `keysym` in it (XTest).
     fn press_key(&self, window: u64, keysym: std::os::raw::c_uint) {
         use x11_dl::xlib;
+        // SAFETY: `display` is an open connection (see `find`); the calls take plain values.
         unsafe {
             (self.xlib.XSetInputFocus)(
                 self.display,
@@ -717,6 +722,8 @@ impl FakeUser {
 
     fn close(&self, window: u64) {
         use x11_dl::xlib;
+        // SAFETY: `display` is an open connection (see `find`); atom names are NUL-terminated C
+        // string literals; the event is a fully initialised ClientMessage that XSendEvent reads.
         unsafe {
             let atom = |name: &std::ffi::CStr| {
                 (self.xlib.XInternAtom)(self.display, name.as_ptr(), xlib::False)
@@ -753,6 +760,8 @@ impl FakeUser {
     /// restores it.
     fn set_minimised(&self, window: u64, minimised: bool) {
         use x11_dl::xlib;
+        // SAFETY: `display` is an open connection (see `find`); the property data is one atom
+        // (32-bit format, 1 element) that outlives the call.
         unsafe {
             let atom = |name: &std::ffi::CStr| {
                 (self.xlib.XInternAtom)(self.display, name.as_ptr(), xlib::False)
@@ -780,6 +789,7 @@ impl FakeUser {
 
 impl Drop for FakeUser {
     fn drop(&mut self) {
+        // SAFETY: the connection opened in `open` is closed once, here, and not used after.
         unsafe { (self.xlib.XCloseDisplay)(self.display) };
     }
 }

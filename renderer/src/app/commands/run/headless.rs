@@ -12,12 +12,12 @@ use std::time::{Duration, Instant};
 use aerie_config::Channel;
 
 use crate::app::commands::run::args::RunArgs;
-use crate::app::commands::run::plan::{plan, Plan};
+use crate::app::commands::run::plan::{plan, renderer_desc, Plan};
 use crate::app::commands::run::poses::{open_input, open_stats, RunPoses, StraightPassSource};
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::prepare::prepare_terrain;
 use crate::app::window::pose_source::PoseSource;
-use crate::render::frame::{RendererDesc, TerrainRenderer};
+use crate::render::frame::TerrainRenderer;
 use crate::sim::channel::AircraftPose;
 use crate::sim::flight::StraightPass;
 use crate::sim::pose_input::{counters_text, GeoMapping, SimInput};
@@ -25,7 +25,6 @@ use crate::tools::output::write_text;
 use crate::tools::overlay::{OverlayInfo, OverlayState};
 use crate::tools::percentile::percentile;
 use crate::tools::stats_csv::FrameRow;
-use crate::vk::DeviceDesc;
 use aerie_config::parse_size;
 use aerie_terrain::select::SelectParams;
 
@@ -96,23 +95,7 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
         0.0,
         open_stats(a, geo)?,
     );
-    let defaults = RendererDesc::default();
-    let desc = RendererDesc {
-        validation: a.validate || cfg.validation || cfg!(debug_assertions),
-        device: DeviceDesc {
-            name_filter: a.gpu.clone().or_else(|| cfg.gpu.clone()),
-            swapchain: false,
-        },
-        width: sizes[0].0,
-        height: sizes[0].1,
-        staging_budget: cfg.staging_budget_bytes(),
-        tile_size: cfg.tile_size,
-        select: SelectParams {
-            tau_px: cfg.tau_px,
-            ..defaults.select
-        },
-        ..defaults
-    };
+    let desc = renderer_desc(a, &plan, sizes[0], None);
     let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
     let result = (|| {
         let start = match &mut poses.input {

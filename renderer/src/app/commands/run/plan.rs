@@ -2,11 +2,14 @@
 //! settings resolved and the channels chosen. Bad input stops here (exit 2).
 
 use aerie_config::{Channel, ChannelDisplay, RenderConfig};
+use aerie_terrain::select::SelectParams;
 
 use crate::app::commands::run::args::RunArgs;
 use crate::app::commands::run::settings::{resolve_settings, RunSettings};
 use crate::app::failure::{bad_input, Failure};
 use crate::app::out_path::prepare_out_file;
+use crate::render::frame::RendererDesc;
+use crate::vk::DeviceDesc;
 use aerie_config::parse_size;
 
 /// Window size of a fullscreen channel shown with `--windowed` when it has no resolution.
@@ -159,4 +162,35 @@ pub(crate) fn plan(a: &RunArgs) -> Result<Plan, Failure> {
         channels,
         settings,
     })
+}
+
+/// The renderer `run` draws with, headless or windowed: validation, device, staging budget, tile
+/// size and τ from the flags over the config; `size` is the first channel's. `presentation`:
+/// the window system's instance extensions when drawing into windows (swapchains), `None`
+/// headless.
+pub(crate) fn renderer_desc(
+    a: &RunArgs,
+    plan: &Plan,
+    size: (u32, u32),
+    presentation: Option<Vec<std::ffi::CString>>,
+) -> RendererDesc {
+    let cfg = &plan.config.render;
+    let defaults = RendererDesc::default();
+    RendererDesc {
+        validation: a.validate || cfg.validation || cfg!(debug_assertions),
+        device: DeviceDesc {
+            name_filter: a.gpu.clone().or_else(|| cfg.gpu.clone()),
+            swapchain: presentation.is_some(),
+        },
+        instance_extensions: presentation.unwrap_or_default(),
+        width: size.0,
+        height: size.1,
+        staging_budget: cfg.staging_budget_bytes(),
+        tile_size: cfg.tile_size,
+        select: SelectParams {
+            tau_px: cfg.tau_px,
+            ..defaults.select
+        },
+        ..defaults
+    }
 }

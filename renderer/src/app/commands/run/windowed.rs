@@ -4,7 +4,7 @@
 use winit::event_loop::EventLoop;
 
 use crate::app::commands::run::args::RunArgs;
-use crate::app::commands::run::plan::{plan, Plan};
+use crate::app::commands::run::plan::{plan, renderer_desc, Plan};
 use crate::app::commands::run::poses::{open_input, open_stats, RunPoses, StraightPassSource};
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::prepare::prepare_terrain;
@@ -16,8 +16,6 @@ use crate::sim::flight::StraightPass;
 use crate::sim::pose_input::GeoMapping;
 use crate::tools::output::write_text;
 use crate::tools::percentile::percentile;
-use crate::vk::DeviceDesc;
-use aerie_terrain::select::SelectParams;
 
 /// `aerie run` in windows on an existing event loop (winit allows one per process; tests run several
 /// sessions on theirs). Returns the JSON summary.
@@ -29,24 +27,7 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
     let (width, height) = plan.channels[0]
         .nominal_size()
         .unwrap_or((cfg.width, cfg.height));
-    let defaults = RendererDesc::default();
-    let desc = RendererDesc {
-        validation: a.validate || cfg.validation || cfg!(debug_assertions),
-        instance_extensions: extensions,
-        device: DeviceDesc {
-            name_filter: a.gpu.clone().or_else(|| cfg.gpu.clone()),
-            swapchain: true,
-        },
-        width,
-        height,
-        staging_budget: cfg.staging_budget_bytes(),
-        tile_size: cfg.tile_size,
-        select: SelectParams {
-            tau_px: cfg.tau_px,
-            ..defaults.select
-        },
-        ..defaults
-    };
+    let desc = renderer_desc(a, &plan, (width, height), Some(extensions));
     let period_s = a
         .seconds
         .or(a.frames.map(|n| n as f64 / 60.0))
