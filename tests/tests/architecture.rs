@@ -158,3 +158,19 @@ fn terrain_crate_has_no_vulkan_or_window_dependency() {
         );
     }
 }
+
+#[test]
+fn commands_do_not_import_the_command_enum() {
+    // cli.rs dispatches to the commands; a command importing it back was the old 9-file cycle.
+    let g = graph("renderer/src");
+    assert!(g.arrows["app/cli.rs"]
+        .iter()
+        .any(|f| f.starts_with("app/commands/")));
+    let importers: Vec<&String> = g
+        .arrows
+        .iter()
+        .filter(|(_, to)| to.contains("app/cli.rs"))
+        .map(|(from, _)| from)
+        .collect();
+    assert!(importers.is_empty(), "import app/cli.rs: {importers:?}");
+}
