@@ -14,7 +14,10 @@
 //! render of the same camera), and the CPU oracle of the selection
 //! ([`crate::tools::image_error::oracle_selection`]). Outputs in `--out`: `results.csv`,
 //! `summary.csv`, `summary.md`, `time_vs_error.png`, `triangles_vs_error.png` and one error
-//! heat map per configuration (its worst frame).
+//! heat map per configuration (its worst frame). The folder must be empty, or `--overwrite`
+//! removes what an earlier `bench` wrote there ([`BENCH_FILES`]). A file that cannot be written
+//! does not stop the others: every output is tried, `summary.md` lists the ones that failed
+//! before it, and the command exits 1 naming the first.
 
 mod config;
 mod plot;
@@ -31,7 +34,7 @@ use clap::Args;
 use crate::app::args::{read_waypoints, PassArgs};
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::flight_plan::FlightPlan;
-use crate::app::out_path::prepare_out_folder;
+use crate::app::out_path::{prepare_run_folder, WriteFailures, BENCH_FILES};
 use crate::app::prepare::prepare_terrain;
 use crate::app::progress::count_bar;
 use crate::app::renderer_setup::{parse_view, patch_tiles, renderer_desc, RendererChoice, View};
@@ -56,8 +59,14 @@ pub struct BenchArgs {
     #[arg(long)]
     pub dem: PathBuf,
     /// Output folder (created, with the folders above it): results.csv, summary.csv, summary.md, time_vs_error.png, ...
+    /// It must be empty unless --overwrite.
     #[arg(long)]
     pub out: PathBuf,
+    /// Reuse a non-empty --out folder: first remove the files an earlier `aerie bench` wrote
+    /// there (results.csv, summary.csv, summary.md, the charts, heatmap_*.png); anything else in
+    /// it is kept.
+    #[arg(long)]
+    pub overwrite: bool,
     /// Timed waypoints (`t_s,x_m,y_m,z_m,heading,pitch,roll` per line) instead of the built-in
     /// straight pass through the dataset's centre.
     #[arg(long)]
@@ -170,7 +179,13 @@ struct Lane {
 
 pub fn run(a: BenchArgs) -> Result<(), Failure> {
     let mut p = plan(&a)?;
-    prepare_out_folder("--out", &a.out)?;
+    let removed = prepare_run_folder("--out", &a.out, a.overwrite, &BENCH_FILES)?;
+    if removed > 0 {
+        eprintln!(
+            "--overwrite: removed {removed} files of an earlier bench from {}",
+            a.out.display()
+        );
+    }
     let tile_size = RendererDesc::default().tile_size;
     let (ds, bake) = prepare_terrain(&a.dem, tile_size)?;
     let total_frames = a.warmup + a.frames;
@@ -396,31 +411,45 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
         oracle_nodes: a.oracle_nodes,
     };
     let out = &a.out;
-    write_text(
-        &out.join("results.csv"),
-        &report::results_csv(&configs, &rows),
-    )
-    .map_err(runtime)?;
-    write_text(&out.join("summary.csv"), &report::summary_csv(&summaries)).map_err(runtime)?;
-    let md = report::summary_md(&meta, &summaries);
-    write_text(&out.join("summary.md"), &md).map_err(runtime)?;
-    plot::time_vs_error(&out.join("time_vs_error.png"), &summaries).map_err(runtime)?;
-    plot::triangles_vs_error(&out.join("triangles_vs_error.png"), &summaries).map_err(runtime)?;
+    // Every output is tried even when one fails; the charts and heat maps go first so that
+    // summary.md can list what is missing.
+    let mut failures = WriteFailures::default();
+    let path = out.join("time_vs_error.png");
+    failures.check(None, &path, plot::time_vs_error(&path, &summaries));
+    let path = out.join("triangles_vs_error.png");
+    failures.check(None, &path, plot::triangles_vs_error(&path, &summaries));
     let mut heatmaps = 0;
     for lane in &reported {
         if let Some((frame, _)) = lane.worst {
             let scale = 2.0 * lane.config.tau_for_error();
             let path = out.join(format!("heatmap_{}_frame{frame:04}.png", lane.config.key()));
-            write_png(
-                &path,
-                p.view.width,
-                p.view.height,
-                &heatmap_rgba(&lane.worst_heat, scale),
-            )
-            .map_err(runtime)?;
-            heatmaps += 1;
+            let rgba = heatmap_rgba(&lane.worst_heat, scale);
+            let written = write_png(&path, p.view.width, p.view.height, &rgba);
+            heatmaps += failures.check(None, &path, written) as u32;
         }
     }
+    let path = out.join("results.csv");
+    failures.check(
+        None,
+        &path,
+        write_text(&path, &report::results_csv(&configs, &rows)),
+    );
+    let path = out.join("summary.csv");
+    failures.check(
+        None,
+        &path,
+        write_text(&path, &report::summary_csv(&summaries)),
+    );
+    let mut md = report::summary_md(&meta, &summaries);
+    if !failures.failed.is_empty() {
+        md.push_str("\n## Files not written\n\n");
+        for f in &failures.failed {
+            md.push_str(&format!("- {}\n", f.error));
+        }
+    }
+    let path = out.join("summary.md");
+    let written = write_text(&path, &md);
+    let md_written = failures.check(None, &path, written);
     println!("{}", report::summary_table(&summaries));
     println!(
         "{} configurations × {} frames ({} warm-up) on {}: {}/results.csv, summary.csv, summary.md, time_vs_error.png, triangles_vs_error.png, {heatmaps} heat maps",
@@ -430,7 +459,7 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
         meta.device,
         out.display()
     );
-    Ok(())
+    failures.verdict(md_written.then_some(path.as_path()))
 }
 
 /// Measures one lane's frame, accumulates it (outside warm-up) and keeps its worst heat map.

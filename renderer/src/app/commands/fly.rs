@@ -7,6 +7,11 @@
 //! channel's frames in `<out>/<channel>/frame_NNNN.png`, and a stitched review panorama
 //! `<out>/panorama_NNNN.png` ([`crate::tools::panorama`]). `frames.csv` has one row per frame per
 //! channel (first column `channel`); `summary.json` lists the channels and the panorama canvas.
+//!
+//! The output folder must be empty, or `--overwrite` removes what an earlier `fly` wrote there
+//! ([`FLY_FILES`]). A PNG that cannot be written does not stop the flight: it is recorded, every
+//! later frame is still tried, `frames.csv` and `summary.json` (`failed_frames`,
+//! `failed_files`) are still written, and the command exits 1 naming the first failed file.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -18,7 +23,7 @@ use glam::DVec3;
 use crate::app::args::{read_waypoints, GpuArgs, PassArgs};
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::flight_plan::FlightPlan;
-use crate::app::out_path::prepare_out_folder;
+use crate::app::out_path::{prepare_run_folder, WriteFailures, FLY_FILES};
 use crate::app::prepare::prepare_terrain;
 use crate::app::progress::count_bar;
 use crate::app::renderer_setup::{setup, Setup};
@@ -67,9 +72,14 @@ pub struct FlyArgs {
     #[arg(long)]
     pub overlay: bool,
     /// Output folder (created, with the folders above it): frame_NNNN.png, frames.csv,
-    /// summary.json.
+    /// summary.json. It must be empty unless --overwrite.
     #[arg(long)]
     pub out: PathBuf,
+    /// Reuse a non-empty --out folder: first remove the files an earlier `aerie fly` wrote
+    /// there (frame_NNNN.png, panorama_NNNN.png, channel folders' frames, frames.csv,
+    /// summary.json); anything else in it is kept.
+    #[arg(long)]
+    pub overwrite: bool,
 }
 
 pub fn run(a: FlyArgs) -> Result<(), Failure> {
@@ -86,9 +96,15 @@ pub fn run(a: FlyArgs) -> Result<(), Failure> {
         Some(p) => Some(plan_channels(p, a.channel_scale)?),
         None => None,
     };
-    prepare_out_folder("--out", &a.out)?;
-    let (ds, b) = prepare_terrain(&a.dem, s.desc.tile_size)?;
     let waypoints = read_waypoints("--path", a.path.as_ref())?;
+    let removed = prepare_run_folder("--out", &a.out, a.overwrite, &FLY_FILES)?;
+    if removed > 0 {
+        eprintln!(
+            "--overwrite: removed {removed} files of an earlier fly from {}",
+            a.out.display()
+        );
+    }
+    let (ds, b) = prepare_terrain(&a.dem, s.desc.tile_size)?;
     let flight = FlightPlan::new(&ds, &a.pass, waypoints, a.frames as f64 / a.fps);
     let mut desc = s.desc.clone();
     if let Some((_, chans)) = &channel_plan {
@@ -140,6 +156,7 @@ fn fly_one_camera(
     let mut frame_ms = Vec::new();
     let mut triangles = Vec::new();
     let mut pngs = 0u32;
+    let mut failures = WriteFailures::default();
     for f in 0..a.frames {
         let t = f as f64 / a.fps;
         let (pos, att) = flight.pose_at(t);
@@ -159,8 +176,8 @@ fn fly_one_camera(
         csv.push_str(&csv_row(&stats, t, pos, att));
         if f % a.every == 0 {
             let path = a.out.join(format!("frame_{f:04}.png"));
-            write_png(&path, width, height, &r.colour_rgba()).map_err(runtime)?;
-            pngs += 1;
+            let written = write_png(&path, width, height, &r.colour_rgba());
+            pngs += failures.check(Some(f), &path, written) as u32;
         }
         bar.inc(1);
     }
@@ -168,7 +185,6 @@ fn fly_one_camera(
     let device = r.device_name().to_string();
     r.destroy();
     r.validation_counters().verdict().map_err(runtime)?;
-    write_text(&a.out.join("frames.csv"), &csv).map_err(runtime)?;
     for v in [&mut gpu_ms, &mut frame_ms, &mut triangles] {
         v.sort_by(f64::total_cmp);
     }
@@ -191,7 +207,7 @@ fn fly_one_camera(
             "warnings": r.validation_counters().warnings(),
         },
     });
-    write_text(&a.out.join("summary.json"), &format!("{summary:#}\n")).map_err(runtime)?;
+    let done = write_csv_and_summary(&a.out, &csv, summary, &mut failures);
     println!(
         "{} frames ({} PNGs) in {}: frame median {:.1} ms, p99 {:.1} ms, max {:.1} ms (GPU median {:.1} ms); triangles median {:.0}; {} tiles refined, {} late; validation clean",
         a.frames,
@@ -205,7 +221,26 @@ fn fly_one_camera(
         refined,
         late
     );
-    Ok(())
+    done
+}
+
+/// The end of every flight: `frames.csv`, then `summary.json` with `failed_frames` and
+/// `failed_files` (both empty on a clean run), each tried even when files before it failed.
+/// Ok when every file of the run was written, else exit 1 naming the first that was not.
+fn write_csv_and_summary(
+    out: &Path,
+    csv: &str,
+    mut summary: serde_json::Value,
+    failures: &mut WriteFailures,
+) -> Result<(), Failure> {
+    let csv_path = out.join("frames.csv");
+    failures.check(None, &csv_path, write_text(&csv_path, csv));
+    summary["failed_frames"] = serde_json::json!(failures.failed_frames());
+    summary["failed_files"] = failures.json();
+    let path = out.join("summary.json");
+    let written = write_text(&path, &format!("{summary:#}\n"));
+    let written = failures.check(None, &path, written);
+    failures.verdict(written.then_some(path.as_path()))
 }
 
 /// Header of `frames.csv`.
@@ -365,6 +400,7 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
     let mut digests_equal = true;
     let mut pngs = 0u32;
     let mut panoramas = 0u32;
+    let mut failures = WriteFailures::default();
     let mut overlays: Vec<OverlayState> =
         chans.iter().map(|_| OverlayState::new(a.overlay)).collect();
     for f in 0..a.frames {
@@ -412,8 +448,8 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
             if write {
                 let rgba = r.colour_rgba();
                 let path = a.out.join(&c.folder).join(format!("frame_{f:04}.png"));
-                write_png(&path, c.size.0, c.size.1, &rgba).map_err(runtime)?;
-                pngs += 1;
+                let written = write_png(&path, c.size.0, c.size.1, &rgba);
+                pngs += failures.check(Some(f), &path, written) as u32;
                 images.push(rgba);
             }
         }
@@ -423,8 +459,8 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
             let refs: Vec<&[u8]> = images.iter().map(|v| v.as_slice()).collect();
             let pano = map.compose(&refs, &sizes, !a.no_panorama_borders);
             let path = a.out.join(format!("panorama_{f:04}.png"));
-            write_png(&path, canvas.width, canvas.height, &pano).map_err(runtime)?;
-            panoramas += 1;
+            let written = write_png(&path, canvas.width, canvas.height, &pano);
+            panoramas += failures.check(Some(f), &path, written) as u32;
         }
         bar.inc(1);
     }
@@ -434,7 +470,6 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
     let validation = r.desc().validation;
     r.destroy();
     counters.verdict().map_err(runtime)?;
-    write_text(&a.out.join("frames.csv"), &csv).map_err(runtime)?;
     frame_ms.sort_by(f64::total_cmp);
     let channels_json: Vec<serde_json::Value> = chans
         .iter()
@@ -475,7 +510,7 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
         "frame_ms": median_p99_max(&frame_ms),
         "validation": {"enabled": validation, "errors": counters.errors(), "warnings": counters.warnings()},
     });
-    write_text(&a.out.join("summary.json"), &format!("{summary:#}\n")).map_err(runtime)?;
+    let done = write_csv_and_summary(&a.out, &csv, summary, &mut failures);
     println!(
         "{} frames × {} channels ({} PNGs, {} panoramas {}x{}) in {}: frame median {:.1} ms, max {:.1} ms (all channels); validation clean",
         a.frames,
@@ -488,7 +523,7 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
         percentile(&frame_ms, 0.5),
         percentile(&frame_ms, 1.0),
     );
-    Ok(())
+    done
 }
 
 /// The channel's frustum edge angles (left, right, down, up), degrees from its view axis.
