@@ -21,7 +21,7 @@ demo: setup
 	$(AERIE) render --dem $(DEM) --debug-tiles \
 	    --camera 30500,12000,4500,0,-15,0 --size 1280x720 --out $(DEMO_OUT)-tiles.png
 	$(AERIE) fly --dem $(DEM) \
-	    --frames 24 --every 4 --size 640x360 --out $(DEMO_OUT)
+	    --frames 24 --every 4 --size 640x360 --out $(DEMO_OUT) --overwrite
 	@echo "demo: $(DEMO_OUT)-still.png, $(DEMO_OUT)-tiles.png, $(DEMO_OUT)/frame_*.png, $(DEMO_OUT)/frames.csv, $(DEMO_OUT)/summary.json"
 
 # `make test` is CI's second command (after `make demo`): formatting, then every test. Clippy is
@@ -48,5 +48,5 @@ bench: setup
 BENCH_OUT ?= out/bench
 bench-run: setup
 	cargo build --release -p aerie
-	$(AERIE_RELEASE) bench --dem $(DEM) --out $(BENCH_OUT) \
+	$(AERIE_RELEASE) bench --dem $(DEM) --out $(BENCH_OUT) --overwrite \
 	    --size 1280x720 --frames 60 --modes bounded,clipmap,distance,full --tau 0.5,1,2,5

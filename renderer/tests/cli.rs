@@ -64,7 +64,7 @@ fn render_writes_png_and_json_summary() {
     assert!(v["device"].as_str().unwrap().len() > 1);
     assert!(v["gpu_ms"].as_f64().unwrap() >= 0.0);
     let saved: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("frame.json")).unwrap())
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("frame.png.json")).unwrap())
             .unwrap();
     assert_eq!(saved, v);
 }
@@ -263,7 +263,7 @@ fn render_and_fly_create_nested_output_folders() {
     assert!(o.status.success(), "{}", stderr(&o));
     let img = image::open(&still).unwrap().to_rgba8();
     assert_eq!((img.width(), img.height()), (64, 36));
-    assert!(dir.path().join("out/a/b/still.json").is_file());
+    assert!(dir.path().join("out/a/b/still.png.json").is_file());
 
     let flight = dir.path().join("out/c/d/flight");
     let o = aerie(&[
@@ -312,4 +312,203 @@ fn an_output_folder_that_cannot_be_made_is_named() {
         err.contains(&format!("cannot create folder {}", blocker.display())),
         "{err}"
     );
+}
+
+/// `fly` over the hill: `frames` frames at 48×32 into `out`, plus `extra` arguments.
+fn fly_hill(dem: &Path, out: &Path, frames: u32, extra: &[&str]) -> Output {
+    let frames = frames.to_string();
+    let mut args = vec![
+        "fly",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--frames",
+        &frames,
+        "--size",
+        "48x32",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    aerie(&args)
+}
+
+fn summary_json(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn fly_refuses_a_used_folder_and_overwrite_clears_only_its_own_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = raw_dem(dir.path());
+    let out = dir.path().join("flight");
+    let o = fly_hill(&dem, &out, 3, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::write(out.join("notes.txt"), b"mine").unwrap();
+    let o = fly_hill(&dem, &out, 1, &[]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&out.display().to_string()) && err.contains("--overwrite"),
+        "{err}"
+    );
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        out.join("frame_0002.png").is_file(),
+        "a refusal removes nothing"
+    );
+    let o = fly_hill(&dem, &out, 1, &["--overwrite"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("frame_0000.png").is_file());
+    for stale in ["frame_0001.png", "frame_0002.png"] {
+        assert!(!out.join(stale).exists(), "stale {stale} removed");
+    }
+    assert_eq!(std::fs::read(out.join("notes.txt")).unwrap(), b"mine");
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 2, "header + the new run's one frame");
+    let s = summary_json(&out);
+    assert_eq!(s["frames"], 1);
+    assert_eq!(s["failed_frames"], serde_json::json!([]));
+}
+
+#[test]
+fn a_frame_that_cannot_be_written_still_leaves_csv_and_summary_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = raw_dem(dir.path());
+    let out = dir.path().join("flight");
+    // A folder where frame 2's PNG goes: its write fails even for root (rename onto a folder),
+    // and --overwrite keeps it (it is not a file an earlier fly wrote).
+    std::fs::create_dir_all(out.join("frame_0002.png")).unwrap();
+    std::fs::write(out.join("frame_0002.png/keep.txt"), b"x").unwrap();
+    let o = fly_hill(&dem, &out, 4, &["--overwrite"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let bad = out.join("frame_0002.png").display().to_string();
+    assert!(
+        err.contains("frame 2: ") && err.contains(&bad) && err.contains("os error"),
+        "names the first failed file and the OS reason: {err}"
+    );
+    assert!(err.contains("summary.json lists them"), "{err}");
+    // The flight went on: later frames written, every frame in frames.csv.
+    for f in ["frame_0000.png", "frame_0001.png", "frame_0003.png"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 5, "header + 4 frames");
+    let s = summary_json(&out);
+    assert_eq!(s["frames"], 4);
+    assert_eq!(s["pngs"], 3);
+    assert_eq!(s["failed_frames"], serde_json::json!([2]));
+    let files = s["failed_files"].as_array().unwrap();
+    assert_eq!(files.len(), 1);
+    assert_eq!(files[0]["file"], bad.as_str());
+    assert!(
+        files[0]["error"].as_str().unwrap().contains("os error"),
+        "{files:?}"
+    );
+    // Nothing half-written is left next to the frames.
+    let names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(names.iter().all(|n| !n.starts_with('.')), "{names:?}");
+}
+
+#[test]
+fn render_writes_its_json_as_png_json_and_never_replaces_a_foreign_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = raw_dem(dir.path());
+    let out = dir.path().join("notes.png");
+    let notes = dir.path().join("notes.json");
+    std::fs::write(&notes, b"{\"todo\": \"keep me\"}").unwrap();
+    let render = || {
+        aerie(&[
+            "render",
+            "--dem",
+            dem.to_str().unwrap(),
+            "--camera",
+            "800,-400,900,0,-30,0",
+            "--size",
+            "48x32",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let o = render();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&notes).unwrap(), b"{\"todo\": \"keep me\"}");
+    let json = dir.path().join("notes.png.json");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(v["triangles"].as_u64().unwrap() > 0);
+    // Rendering again replaces its own summary.
+    let o = render();
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A file of that name it did not write is refused before rendering: exit 2, untouched.
+    std::fs::write(&json, b"my own notes").unwrap();
+    std::fs::remove_file(&out).unwrap();
+    let o = render();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains(&json.display().to_string()), "{err}");
+    assert_eq!(std::fs::read(&json).unwrap(), b"my own notes");
+    assert!(!out.exists(), "no PNG when refused");
+}
+
+/// `bench` with one cheap configuration over the hill into `out`.
+fn bench_hill(dem: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "bench",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--modes",
+        "clipmap",
+        "--no-image-error",
+        "--oracle-nodes",
+        "0",
+        "--size",
+        "48x32",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    aerie(&args)
+}
+
+#[test]
+fn bench_refuses_a_used_folder_and_still_writes_the_rest_when_a_file_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = raw_dem(dir.path());
+    let out = dir.path().join("bench");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("results.csv"), b"stale").unwrap();
+    let o = bench_hill(&dem, &out, &[]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&out.display().to_string()) && err.contains("--overwrite"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(out.join("results.csv")).unwrap(), b"stale");
+    // summary.csv cannot be written (a folder is in its place); everything else is.
+    std::fs::create_dir_all(out.join("summary.csv/x")).unwrap();
+    let o = bench_hill(&dem, &out, &["--overwrite"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let bad = out.join("summary.csv").display().to_string();
+    assert!(err.contains(&bad) && err.contains("os error"), "{err}");
+    let results = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert!(
+        results.lines().count() >= 2 && results != "stale",
+        "{results}"
+    );
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(
+        md.contains("Files not written") && md.contains(&bad),
+        "{md}"
+    );
+    assert!(out.join("time_vs_error.png").is_file());
 }

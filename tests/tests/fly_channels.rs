@@ -201,3 +201,72 @@ fn bad_channel_configs_are_one_line_bad_input() {
     assert!(msg.starts_with("--channel-scale: 0"), "{msg}");
     assert!(!out.exists(), "nothing written on bad input");
 }
+
+#[test]
+fn channel_flights_keep_their_folder_rules_and_summaries_through_failed_writes() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = demo_copy(dir.path());
+    let out = dir.path().join("out");
+    let cfg = dir.path().join("two.toml");
+    std::fs::write(
+        &cfg,
+        "[[channel]]\nname = \"a\"\nresolution = \"48x32\"\nview = { heading = -30.0 }\n\
+         frustum = { hfov = 60.0 }\n\
+         [[channel]]\nname = \"b\"\nresolution = \"48x32\"\nview = { heading = 30.0 }\n\
+         frustum = { hfov = 60.0 }\n",
+    )
+    .unwrap();
+    let s = |p: &Path| p.display().to_string();
+    let (d, c, o) = (s(&dem), s(&cfg), s(&out));
+    let run_with = |frames: &str, extra: &[&str]| {
+        let mut args = vec![
+            "fly",
+            "--dem",
+            &d,
+            "--channels",
+            &c,
+            "--frames",
+            frames,
+            "--out",
+            &o,
+        ];
+        args.extend_from_slice(extra);
+        fly(&args)
+    };
+    run_with("3", &[]).unwrap_or_else(|(c, m)| panic!("exit {c}: {m}"));
+    assert!(out.join("b/frame_0002.png").is_file() && out.join("panorama_0002.png").is_file());
+
+    // A used folder is refused, naming it and --overwrite.
+    let (code, msg) = run_with("1", &[]).expect_err("used folder");
+    assert_eq!(code, 2);
+    assert!(msg.contains(&o) && msg.contains("--overwrite"), "{msg}");
+
+    // With --overwrite a shorter flight leaves no stale frame; frame 0's panorama cannot be
+    // written (a folder stands in its place), and the summary still says so.
+    std::fs::remove_file(out.join("panorama_0000.png")).unwrap();
+    std::fs::create_dir_all(out.join("panorama_0000.png/x")).unwrap();
+    let (code, msg) = run_with("1", &["--overwrite"]).expect_err("a failed write");
+    assert_eq!(code, 1, "{msg}");
+    assert!(
+        msg.starts_with("frame 0: ") && msg.contains(&s(&out.join("panorama_0000.png"))),
+        "{msg}"
+    );
+    for ch in ["a", "b"] {
+        assert!(out.join(ch).join("frame_0000.png").is_file(), "{ch}");
+        for f in 1..3 {
+            assert!(
+                !out.join(ch).join(format!("frame_{f:04}.png")).exists(),
+                "{ch} {f}"
+            );
+        }
+    }
+    assert!(!out.join("panorama_0001.png").exists() && !out.join("panorama_0002.png").exists());
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 2, "header + 1 frame × 2 channels");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["frames"], 1);
+    assert_eq!(summary["pngs"], 2);
+    assert_eq!(summary["panorama"]["pngs"], 0);
+    assert_eq!(summary["failed_frames"], serde_json::json!([0]));
+}

@@ -137,11 +137,12 @@ pub fn prepare_run_folder(
     }
     if !overwrite {
         let first = entries[0].file_name().unwrap_or_default().to_string_lossy();
+        let n = entries.len();
         return Err(bad_input(format!(
-            "{flag} {}: folder is not empty ({} entries, e.g. {first}); pass --overwrite to \
+            "{flag} {}: folder is not empty ({n} {}, e.g. {first}); pass --overwrite to \
              replace what an earlier `aerie {}` wrote there, or choose an empty folder",
             out.display(),
-            entries.len(),
+            if n == 1 { "entry" } else { "entries" },
             files.command
         )));
     }
