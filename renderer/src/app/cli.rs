@@ -20,17 +20,18 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Render one frame of a DEM from a fixed camera to a PNG (+ a JSON summary next to it).
+    /// Render one frame of a DEM from a fixed camera to a PNG (+ a JSON summary next to it,
+    /// `<png>.json`).
     Render(render::RenderArgs),
     /// Fly a scripted pass (or waypoints) over a DEM headless, one camera or every channel of a
-    /// config: PNGs, per-frame CSV, summary.
+    /// config: PNGs, per-frame CSV, summary, into an empty folder (or --overwrite).
     Fly(fly::FlyArgs),
     /// Generate a deterministic synthetic DEM (raw f32 + JSON sidecar) for scale and stress tests.
     GenDem(gen_dem::GenDemArgs),
     /// Bake the per-tile error table of a dataset (file or folder of SRTM tiles).
     Bake(bake::BakeArgs),
     /// Time against measured image-space error: every LOD mode (× τ) on the same frames,
-    /// results.csv, summary.csv/.md, time_vs_error.png in --out.
+    /// results.csv, summary.csv/.md, time_vs_error.png in an empty --out (or --overwrite).
     Bench(bench::BenchArgs),
     /// Receive aircraft poses (UDP or shared memory) without rendering: progress, summary,
     /// optional recording.

@@ -81,13 +81,20 @@ fn numbered(name: &str, prefix: &str, suffix: &str) -> bool {
         .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
 }
 
-/// A hidden temporary next to a file `is_file` accepts: `.` + that name + `.` + anything.
+/// A temporary an interrupted write left next to a file `is_file` accepts: hidden, `.` + that
+/// name + `.` + anything, or visible, that name + `.tmp…` / `.partial…`.
 fn temp_of(name: &str, is_file: impl Fn(&str) -> bool) -> bool {
-    let Some(rest) = name.strip_prefix('.') else {
-        return false;
+    let (rest, hidden) = match name.strip_prefix('.') {
+        Some(rest) => (rest, true),
+        None => (name, false),
     };
-    rest.match_indices('.')
-        .any(|(i, _)| i > 0 && i + 1 < rest.len() && is_file(&rest[..i]))
+    rest.match_indices('.').any(|(i, _)| {
+        let tail = &rest[i + 1..];
+        i > 0
+            && !tail.is_empty()
+            && (hidden || tail.starts_with("tmp") || tail.starts_with("partial"))
+            && is_file(&rest[..i])
+    })
 }
 
 /// `aerie fly`: frames, channel frames, panoramas, `frames.csv`, `summary.json`.
@@ -358,6 +365,9 @@ mod tests {
             "summary.json",
             ".frame_0003.png.partial",
             ".summary.json.tmp123",
+            "frame_0004.png.tmp4711",
+            "frames.csv.partial",
+            "frames.csv.tmp",
         ] {
             assert!(FLY_FILES.is_top(n), "{n}");
         }
@@ -370,6 +380,7 @@ mod tests {
             ".frame_0003.png",
             "results.csv",
             ".hidden",
+            "summary.json.bak",
         ] {
             assert!(!FLY_FILES.is_top(n), "{n}");
         }
