@@ -291,6 +291,10 @@ impl ShmReader {
             if n < SHM_SIZE {
                 let first = !self.shrunk;
                 self.shrunk = true;
+                // A regrown file starts over (its writer re-creates the header and the
+                // sequence): its first record is new whatever its seq.
+                self.last_seq = 0;
+                self.last_dropped = None;
                 return ShmRead::Shrunk {
                     len: n as u64,
                     first,
