@@ -44,8 +44,8 @@ fn c_pose_k(k: u64) -> Pose {
         attitude_deg: [(k % 360) as f64, (k % 170) as f64 - 85.0, -x / 1e4],
         sim_time_s: 0.001 * x,
         frame: k,
-        velocity_enu: Some([x + 1.0, x + 2.0, x + 3.0]),
-        angular_rates_deg_s: (k % 2 == 0).then_some([x; 3]),
+        velocity_enu: Some([1.0, 2.0, 3.0].map(|d| (k % 200) as f64 + d)),
+        angular_rates_deg_s: (k % 2 == 0).then_some([(k % 30) as f64; 3]),
     }
 }
 

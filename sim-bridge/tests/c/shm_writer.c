@@ -29,13 +29,14 @@ static void pose_k(struct aerie_pose *v, uint64_t k)
     v->attitude_deg[0] = (double)(k % 360);
     v->attitude_deg[1] = (double)(k % 170) - 85.0;
     v->attitude_deg[2] = -x / 1e4;
-    v->velocity_enu[0] = x + 1.0;
-    v->velocity_enu[1] = x + 2.0;
-    v->velocity_enu[2] = x + 3.0;
+    /* Speeds and rates in physical ranges (aerie drops implausible ones). */
+    v->velocity_enu[0] = (double)(k % 200) + 1.0;
+    v->velocity_enu[1] = (double)(k % 200) + 2.0;
+    v->velocity_enu[2] = (double)(k % 200) + 3.0;
     if (k % 2 == 0) {
-        v->rates_deg_s[0] = x;
-        v->rates_deg_s[1] = x;
-        v->rates_deg_s[2] = x;
+        v->rates_deg_s[0] = (double)(k % 30);
+        v->rates_deg_s[1] = (double)(k % 30);
+        v->rates_deg_s[2] = (double)(k % 30);
     }
 }
 
