@@ -33,14 +33,14 @@ use crate::pose::Pose;
 use crate::stats::{Counters, StatsSnapshot};
 use crate::timing::{monotonic_s, ExtrapolationParams};
 
+use crate::shm_layout::{
+    check_record, header_word, pose_from_words, pose_to_words, split_header, words_of, WORDS,
+    W_CRC, W_FLAGS, W_HEADER, W_SEQ,
+};
 pub use crate::shm_layout::{
     decode_snapshot, RecordError, ShmPose, ShmSnapshot, DEFAULT_MAX_RETRIES, DEFAULT_SHM_NAME,
-    SHM_CRC_END, SHM_CRC_START, SHM_FLAG_LOCAL_ENU, SHM_FLAG_RATES, SHM_FLAG_VELOCITY,
-    SHM_MAGIC, SHM_SIZE, SHM_VERSION,
-};
-use crate::shm_layout::{
-    check_record, pose_from_words, pose_to_words, split_header, words_of, header_word, W_CRC,
-    W_FLAGS, W_HEADER, W_SEQ, WORDS,
+    SHM_CRC_END, SHM_CRC_START, SHM_FLAG_LOCAL_ENU, SHM_FLAG_RATES, SHM_FLAG_VELOCITY, SHM_MAGIC,
+    SHM_SIZE, SHM_VERSION,
 };
 use crate::stats::DropReason;
 

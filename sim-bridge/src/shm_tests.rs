@@ -109,8 +109,20 @@ fn write_then_read_and_header_checks() {
         .unwrap()
         .set_len(8)
         .unwrap();
-    assert_eq!(tr.read(), ShmRead::Shrunk { len: 8, first: true });
-    assert_eq!(tr.read(), ShmRead::Shrunk { len: 8, first: false });
+    assert_eq!(
+        tr.read(),
+        ShmRead::Shrunk {
+            len: 8,
+            first: true
+        }
+    );
+    assert_eq!(
+        tr.read(),
+        ShmRead::Shrunk {
+            len: 8,
+            first: false
+        }
+    );
     drop(tw);
     let mut tw = ShmWriter::create(&trunc.0).unwrap();
     assert_eq!(tr.read(), ShmRead::NotWritten);
@@ -135,7 +147,11 @@ fn write_then_read_and_header_checks() {
     std::fs::write(&v1.0, &old).unwrap();
     assert!(matches!(
         ShmReader::open(&v1.0),
-        Err(ShmError::BadHeader { version: 1, size: 136, .. })
+        Err(ShmError::BadHeader {
+            version: 1,
+            size: 136,
+            ..
+        })
     ));
     // Bad files are refused with their name.
     let bad = TempShm::new("bad");

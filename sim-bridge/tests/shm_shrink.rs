@@ -118,18 +118,37 @@ fn shrinking_and_regrowing_at_20_hz_for_5_s_never_faults_or_yields_garbage() {
         stats.shm_shrinks,
         stats.dropped_by_reason()
     );
-    assert!(garbage.is_empty(), "{} garbage poses, first {:?}", garbage.len(), garbage[0]);
+    assert!(
+        garbage.is_empty(),
+        "{} garbage poses, first {:?}",
+        garbage.len(),
+        garbage[0]
+    );
     // Every pose the source accepted is one the writer wrote.
     let latest = pose_reader.latest().expect("the source read poses");
-    assert_eq!(latest.latest.pose, pose_k(last_k), "the source did not recover");
+    assert_eq!(
+        latest.latest.pose,
+        pose_k(last_k),
+        "the source did not recover"
+    );
     if let Some(prev) = latest.previous {
         assert_eq!(prev.pose, pose_k(prev.pose.frame));
     }
     // The readers see most of the 15 ms short windows even on a busy machine; a reader that
     // missed them all (or did not recover after one) would fail here.
-    assert!(shrinks >= CYCLES / 4, "only {shrinks} of {CYCLES} shrinks seen");
-    assert!(stats.shm_shrinks >= CYCLES / 4, "source saw {} shrinks", stats.shm_shrinks);
+    assert!(
+        shrinks >= CYCLES / 4,
+        "only {shrinks} of {CYCLES} shrinks seen"
+    );
+    assert!(
+        stats.shm_shrinks >= CYCLES / 4,
+        "source saw {} shrinks",
+        stats.shm_shrinks
+    );
     assert!(stats.shm_shrinks <= CYCLES);
-    assert!(reads >= CYCLES / 4, "only {reads} poses read across {CYCLES} regrowths");
+    assert!(
+        reads >= CYCLES / 4,
+        "only {reads} poses read across {CYCLES} regrowths"
+    );
     assert!(shrunk_now.load(Ordering::Relaxed) == CYCLES);
 }

@@ -60,7 +60,17 @@ fn c_family_writer_against_the_reader(compiler: &str, lang: &str, std: &str) {
     let dir = tempfile::tempdir().unwrap();
     let exe = dir.path().join("writer");
     let out = Command::new(compiler)
-        .args(["-x", lang, std, "-Wall", "-Wextra", "-pedantic", "-Werror", "-O2", "-I"])
+        .args([
+            "-x",
+            lang,
+            std,
+            "-Wall",
+            "-Wextra",
+            "-pedantic",
+            "-Werror",
+            "-O2",
+            "-I",
+        ])
         .arg(manifest_dir().join("include"))
         .arg(manifest_dir().join("tests/c/shm_writer.c"))
         .arg("-o")
@@ -112,7 +122,10 @@ fn c_family_writer_against_the_reader(compiler: &str, lang: &str, std: &str) {
     // The writer's last act rewrote pose N after corrupting it (its own reader check).
     assert!(dropped.len() <= 1, "dropped {dropped:?}");
     assert_eq!(last, N, "the last pose was not read");
-    eprintln!("{compiler} {std}: {N} poses written, {reads} read, {} dropped", dropped.len());
+    eprintln!(
+        "{compiler} {std}: {N} poses written, {reads} read, {} dropped",
+        dropped.len()
+    );
 }
 
 #[test]

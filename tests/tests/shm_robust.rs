@@ -63,14 +63,27 @@ fn a_cxx11_writer_from_the_header_feeds_aerie_listen() {
     let root = aerie_tests::repo_root();
     let exe = dir.path().join("writer");
     let out = Command::new("g++")
-        .args(["-x", "c++", "-std=c++11", "-Wall", "-Wextra", "-pedantic", "-Werror", "-I"])
+        .args([
+            "-x",
+            "c++",
+            "-std=c++11",
+            "-Wall",
+            "-Wextra",
+            "-pedantic",
+            "-Werror",
+            "-I",
+        ])
         .arg(root.join("sim-bridge/include"))
         .arg(root.join("sim-bridge/tests/c/shm_writer.c"))
         .arg("-o")
         .arg(&exe)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let (file, json) = (dir.path().join("pose"), dir.path().join("listen.json"));
     let _ = aerie();
     let child = listen(&file, "4", &json);
@@ -131,7 +144,11 @@ fn aerie_listen_survives_a_file_shrinking_under_it() {
     eprintln!("aerie listen under a shrinking file: {s}");
     assert!(u(&s, "shm_shrinks") >= 10, "{s}");
     assert!(u(&s, "shm_shrinks") <= 40, "{s}");
-    assert_eq!(s["last_pose"]["frame"].as_u64(), Some(k), "did not recover: {s}");
+    assert_eq!(
+        s["last_pose"]["frame"].as_u64(),
+        Some(k),
+        "did not recover: {s}"
+    );
     // Only records cut by the shrinks (zeroed header, cut checksum) are dropped.
     let d = &s["dropped"];
     assert_eq!(
