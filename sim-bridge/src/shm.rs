@@ -174,9 +174,9 @@ impl ShmWriter {
         w(W_SEQ).store(seq.wrapping_add(2), Ordering::Release);
     }
 
-    /// Publishes `pose` with its checksum flipped (tests: a reader must drop it).
-    #[doc(hidden)]
-    pub fn write_with_bad_checksum(&mut self, pose: &Pose) {
+    /// Publishes `pose` with its checksum flipped (a reader must drop it).
+    #[cfg(test)]
+    pub(crate) fn write_with_bad_checksum(&mut self, pose: &Pose) {
         let mut v = pose_to_words(pose);
         v[W_CRC] ^= 1;
         self.write_words(&v);
