@@ -35,7 +35,7 @@ use crate::timing::{monotonic_s, ExtrapolationParams};
 
 use crate::shm_layout::{
     check_record, header_word, pose_from_words, pose_to_words, split_header, words_of, WORDS,
-    W_CRC, W_FLAGS, W_HEADER, W_SEQ,
+    W_FLAGS, W_HEADER, W_SEQ,
 };
 pub use crate::shm_layout::{
     decode_snapshot, RecordError, ShmPose, ShmSnapshot, DEFAULT_MAX_RETRIES, DEFAULT_SHM_NAME,
@@ -178,7 +178,7 @@ impl ShmWriter {
     #[cfg(test)]
     pub(crate) fn write_with_bad_checksum(&mut self, pose: &Pose) {
         let mut v = pose_to_words(pose);
-        v[W_CRC] ^= 1;
+        v[crate::shm_layout::W_CRC] ^= 1;
         self.write_words(&v);
     }
 }
