@@ -8,7 +8,8 @@ sim-bridge/include/aerie_pose.h). Watch it with:
     python3 sim-bridge/examples/shm_writer.py --seconds 10 &
     aerie listen --protocol shm --shm-name aerie-pose --seconds 5
 
-The seqlock: `seq` is made odd, the fields are written, `seq` is made even. CPython performs
+The seqlock: `seq` is made odd, the fields and their CRC-32 (zlib.crc32 of bytes 16..136,
+stored at offset 136) are written, `seq` is made even. CPython performs
 these stores in program order and x86-64 keeps stores in order (TSO); on weakly ordered CPUs
 (ARM) a Python writer has no memory fence available -- use the C header there.
 """
@@ -19,10 +20,11 @@ import mmap
 import os
 import struct
 import time
+import zlib
 
 MAGIC = 0x53504541  # b"AEPS" read little-endian
-VERSION = 1
-SIZE = 136
+VERSION = 2
+SIZE = 144
 FLAG_LOCAL_ENU = 1 << 0
 FLAG_VELOCITY = 1 << 1
 FLAG_RATES = 1 << 2
@@ -31,7 +33,8 @@ HEADER = struct.Struct("=IHH")  # offset 0: magic, version, size
 SEQ = struct.Struct("=Q")  # offset 8: seqlock counter
 # offset 16: flags, reserved, frame, sim time, position[3], attitude[3], velocity[3], rates[3]
 BODY = struct.Struct("=IIQd3d3d3d3d")
-assert 16 + BODY.size == SIZE
+CRC = struct.Struct("=II")  # offset 136: CRC-32 of bytes 16..136, reserved
+assert 16 + BODY.size + CRC.size == SIZE
 
 EARTH_RADIUS_M = 6371000.0  # spherical approximation, good enough for a demo path
 G = 9.80665
@@ -62,10 +65,12 @@ class PoseWriter:
         flags = (FLAG_LOCAL_ENU if local_enu else 0)
         flags |= FLAG_VELOCITY if velocity_enu is not None else 0
         flags |= FLAG_RATES if rates_deg_s is not None else 0
+        body = BODY.pack(flags, 0, frame, sim_time_s, *position, *attitude_deg,
+                         *(velocity_enu or (0.0, 0.0, 0.0)), *(rates_deg_s or (0.0, 0.0, 0.0)))
         self.seq += 1
         SEQ.pack_into(self.map, 8, self.seq)  # odd: writing
-        BODY.pack_into(self.map, 16, flags, 0, frame, sim_time_s, *position, *attitude_deg,
-                       *(velocity_enu or (0.0, 0.0, 0.0)), *(rates_deg_s or (0.0, 0.0, 0.0)))
+        self.map[16:16 + BODY.size] = body
+        CRC.pack_into(self.map, 16 + BODY.size, zlib.crc32(body) & 0xFFFFFFFF, 0)
         self.seq += 1
         SEQ.pack_into(self.map, 8, self.seq)  # even: stable
 

@@ -330,6 +330,9 @@ mod tests {
         let mut bad = s.clone();
         bad[0] = b'X';
         seeds.push(("shm", "bad_magic", bad));
+        let mut bad = s.clone();
+        bad[shm::SHM_CRC_END] ^= 1;
+        seeds.push(("shm", "bad_crc", bad));
         let rec = dir.path().join("r.aerie-rec");
         record::write_recording(
             &rec,

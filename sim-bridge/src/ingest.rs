@@ -7,7 +7,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::codec::cigi::{CigiMessage, ViewTable};
-use crate::codec::{decode, DecodeError, Protocol, ProtocolChoice};
+use crate::codec::{decode, Protocol, ProtocolChoice};
 use crate::handoff::{latest, Publisher, Subscriber};
 use crate::pose::Pose;
 use crate::stats::{Counters, DropReason, StatsSnapshot};
@@ -232,9 +232,9 @@ impl Ingest {
         }
     }
 
-    /// Counts an input error that is not a datagram (e.g. a shared-memory read that kept
-    /// tearing) under `reason`.
-    pub fn count_drop(&mut self, reason: DropReason, detail: &DecodeError) {
+    /// Counts an input error that is not a datagram (e.g. a shared-memory record with a bad
+    /// header or checksum) under `reason`.
+    pub fn count_drop(&mut self, reason: DropReason, detail: &dyn std::fmt::Display) {
         self.counters.received();
         self.drop_with(reason, detail);
     }

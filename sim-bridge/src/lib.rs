@@ -27,6 +27,7 @@ pub mod record;
 pub mod script;
 pub mod send;
 pub mod shm;
+mod shm_layout;
 pub mod stats;
 pub mod timing;
 pub mod udp;

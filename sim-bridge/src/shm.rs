@@ -1,18 +1,25 @@
-//! Shared-memory pose input for a simulator on the same host: a 136-byte file (by default
-//! `/dev/shm/aerie-pose`) holding one [`ShmPose`], guarded by a seqlock.
+//! Shared-memory pose input for a simulator on the same host: a 144-byte file (by default
+//! `/dev/shm/aerie-pose`) holding one [`ShmPose`], guarded by a seqlock and a CRC-32.
 //!
-//! Writer protocol (one writer): `seq += 1` (odd: writing), release fence, write the fields,
-//! `seq += 1` with release (even: stable). Reader: load `seq` (acquire); if odd, retry; copy the
-//! fields; acquire fence; reload `seq`; if it changed, the copy may be torn: retry (bounded —
-//! after [`DEFAULT_MAX_RETRIES`] the reader gives up for this poll and keeps the last pose).
+//! Writer protocol (one writer): `seq += 1` (odd: writing), release fence, write the fields
+//! and the checksum, `seq += 1` with release (even: stable). Reader: read the record; if `seq`
+//! is odd, retry; re-read `seq`; if it changed, the copy may be torn: retry (bounded — after
+//! [`DEFAULT_MAX_RETRIES`] the reader gives up for this poll and keeps the last pose). Every
+//! read re-checks the header (magic, version, size) and the checksum: a record that fails
+//! either is dropped and counted by reason, never decoded into a pose.
+//!
+//! The reader never maps the file: it copies the record with `pread` on the descriptor. A
+//! file that shrinks under a mapping raises SIGBUS on the next access, and a size check before
+//! the access cannot close that race; `pread` on a short file simply returns fewer bytes,
+//! which is counted as a shrink, and reading resumes when the file has regrown.
+//!
 //! The C header `sim-bridge/include/aerie_pose.h` and the Python example
-//! `sim-bridge/examples/shm_writer.py` implement the writer side.
-//!
-//! Every field is accessed as an aligned 64-bit atomic word (the header word packs magic,
-//! version and size; the flags word packs flags and a reserved u32), so concurrent access is
-//! defined behaviour on the Rust side. Host byte order (little-endian on x86-64/AArch64).
+//! `sim-bridge/examples/shm_writer.py` implement the writer side. The Rust [`ShmWriter`] (tests
+//! and `aerie-send`) maps the file and stores every field as an aligned 64-bit atomic word, as
+//! the C header does. Host byte order (little-endian on x86-64/AArch64).
 
-use std::fs::OpenOptions;
+use std::fs::{File, OpenOptions};
+use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{fence, AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
@@ -22,97 +29,20 @@ use std::time::{Duration, Instant};
 use memmap2::{MmapOptions, MmapRaw};
 
 use crate::ingest::{input_channel, Ingest, InputParams, PoseReader};
-use crate::pose::{Pose, PosePosition};
+use crate::pose::Pose;
 use crate::stats::{Counters, StatsSnapshot};
 use crate::timing::{monotonic_s, ExtrapolationParams};
 
-/// `magic` field: the bytes `"AEPS"` (0x53504541 read little-endian).
-pub const SHM_MAGIC: u32 = u32::from_le_bytes(*b"AEPS");
-/// Layout version.
-pub const SHM_VERSION: u16 = 1;
-/// Size of [`ShmPose`] and of the file.
-pub const SHM_SIZE: usize = 136;
-/// Default file name in `/dev/shm`.
-pub const DEFAULT_SHM_NAME: &str = "aerie-pose";
-/// Flag: the position is local ENU metres (else WGS84 lat/lon/alt).
-pub const SHM_FLAG_LOCAL_ENU: u32 = 1 << 0;
-/// Flag: the velocity field is valid.
-pub const SHM_FLAG_VELOCITY: u32 = 1 << 1;
-/// Flag: the rates field is valid.
-pub const SHM_FLAG_RATES: u32 = 1 << 2;
-/// Torn reads retried per poll before giving up until the next poll.
-pub const DEFAULT_MAX_RETRIES: u32 = 64;
-
-/// The shared-memory layout (documentation and size/offset checks; access goes through 64-bit
-/// atomic words at these offsets). Mirrors `struct aerie_pose` in `aerie_pose.h`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ShmPose {
-    /// [`SHM_MAGIC`].
-    pub magic: u32,
-    /// [`SHM_VERSION`].
-    pub version: u16,
-    /// [`SHM_SIZE`].
-    pub size: u16,
-    /// Seqlock counter: odd while the writer is writing, even when stable; 0 = never written.
-    pub seq: u64,
-    /// `SHM_FLAG_*` bits.
-    pub flags: u32,
-    /// 0.
-    pub reserved: u32,
-    /// Simulator frame number.
-    pub frame: u64,
-    /// Simulation time, seconds.
-    pub sim_time_s: f64,
-    /// lat°, lon°, alt m (WGS84) or x, y, z m (local ENU).
-    pub position: [f64; 3],
-    /// Heading, pitch, roll, degrees.
-    pub attitude_deg: [f64; 3],
-    /// East, north, up velocity, m/s.
-    pub velocity_enu: [f64; 3],
-    /// Heading, pitch, roll rates, deg/s.
-    pub rates_deg_s: [f64; 3],
-}
-
-const _: () = assert!(std::mem::size_of::<ShmPose>() == SHM_SIZE);
-const WORDS: usize = SHM_SIZE / 8;
-const W_HEADER: usize = 0;
-const W_SEQ: usize = 1;
-const W_FLAGS: usize = 2;
-const W_FRAME: usize = 3;
-const W_TIME: usize = 4;
-const W_POS: usize = 5;
-const W_ATT: usize = 8;
-const W_VEL: usize = 11;
-const W_RATES: usize = 14;
-
-fn header_word() -> u64 {
-    let mut b = [0u8; 8];
-    b[..4].copy_from_slice(&SHM_MAGIC.to_ne_bytes());
-    b[4..6].copy_from_slice(&SHM_VERSION.to_ne_bytes());
-    b[6..8].copy_from_slice(&(SHM_SIZE as u16).to_ne_bytes());
-    u64::from_ne_bytes(b)
-}
-
-fn split_header(w: u64) -> (u32, u16, u16) {
-    let b = w.to_ne_bytes();
-    (
-        u32::from_ne_bytes([b[0], b[1], b[2], b[3]]),
-        u16::from_ne_bytes([b[4], b[5]]),
-        u16::from_ne_bytes([b[6], b[7]]),
-    )
-}
-
-fn flags_word(flags: u32) -> u64 {
-    let mut b = [0u8; 8];
-    b[..4].copy_from_slice(&flags.to_ne_bytes());
-    u64::from_ne_bytes(b)
-}
-
-fn flags_of(w: u64) -> u32 {
-    let b = w.to_ne_bytes();
-    u32::from_ne_bytes([b[0], b[1], b[2], b[3]])
-}
+use crate::shm_layout::{
+    check_record, header_word, pose_from_words, pose_to_words, split_header, words_of, WORDS,
+    W_FLAGS, W_HEADER, W_SEQ,
+};
+pub use crate::shm_layout::{
+    decode_snapshot, RecordError, ShmPose, ShmSnapshot, DEFAULT_MAX_RETRIES, DEFAULT_SHM_NAME,
+    SHM_CRC_END, SHM_CRC_START, SHM_FLAG_LOCAL_ENU, SHM_FLAG_RATES, SHM_FLAG_VELOCITY, SHM_MAGIC,
+    SHM_SIZE, SHM_VERSION,
+};
+use crate::stats::DropReason;
 
 /// `/dev/shm/<name>` for a bare name; a name containing `/` is taken as a path.
 pub fn shm_path(name: &str) -> PathBuf {
@@ -156,12 +86,9 @@ pub enum ShmError {
     },
 }
 
-/// A 136-byte shared mapping viewed as 64-bit atomic words.
+/// The writer's shared mapping viewed as 64-bit atomic words.
 struct Words {
     map: MmapRaw,
-    /// Kept open to check the file's size before touching the mapping (a file truncated
-    /// under a mapping raises SIGBUS on access).
-    file: std::fs::File,
 }
 
 impl Words {
@@ -173,61 +100,43 @@ impl Words {
         unsafe { AtomicU64::from_ptr(self.map.as_mut_ptr().add(i * 8).cast::<u64>()) }
     }
 
-    fn open(path: &Path, write: bool) -> Result<Words, ShmError> {
+    fn open(path: &Path) -> Result<Words, ShmError> {
         let io = |source| ShmError::Io {
             path: path.to_path_buf(),
             source,
         };
         let file = OpenOptions::new()
             .read(true)
-            .write(write)
-            .create(write)
+            .write(true)
+            .create(true)
             .truncate(false)
             .open(path)
             .map_err(io)?;
-        let len = file.metadata().map_err(io)?.len();
-        if write && len < SHM_SIZE as u64 {
+        if file.metadata().map_err(io)?.len() < SHM_SIZE as u64 {
             file.set_len(SHM_SIZE as u64).map_err(io)?;
-        } else if len < SHM_SIZE as u64 {
-            return Err(ShmError::TooSmall {
-                path: path.to_path_buf(),
-                len,
-            });
         }
-        let opts = {
-            let mut o = MmapOptions::new();
-            o.len(SHM_SIZE);
-            o
-        };
-        let map = if write {
-            opts.map_raw(&file)
-        } else {
-            opts.map_raw_read_only(&file)
-        }
-        .map_err(io)?;
-        Ok(Words { map, file })
-    }
-
-    /// Whether the file still covers the mapping.
-    fn intact(&self) -> bool {
-        self.file
-            .metadata()
-            .map(|m| m.len() >= SHM_SIZE as u64)
-            .unwrap_or(false)
+        let map = MmapOptions::new()
+            .len(SHM_SIZE)
+            .map_raw(&file)
+            .map_err(io)?;
+        Ok(Words { map })
     }
 }
 
-/// Writes poses into a shared-memory file (the simulator side; used by tests and tools).
+/// Writes poses into a shared-memory file (the simulator side; used by tests and tools). It
+/// maps the file: whoever shrinks the file must not write until it has regrown (and should
+/// [`create`](Self::create) the writer again, which rewrites the header).
 pub struct ShmWriter {
     words: Words,
     path: PathBuf,
 }
 
 impl ShmWriter {
-    /// Opens or creates `path`, sizes it to [`SHM_SIZE`] and writes the header. An existing
-    /// file keeps its sequence counter (rounded up to even), so readers see the new writes.
+    /// Opens or creates `path`, grows it to [`SHM_SIZE`] if shorter and writes the header. An
+    /// existing file keeps its sequence counter (rounded up to even), so readers see the new
+    /// writes.
     pub fn create(path: &Path) -> Result<Self, ShmError> {
-        let words = Words::open(path, true)?;
+        let words = Words::open(path)?;
         let seq = words.word(W_SEQ).load(Ordering::Relaxed);
         if split_header(words.word(W_HEADER).load(Ordering::Relaxed))
             != (SHM_MAGIC, SHM_VERSION, SHM_SIZE as u16)
@@ -248,56 +157,41 @@ impl ShmWriter {
         &self.path
     }
 
-    /// Publishes `pose` (seqlock write; wait-free).
+    /// Publishes `pose` (seqlock write with its checksum; wait-free).
     pub fn write(&mut self, pose: &Pose) {
-        let mut flags = 0;
-        let position = match pose.position {
-            PosePosition::Geodetic {
-                lat_deg,
-                lon_deg,
-                alt_m,
-            } => [lat_deg, lon_deg, alt_m],
-            PosePosition::LocalEnu { x, y, z } => {
-                flags |= SHM_FLAG_LOCAL_ENU;
-                [x, y, z]
-            }
-        };
-        if pose.velocity_enu.is_some() {
-            flags |= SHM_FLAG_VELOCITY;
-        }
-        if pose.angular_rates_deg_s.is_some() {
-            flags |= SHM_FLAG_RATES;
-        }
+        self.write_words(&pose_to_words(pose));
+    }
+
+    /// Publishes the checksummed words `W_FLAGS..=W_CRC` of `v` (the rest is ignored).
+    fn write_words(&mut self, v: &[u64; WORDS]) {
         let w = |i: usize| self.words.word(i);
         let seq = w(W_SEQ).load(Ordering::Relaxed);
         w(W_SEQ).store(seq.wrapping_add(1), Ordering::Relaxed);
         fence(Ordering::Release);
-        w(W_FLAGS).store(flags_word(flags), Ordering::Relaxed);
-        w(W_FRAME).store(pose.frame, Ordering::Relaxed);
-        w(W_TIME).store(pose.sim_time_s.to_bits(), Ordering::Relaxed);
-        let vectors = [
-            (W_POS, position),
-            (W_ATT, pose.attitude_deg),
-            (W_VEL, pose.velocity_enu.unwrap_or([0.0; 3])),
-            (W_RATES, pose.angular_rates_deg_s.unwrap_or([0.0; 3])),
-        ];
-        for (base, v) in vectors {
-            for (k, x) in v.iter().enumerate() {
-                w(base + k).store(x.to_bits(), Ordering::Relaxed);
-            }
+        for (i, x) in v.iter().enumerate().skip(W_FLAGS) {
+            w(i).store(*x, Ordering::Relaxed);
         }
         w(W_SEQ).store(seq.wrapping_add(2), Ordering::Release);
+    }
+
+    /// Publishes `pose` with its checksum flipped (a reader must drop it).
+    #[cfg(test)]
+    pub(crate) fn write_with_bad_checksum(&mut self, pose: &Pose) {
+        let mut v = pose_to_words(pose);
+        v[crate::shm_layout::W_CRC] ^= 1;
+        self.write_words(&v);
     }
 }
 
 /// The result of one [`ShmReader::read`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum ShmRead {
     /// The writer has not written a pose yet (`seq` is 0).
     NotWritten,
-    /// Same sequence as the last read: nothing new.
+    /// The same record as the last read (a pose already returned, or one already dropped).
     Unchanged,
-    /// A new, consistent pose (not yet validated: see [`Pose::validate`]).
+    /// A new, consistent pose with a good header and checksum (not yet validated: see
+    /// [`Pose::validate`]).
     New {
         /// The pose.
         pose: Pose,
@@ -311,25 +205,51 @@ pub enum ShmRead {
         /// Attempts made.
         retries: u32,
     },
-    /// The file was truncated below the layout's size: the mapping is not read (it would
-    /// fault); reopen the file.
-    Truncated,
+    /// A stable record failed the header or checksum check: dropped. Reported once per
+    /// record; reading it again gives [`Unchanged`](Self::Unchanged).
+    Dropped(RecordError),
+    /// The file is shorter than the layout (it shrank under the reader): nothing decoded.
+    /// Reading resumes by itself once the file has regrown.
+    Shrunk {
+        /// The bytes there were.
+        len: u64,
+        /// Whether this read found the shrink (the previous read saw a whole file).
+        first: bool,
+    },
+    /// `pread` failed (not a shrink): reopen the file.
+    Failed(std::io::ErrorKind),
 }
 
-/// Reads poses from a shared-memory file. Never blocks: [`read`](Self::read) makes at most
+/// Reads poses from a shared-memory file through `pread` (never a mapping, so a file that
+/// shrinks cannot fault the reader). Never blocks: [`read`](Self::read) makes at most
 /// `1 + max_retries` attempts.
 pub struct ShmReader {
-    words: Words,
+    file: File,
     path: PathBuf,
     last_seq: u64,
+    /// The last dropped record (its words), so a record is counted once, not once per poll.
+    last_dropped: Option<[u64; WORDS]>,
+    shrunk: bool,
     max_retries: u32,
 }
 
 impl ShmReader {
-    /// Opens `path` read-only and checks its header.
+    /// Opens `path` read-only and checks its size and header.
     pub fn open(path: &Path) -> Result<Self, ShmError> {
-        let words = Words::open(path, false)?;
-        let (magic, version, size) = split_header(words.word(W_HEADER).load(Ordering::Acquire));
+        let io = |source| ShmError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let file = File::open(path).map_err(io)?;
+        let mut b = [0u8; SHM_SIZE];
+        let n = read_record(&file, &mut b).map_err(io)?;
+        if n < SHM_SIZE {
+            return Err(ShmError::TooSmall {
+                path: path.to_path_buf(),
+                len: n as u64,
+            });
+        }
+        let (magic, version, size) = split_header(words_of(&b)[W_HEADER]);
         if (magic, version, usize::from(size)) != (SHM_MAGIC, SHM_VERSION, SHM_SIZE) {
             return Err(ShmError::BadHeader {
                 path: path.to_path_buf(),
@@ -339,9 +259,11 @@ impl ShmReader {
             });
         }
         Ok(Self {
-            words,
+            file,
             path: path.to_path_buf(),
             last_seq: 0,
+            last_dropped: None,
+            shrunk: false,
             max_retries: DEFAULT_MAX_RETRIES,
         })
     }
@@ -357,36 +279,66 @@ impl ShmReader {
         &self.path
     }
 
-    /// One seqlock read attempt series; see [`ShmRead`]. Checks first that the file was not
-    /// truncated (writers must never shrink the file while readers run; the check narrows the
-    /// window in which one that does could fault the reader to microseconds).
+    /// One seqlock read attempt series; see [`ShmRead`].
     pub fn read(&mut self) -> ShmRead {
-        if !self.words.intact() {
-            return ShmRead::Truncated;
-        }
-        let w = |i: usize| self.words.word(i);
-        let mut v = [0u64; WORDS];
+        let mut b = [0u8; SHM_SIZE];
+        let mut crc_misses = 0;
         for attempt in 0..=self.max_retries {
-            let s1 = w(W_SEQ).load(Ordering::Acquire);
-            if s1 == 0 {
-                return ShmRead::NotWritten;
+            let n = match read_record(&self.file, &mut b) {
+                Ok(n) => n,
+                Err(e) => return ShmRead::Failed(e.kind()),
+            };
+            if n < SHM_SIZE {
+                let first = !self.shrunk;
+                self.shrunk = true;
+                // A regrown file starts over (its writer re-creates the header and the
+                // sequence): its first record is new whatever its seq.
+                self.last_seq = 0;
+                self.last_dropped = None;
+                return ShmRead::Shrunk {
+                    len: n as u64,
+                    first,
+                };
             }
-            if s1 == self.last_seq {
-                return ShmRead::Unchanged;
-            }
+            self.shrunk = false;
+            let v = words_of(&b);
+            let s1 = v[W_SEQ];
             if s1 & 1 == 1 {
                 std::hint::spin_loop();
                 continue;
             }
-            for (i, slot) in v.iter_mut().enumerate().skip(W_FLAGS) {
-                *slot = w(i).load(Ordering::Relaxed);
+            let checked = check_record(&v);
+            if s1 != 0 && s1 == self.last_seq && checked.is_ok() {
+                return ShmRead::Unchanged;
             }
+            // The copy is consistent only if no write began while it was taken.
             fence(Ordering::Acquire);
-            if w(W_SEQ).load(Ordering::Relaxed) != s1 {
-                std::hint::spin_loop();
-                continue;
+            match self.seq_now() {
+                Ok(Some(s2)) if s2 == s1 => {}
+                Ok(_) => {
+                    std::hint::spin_loop();
+                    continue;
+                }
+                Err(e) => return ShmRead::Failed(e.kind()),
+            }
+            if let Err(e) = checked {
+                // A checksum mismatch on a stable record may still be a copy torn on a weakly
+                // ordered CPU: look once more before calling it garbage.
+                if e.reason == DropReason::BadCrc && crc_misses == 0 {
+                    crc_misses += 1;
+                    continue;
+                }
+                if self.last_dropped == Some(v) {
+                    return ShmRead::Unchanged;
+                }
+                self.last_dropped = Some(v);
+                return ShmRead::Dropped(e);
+            }
+            if s1 == 0 {
+                return ShmRead::NotWritten;
             }
             self.last_seq = s1;
+            self.last_dropped = None;
             return ShmRead::New {
                 pose: pose_from_words(&v),
                 seq: s1,
@@ -397,73 +349,36 @@ impl ShmReader {
             retries: self.max_retries + 1,
         }
     }
-}
 
-fn pose_from_words(v: &[u64; WORDS]) -> Pose {
-    let f = |i: usize| f64::from_bits(v[i]);
-    let v3 = |i: usize| [f(i), f(i + 1), f(i + 2)];
-    let flags = flags_of(v[W_FLAGS]);
-    let [a, b, c] = v3(W_POS);
-    Pose {
-        position: if flags & SHM_FLAG_LOCAL_ENU != 0 {
-            PosePosition::LocalEnu { x: a, y: b, z: c }
-        } else {
-            PosePosition::Geodetic {
-                lat_deg: a,
-                lon_deg: b,
-                alt_m: c,
+    /// `seq` as the file holds it now (`None`: the file no longer covers it).
+    fn seq_now(&self) -> std::io::Result<Option<u64>> {
+        let mut s = [0u8; 8];
+        let mut n = 0;
+        while n < 8 {
+            match self.file.read_at(&mut s[n..], 8 + n as u64) {
+                Ok(0) => return Ok(None),
+                Ok(k) => n += k,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
             }
-        },
-        attitude_deg: v3(W_ATT),
-        sim_time_s: f(W_TIME),
-        frame: v[W_FRAME],
-        velocity_enu: (flags & SHM_FLAG_VELOCITY != 0).then(|| v3(W_VEL)),
-        angular_rates_deg_s: (flags & SHM_FLAG_RATES != 0).then(|| v3(W_RATES)),
+        }
+        Ok(Some(u64::from_ne_bytes(s)))
     }
 }
 
-/// A byte copy of the shared-memory file, decoded (tools, tests and the fuzz target; the live
-/// reader goes through atomics and the seqlock instead).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShmSnapshot {
-    /// The seqlock counter (odd: the copy was taken mid-write and may be torn).
-    pub seq: u64,
-    /// The pose, `None` when `seq` is 0 (never written). Not validated: see [`Pose::validate`].
-    pub pose: Option<Pose>,
-}
-
-/// Decodes a byte copy of the file (host byte order, at least [`SHM_SIZE`] bytes; the file
-/// may be longer). Errors name the byte offset.
-pub fn decode_snapshot(b: &[u8]) -> Result<ShmSnapshot, String> {
-    if b.len() < SHM_SIZE {
-        return Err(format!("{} bytes, the layout needs {SHM_SIZE}", b.len()));
+/// `pread`s the record from offset 0; returns the bytes read (fewer than [`SHM_SIZE`]: the
+/// file is shorter).
+fn read_record(file: &File, b: &mut [u8; SHM_SIZE]) -> std::io::Result<usize> {
+    let mut n = 0;
+    while n < SHM_SIZE {
+        match file.read_at(&mut b[n..], n as u64) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
     }
-    let mut v = [0u64; WORDS];
-    for (i, w) in v.iter_mut().enumerate() {
-        let mut word = [0u8; 8];
-        word.copy_from_slice(&b[i * 8..i * 8 + 8]);
-        *w = u64::from_ne_bytes(word);
-    }
-    let (magic, version, size) = split_header(v[W_HEADER]);
-    if magic != SHM_MAGIC {
-        return Err(format!(
-            "offset 0: magic {magic:#010x}, expected {SHM_MAGIC:#010x}"
-        ));
-    }
-    if version != SHM_VERSION {
-        return Err(format!(
-            "offset 4: version {version}, expected {SHM_VERSION}"
-        ));
-    }
-    if usize::from(size) != SHM_SIZE {
-        return Err(format!("offset 6: size {size}, expected {SHM_SIZE}"));
-    }
-    // Unknown flag bits are ignored, as by the live reader.
-    let seq = v[W_SEQ];
-    Ok(ShmSnapshot {
-        seq,
-        pose: (seq != 0).then(|| pose_from_words(&v)),
-    })
+    Ok(n)
 }
 
 /// A shared-memory input.
@@ -492,7 +407,9 @@ impl Default for ShmConfig {
 
 /// A thread polling a shared-memory file and feeding a [`PoseReader`]. It waits for the file to
 /// appear (checking every 100 ms), and reopens it when nothing changed for a second (a
-/// restarted writer may have replaced the file). Dropping it stops the thread.
+/// restarted writer may have replaced the file). Records that fail the header or checksum
+/// check are counted under their [`DropReason`], a file that shrank under the reader under
+/// `shm_shrinks` ([`StatsSnapshot::shm_shrinks`]). Dropping it stops the thread.
 pub struct ShmSource {
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
@@ -550,16 +467,18 @@ impl Drop for ShmSource {
 }
 
 fn poll_loop(cfg: ShmConfig, mut ingest: Ingest, stop: Arc<AtomicBool>) {
+    let name = cfg.path.display().to_string();
     let mut reader: Option<ShmReader> = None;
     let mut last_error = String::new();
     let mut next_open = Instant::now();
     let mut last_change = Instant::now();
+    let mut shrunk = false;
     let counters = ingest.counters().clone();
     while !stop.load(Ordering::Relaxed) {
         if reader.is_none() && Instant::now() >= next_open {
             match ShmReader::open(&cfg.path) {
                 Ok(r) => {
-                    tracing::info!("shm {}: opened", cfg.path.display());
+                    tracing::info!("shm {name}: opened");
                     reader = Some(r.with_max_retries(cfg.max_retries));
                     last_error.clear();
                     last_change = Instant::now();
@@ -575,7 +494,12 @@ fn poll_loop(cfg: ShmConfig, mut ingest: Ingest, stop: Arc<AtomicBool>) {
             }
         }
         if let Some(r) = reader.as_mut() {
-            match r.read() {
+            let read = r.read();
+            if shrunk && !matches!(read, ShmRead::Shrunk { .. } | ShmRead::Failed(_)) {
+                shrunk = false;
+                tracing::info!("shm {name}: the file is whole again");
+            }
+            match read {
                 ShmRead::New { pose, retries, .. } => {
                     let arrival = monotonic_s();
                     counters.retries(retries.into());
@@ -586,21 +510,42 @@ fn poll_loop(cfg: ShmConfig, mut ingest: Ingest, stop: Arc<AtomicBool>) {
                     counters.retries(retries.into());
                     counters.busy();
                 }
-                ShmRead::Truncated => {
-                    tracing::warn!("shm {}: file truncated; reopening", cfg.path.display());
+                ShmRead::Dropped(e) => {
+                    ingest.count_drop(e.reason, &e);
+                    last_change = Instant::now();
+                }
+                ShmRead::Shrunk { len, .. } => {
+                    // Counted once per shrink, also across a reopen while it stays short.
+                    if !shrunk {
+                        counters.shm_shrink();
+                        shrunk = true;
+                        tracing::warn!(
+                            "shm {name}: the file shrank to {len} bytes (the layout needs \
+                             {SHM_SIZE}); nothing read until it regrows"
+                        );
+                    }
+                    reopen_if_idle(&mut reader, &mut next_open, last_change);
+                }
+                ShmRead::Failed(kind) => {
+                    tracing::warn!("shm {name}: read failed ({kind}); reopening");
                     reader = None;
                     next_open = Instant::now() + Duration::from_millis(100);
                 }
                 ShmRead::Unchanged | ShmRead::NotWritten => {
-                    if last_change.elapsed() > Duration::from_secs(1) {
-                        // Look again: the writer may have been restarted on a new file.
-                        reader = None;
-                        next_open = Instant::now();
-                    }
+                    reopen_if_idle(&mut reader, &mut next_open, last_change);
                 }
             }
         }
         std::thread::sleep(cfg.poll_interval);
+    }
+}
+
+/// After a second without a new record, look again: the writer may have been restarted on a
+/// new file (the old one, unlinked, would stay short or unchanged forever).
+fn reopen_if_idle(reader: &mut Option<ShmReader>, next_open: &mut Instant, last_change: Instant) {
+    if last_change.elapsed() > Duration::from_secs(1) {
+        *reader = None;
+        *next_open = Instant::now();
     }
 }
 

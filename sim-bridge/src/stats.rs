@@ -86,6 +86,7 @@ pub struct Counters {
     replies: AtomicU64,
     retries: AtomicU64,
     busy: AtomicU64,
+    shm_shrinks: AtomicU64,
     /// f64 bits of the first accepted pose's arrival (0 bits = none yet).
     first_accept_bits: AtomicU64,
     /// f64 bits of the latest accepted pose's arrival.
@@ -128,6 +129,9 @@ impl Counters {
     pub(crate) fn busy(&self) {
         self.busy.fetch_add(1, Relaxed);
     }
+    pub(crate) fn shm_shrink(&self) {
+        self.shm_shrinks.fetch_add(1, Relaxed);
+    }
 
     /// A consistent-enough copy for reporting (each counter read once; `accepted` with
     /// acquire, see [`accepted`](Self::accepted)).
@@ -147,6 +151,7 @@ impl Counters {
             replies: self.replies.load(Relaxed),
             retries: self.retries.load(Relaxed),
             busy: self.busy.load(Relaxed),
+            shm_shrinks: self.shm_shrinks.load(Relaxed),
             first_accept_s: f64::from_bits(self.first_accept_bits.load(Relaxed)),
             last_accept_s: f64::from_bits(self.last_accept_bits.load(Relaxed)),
         }
@@ -177,6 +182,9 @@ pub struct StatsSnapshot {
     pub retries: u64,
     /// Shared memory: polls that gave up after the bounded retries (writer busy).
     pub busy: u64,
+    /// Shared memory: times the file was found shorter than the layout (nothing read from it
+    /// until it regrew).
+    pub shm_shrinks: u64,
     /// Arrival of the first accepted pose, seconds on the monotonic timeline (0 if none).
     pub first_accept_s: f64,
     /// Arrival of the latest accepted pose (0 if none).

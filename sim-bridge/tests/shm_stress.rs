@@ -78,7 +78,7 @@ fn writer_at_10_khz_for_2_s_never_tears_a_read() {
             }
             ShmRead::Busy { .. } => busy += 1,
             ShmRead::Unchanged | ShmRead::NotWritten => {}
-            ShmRead::Truncated => panic!("file truncated"),
+            other => panic!("unexpected {other:?}"),
         }
         if finished {
             break;

@@ -1,12 +1,13 @@
-//! The simulator-side writers shipped for shared memory — the C header and the Python example —
-//! produce files the Rust reader accepts. Each test skips (with a note) when its tool (`cc`,
-//! `python3`) is not installed.
+//! The simulator-side writers shipped for shared memory — the C header (built as C99, C++11 and
+//! C++17 with every warning an error) and the Python example — produce files the Rust reader
+//! accepts, also while it polls them. Each test skips (with a note) when its tool (`gcc`,
+//! `g++`, `python3`) is not installed.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use aerie_sim_bridge::shm::{ShmRead, ShmReader};
-use aerie_sim_bridge::PosePosition;
+use aerie_sim_bridge::{Pose, PosePosition};
 
 fn manifest_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -31,75 +32,115 @@ fn read_new(path: &Path) -> aerie_sim_bridge::Pose {
     }
 }
 
-const C_WRITER: &str = r#"
-#define _POSIX_C_SOURCE 200809L
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <unistd.h>
-#include "aerie_pose.h"
-int main(int argc, char **argv) {
-    if (argc != 2) return 3;
-    int fd = open(argv[1], O_RDWR | O_CREAT, 0644);
-    if (fd < 0 || ftruncate(fd, AERIE_POSE_SIZE) != 0) return 1;
-    struct aerie_pose *p = mmap(NULL, AERIE_POSE_SIZE, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
-    if (p == MAP_FAILED) return 1;
-    aerie_pose_init(p);
-    for (int k = 1; k <= 3; k++) {
-        aerie_pose_begin(p);
-        p->flags = AERIE_POSE_VELOCITY | AERIE_POSE_RATES;
-        p->frame = 1000 + k;
-        p->sim_time_s = 12.5;
-        p->position[0] = 47.25; p->position[1] = 11.5; p->position[2] = 2500.0;
-        p->attitude_deg[0] = 270.0; p->attitude_deg[1] = -3.0; p->attitude_deg[2] = 15.0;
-        p->velocity_enu[0] = -100.0; p->velocity_enu[1] = 5.0; p->velocity_enu[2] = 1.0;
-        p->rates_deg_s[0] = 2.0; p->rates_deg_s[1] = 0.0; p->rates_deg_s[2] = -1.0;
-        aerie_pose_end(p);
+/// Pose k as `tests/c/shm_writer.c` writes it.
+fn c_pose_k(k: u64) -> Pose {
+    let x = k as f64;
+    Pose {
+        position: PosePosition::LocalEnu {
+            x,
+            y: -2.0 * x,
+            z: 1000.0 + 0.5 * x,
+        },
+        attitude_deg: [(k % 360) as f64, (k % 170) as f64 - 85.0, -x / 1e4],
+        sim_time_s: 0.001 * x,
+        frame: k,
+        velocity_enu: Some([1.0, 2.0, 3.0].map(|d| (k % 200) as f64 + d)),
+        angular_rates_deg_s: (k % 2 == 0).then_some([(k % 30) as f64; 3]),
     }
-    struct aerie_pose copy;
-    return aerie_pose_read(p, &copy, 10) && copy.frame == 1003 ? 0 : 2;
 }
-"#;
 
-#[test]
-fn c_header_writer_is_read_back() {
-    if !have("cc") {
-        eprintln!("skipped: no C compiler (`cc`)");
+/// Compiles `tests/c/shm_writer.c` with `compiler` (`-x c` or `-x c++` and `std`) with every
+/// warning an error, runs it for `n` poses while a Rust reader polls the file, and checks
+/// that every pose read is one the writer wrote, none was dropped, and the last is read.
+fn c_family_writer_against_the_reader(compiler: &str, lang: &str, std: &str) {
+    if !have(compiler) {
+        eprintln!("skipped: no `{compiler}` (CI installs it: scripts/setup-debian.sh)");
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let src = dir.path().join("writer.c");
     let exe = dir.path().join("writer");
-    std::fs::write(&src, C_WRITER).unwrap();
-    let out = Command::new("cc")
-        .args(["-std=c11", "-Wall", "-Wextra", "-Werror", "-O2", "-I"])
+    let out = Command::new(compiler)
+        .args([
+            "-x",
+            lang,
+            std,
+            "-Wall",
+            "-Wextra",
+            "-pedantic",
+            "-Werror",
+            "-O2",
+            "-I",
+        ])
         .arg(manifest_dir().join("include"))
-        .arg(&src)
+        .arg(manifest_dir().join("tests/c/shm_writer.c"))
         .arg("-o")
         .arg(&exe)
         .output()
         .unwrap();
     assert!(
         out.status.success(),
-        "aerie_pose.h does not compile cleanly:\n{}",
+        "aerie_pose.h does not compile cleanly with {compiler} {std}:\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    const N: u64 = 3_000;
     let file = dir.path().join("pose");
-    let status = Command::new(&exe).arg(&file).status().unwrap();
-    assert!(status.success(), "C writer failed: {status}");
-    let p = read_new(&file);
-    assert_eq!(p.frame, 1003);
-    assert_eq!(
-        p.position,
-        PosePosition::Geodetic {
-            lat_deg: 47.25,
-            lon_deg: 11.5,
-            alt_m: 2500.0
+    let mut child = Command::new(&exe)
+        .arg(&file)
+        .arg(N.to_string())
+        .spawn()
+        .unwrap();
+    let (mut reads, mut last, mut dropped) = (0u64, 0u64, Vec::new());
+    let mut reader: Option<ShmReader> = None;
+    let mut status = None;
+    // Poll until the writer has exited and one more read followed its exit.
+    loop {
+        let exited = status.is_some();
+        if reader.is_none() {
+            reader = ShmReader::open(&file).ok();
         }
+        if let Some(r) = reader.as_mut() {
+            match r.read() {
+                ShmRead::New { pose, .. } => {
+                    assert_eq!(pose, c_pose_k(pose.frame), "{compiler} {std}: torn pose");
+                    // >=: the writer republishes pose N after its corruption check.
+                    assert!(pose.frame >= last, "{} after {last}", pose.frame);
+                    last = pose.frame;
+                    reads += 1;
+                }
+                ShmRead::Dropped(e) => dropped.push(e),
+                _ => {}
+            }
+        }
+        if exited {
+            break;
+        }
+        status = child.try_wait().unwrap();
+        std::thread::yield_now();
+    }
+    let status = status.unwrap();
+    assert!(status.success(), "{compiler} {std} writer failed: {status}");
+    // The writer's last act rewrote pose N after corrupting it (its own reader check).
+    assert!(dropped.len() <= 1, "dropped {dropped:?}");
+    assert_eq!(last, N, "the last pose was not read");
+    eprintln!(
+        "{compiler} {std}: {N} poses written, {reads} read, {} dropped",
+        dropped.len()
     );
-    assert_eq!(p.attitude_deg, [270.0, -3.0, 15.0]);
-    assert_eq!(p.velocity_enu, Some([-100.0, 5.0, 1.0]));
-    assert_eq!(p.angular_rates_deg_s, Some([2.0, 0.0, -1.0]));
-    p.validate().unwrap();
+}
+
+#[test]
+fn c99_writer_from_the_header_is_read_back() {
+    c_family_writer_against_the_reader("gcc", "c", "-std=c99");
+}
+
+#[test]
+fn cxx11_writer_from_the_header_is_read_back() {
+    c_family_writer_against_the_reader("g++", "c++", "-std=c++11");
+}
+
+#[test]
+fn cxx17_writer_from_the_header_is_read_back() {
+    c_family_writer_against_the_reader("g++", "c++", "-std=c++17");
 }
 
 #[test]

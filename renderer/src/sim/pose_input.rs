@@ -348,7 +348,7 @@ pub fn counters_text(s: &StatsSnapshot) -> String {
         .map(|(r, n)| format!("{r} {n}"))
         .collect();
     format!(
-        "received {}, accepted {}, without pose {}, dropped {}{}",
+        "received {}, accepted {}, without pose {}, dropped {}{}{}",
         s.received,
         s.accepted,
         s.no_pose,
@@ -357,6 +357,11 @@ pub fn counters_text(s: &StatsSnapshot) -> String {
             String::new()
         } else {
             format!(" ({})", parts.join(", "))
+        },
+        if s.shm_shrinks > 0 {
+            format!(", shared-memory file shrank {} times", s.shm_shrinks)
+        } else {
+            String::new()
         }
     )
 }

@@ -282,6 +282,7 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
         "cigi_replies": stats.replies,
         "shm_torn_retries": stats.retries,
         "shm_busy": stats.busy,
+        "shm_shrinks": stats.shm_shrinks,
         "pose_rate_hz": stats.pose_rate_hz(),
         "stream": state_name(reader.state()),
         "last_pose": last_pose,

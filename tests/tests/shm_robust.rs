@@ -1,0 +1,159 @@
+//! Shared memory against the real `aerie listen` process (issue 16 items 2 and 8): a C++11
+//! writer built from `aerie_pose.h` feeds it, and a writer that shrinks and regrows the file
+//! cannot crash it. Both read the `--json` summary. The C++ test skips with a note when `g++`
+//! is missing (CI installs it: scripts/setup-debian.sh).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+use aerie_sim_bridge::shm::ShmWriter;
+use aerie_sim_bridge::{Pose, PosePosition};
+
+/// `aerie`, built (or found up to date) once by cargo, so a stale binary is never tested.
+fn aerie() -> &'static Path {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| {
+        let status = Command::new(env!("CARGO"))
+            .args(["build", "-p", "aerie", "--bin", "aerie"])
+            .current_dir(aerie_tests::repo_root())
+            .status()
+            .expect("run cargo build");
+        assert!(status.success(), "cargo build of aerie failed");
+        let exe = std::env::current_exe().expect("test executable path");
+        // target/<profile>/deps/<test> → target/<profile>/aerie
+        exe.parent().and_then(Path::parent).unwrap().join("aerie")
+    })
+}
+
+fn listen(path: &Path, seconds: &str, json: &Path) -> std::process::Child {
+    Command::new(aerie())
+        .args(["listen", "--protocol", "shm", "--shm-name"])
+        .arg(path)
+        .args(["--seconds", seconds, "--json"])
+        .arg(json)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start aerie listen")
+}
+
+fn summary(out: &Output, json: &Path) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "aerie listen: {}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
+}
+
+fn u(v: &serde_json::Value, key: &str) -> u64 {
+    v[key].as_u64().unwrap_or_else(|| panic!("{key} in {v}"))
+}
+
+#[test]
+fn a_cxx11_writer_from_the_header_feeds_aerie_listen() {
+    if Command::new("g++").arg("--version").output().is_err() {
+        eprintln!("skipped: no g++ (CI installs it: scripts/setup-debian.sh)");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let root = aerie_tests::repo_root();
+    let exe = dir.path().join("writer");
+    let out = Command::new("g++")
+        .args([
+            "-x",
+            "c++",
+            "-std=c++11",
+            "-Wall",
+            "-Wextra",
+            "-pedantic",
+            "-Werror",
+            "-I",
+        ])
+        .arg(root.join("sim-bridge/include"))
+        .arg(root.join("sim-bridge/tests/c/shm_writer.c"))
+        .arg("-o")
+        .arg(&exe)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (file, json) = (dir.path().join("pose"), dir.path().join("listen.json"));
+    let _ = aerie();
+    let child = listen(&file, "4", &json);
+    // aerie waits for the file; the writer creates it and writes 10,000 poses (~1 s).
+    let status = Command::new(&exe).arg(&file).arg("10000").status().unwrap();
+    assert!(status.success(), "writer: {status}");
+    let s = summary(&child.wait_with_output().unwrap(), &json);
+    eprintln!("aerie listen fed by the C++11 writer: {s}");
+    assert!(u(&s, "accepted") > 0, "{s}");
+    assert_eq!(s["last_pose"]["frame"].as_u64(), Some(10_000), "{s}");
+    assert_eq!(s["last_pose"]["position"]["x_m"].as_f64(), Some(10_000.0));
+    assert_eq!(s["last_pose"]["velocity_enu"][0].as_f64(), Some(1.0));
+    // At most the one record the writer corrupts on purpose at the end (its own check).
+    let d = &s["dropped"];
+    assert!(u(d, "bad_crc") <= 1, "{s}");
+    assert_eq!(u(&s, "dropped_total"), u(d, "bad_crc"), "{s}");
+}
+
+#[test]
+fn aerie_listen_survives_a_file_shrinking_under_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let (file, json) = (dir.path().join("pose"), dir.path().join("listen.json"));
+    let pose = |k: u64| Pose {
+        position: PosePosition::LocalEnu {
+            x: k as f64,
+            y: 0.0,
+            z: 1000.0,
+        },
+        attitude_deg: [90.0, 0.0, 0.0],
+        sim_time_s: k as f64 * 1e-3,
+        frame: k,
+        velocity_enu: None,
+        angular_rates_deg_s: None,
+    };
+    let mut w = ShmWriter::create(&file).unwrap();
+    w.write(&pose(1));
+    let _ = aerie();
+    let child = listen(&file, "3", &json);
+    // 20 Hz for 2 s: cut the file, regrow it, write for the rest of the 50 ms.
+    let (start, mut k) = (Instant::now(), 1u64);
+    for cycle in 0..40u32 {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open(&file)
+            .unwrap()
+            .set_len([0, 8, 70, 140][cycle as usize % 4])
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(15));
+        drop(w);
+        w = ShmWriter::create(&file).unwrap();
+        while start.elapsed() < Duration::from_millis(50) * (cycle + 1) {
+            k += 1;
+            w.write(&pose(k));
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+    let s = summary(&child.wait_with_output().unwrap(), &json);
+    eprintln!("aerie listen under a shrinking file: {s}");
+    assert!(u(&s, "shm_shrinks") >= 10, "{s}");
+    assert!(u(&s, "shm_shrinks") <= 40, "{s}");
+    assert_eq!(
+        s["last_pose"]["frame"].as_u64(),
+        Some(k),
+        "did not recover: {s}"
+    );
+    // Only records cut by the shrinks (zeroed header, cut checksum) are dropped.
+    let d = &s["dropped"];
+    assert_eq!(
+        u(&s, "dropped_total"),
+        u(d, "unknown") + u(d, "bad_crc") + u(d, "bad_size") + u(d, "bad_version"),
+        "{s}"
+    );
+}
