@@ -37,24 +37,24 @@ fn bins() -> &'static (PathBuf, PathBuf) {
     BINS.get_or_init(|| {
         let dir = bin_dir();
         let (aerie, send) = (dir.join("aerie"), dir.join("aerie-send"));
-        if !aerie.is_file() || !send.is_file() {
-            let status = Command::new(env!("CARGO"))
-                .args([
-                    "build",
-                    "-p",
-                    "aerie",
-                    "--bin",
-                    "aerie",
-                    "-p",
-                    "aerie-sim-bridge",
-                    "--bin",
-                    "aerie-send",
-                ])
-                .current_dir(aerie_tests::repo_root())
-                .status()
-                .expect("run cargo build");
-            assert!(status.success(), "cargo build of aerie / aerie-send failed");
-        }
+        // Always ask cargo (a no-op when up to date): a binary left from an older checkout must
+        // never be the one tested.
+        let status = Command::new(env!("CARGO"))
+            .args([
+                "build",
+                "-p",
+                "aerie",
+                "--bin",
+                "aerie",
+                "-p",
+                "aerie-sim-bridge",
+                "--bin",
+                "aerie-send",
+            ])
+            .current_dir(aerie_tests::repo_root())
+            .status()
+            .expect("run cargo build");
+        assert!(status.success(), "cargo build of aerie / aerie-send failed");
         (aerie, send)
     })
 }
