@@ -102,7 +102,11 @@ pub fn write_bake_in(
     encode(b, &mut buf);
     aerie_io::write_atomic_in(fs, path, &buf).map_err(|e| BakeError::Write {
         path: show(path),
-        reason: format!("{} failed: {}", e.step, e.source).replace(['\n', '\r'], " "),
+        reason: match e.step {
+            "write" => e.source.to_string(),
+            step => format!("{step} failed: {}", e.source),
+        }
+        .replace(['\n', '\r'], " "),
     })
 }
 
