@@ -176,7 +176,11 @@ impl AtomicFile {
         // SAFETY: the temporary was created by this process with O_EXCL under a name no one
         // else uses, its `len` bytes are allocated (posix_fallocate), and it is not resized
         // while the map lives (the map must be dropped before `commit`, which takes `self`).
-        let map = unsafe { memmap2::MmapOptions::new().len(len as usize).map_mut(file.os_file()) };
+        let map = unsafe {
+            memmap2::MmapOptions::new()
+                .len(len as usize)
+                .map_mut(file.os_file())
+        };
         match map {
             Ok(m) => {
                 self.written = len;

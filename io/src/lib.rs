@@ -16,7 +16,7 @@ mod fs;
 pub mod tmpfs;
 
 pub use atomic::{write_atomic, write_atomic_in, AtomicFile, WriteError};
-pub use fault::{FaultyFs, Faults};
+pub use fault::{Faults, FaultyFs};
 pub use fs::{real, FileSystem, InFile, OutFile, RealFs};
 
 #[cfg(test)]

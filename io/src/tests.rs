@@ -87,8 +87,15 @@ fn eio_fsync_and_rename_failures_leave_nothing_behind() {
         let err = write_atomic_in(FaultyFs::new(faults).shared(), &p, &[1u8; 100]).unwrap_err();
         assert_eq!(err.step, step);
         let msg = err.to_string();
-        assert!(msg.contains("out.bin") && msg.contains("Input/output error"), "{msg}");
-        assert!(names(dir.path()).is_empty(), "{step}: {:?}", names(dir.path()));
+        assert!(
+            msg.contains("out.bin") && msg.contains("Input/output error"),
+            "{msg}"
+        );
+        assert!(
+            names(dir.path()).is_empty(),
+            "{step}: {:?}",
+            names(dir.path())
+        );
     }
 }
 

@@ -186,7 +186,7 @@ impl Recorder {
             source,
         };
         let Some(file) = self.file.as_mut() else {
-            let e = io::Error::new(io::ErrorKind::Other, "an earlier write failed");
+            let e = io::Error::other("an earlier write failed");
             return Err(stopped(self, e));
         };
         let t = ((arrival_s - self.start_s).max(0.0) * 1e9) as u64;
@@ -518,7 +518,10 @@ mod tests {
         assert!(msg.contains("No space left on device"), "{msg}");
         assert!(msg.contains("byte offset 240 after 2 datagrams"), "{msg}");
         // Stopped: later datagrams are refused, not silently lost.
-        assert!(matches!(r.record(0.4, b"x"), Err(RecordingError::Stopped { .. })));
+        assert!(matches!(
+            r.record(0.4, b"x"),
+            Err(RecordingError::Stopped { .. })
+        ));
         drop(r);
         let got = read_recording(&path).unwrap();
         assert_eq!(got.len(), 2);

@@ -45,7 +45,11 @@ fn gen_dem_onto_a_full_disk_fails_naming_the_file_and_leaves_nothing() {
     let f = gen_dem(&out, 257).unwrap_err();
     assert_eq!(f.code, 1, "{}", f.message);
     assert!(f.message.contains("dem.f32"), "{}", f.message);
-    assert!(f.message.contains("No space left on device"), "{}", f.message);
+    assert!(
+        f.message.contains("No space left on device"),
+        "{}",
+        f.message
+    );
     assert!(d.entries().is_empty(), "{:?}", d.entries());
 }
 
@@ -67,7 +71,11 @@ fn bake_onto_a_full_disk_fails_naming_the_bake_and_leaves_nothing() {
     .unwrap_err();
     assert_eq!(f.code, 1, "{}", f.message);
     assert!(f.message.contains("dem.f32.aerie-bake"), "{}", f.message);
-    assert!(f.message.contains("No space left on device"), "{}", f.message);
+    assert!(
+        f.message.contains("No space left on device"),
+        "{}",
+        f.message
+    );
     assert!(d.entries().is_empty(), "{:?}", d.entries());
 }
 
@@ -83,6 +91,10 @@ fn the_bake_next_to_a_dataset_on_a_full_disk_is_an_error_not_sigbus() {
     let f = aerie(&["bake", dem.to_str().unwrap(), "--tile-size", "3"]).unwrap_err();
     assert_eq!(f.code, 1, "{}", f.message);
     assert!(f.message.contains("dem.f32.aerie-bake"), "{}", f.message);
-    assert!(f.message.contains("No space left on device"), "{}", f.message);
+    assert!(
+        f.message.contains("No space left on device"),
+        "{}",
+        f.message
+    );
     assert_eq!(d.entries(), before, "a temporary or cut bake was left");
 }

@@ -56,7 +56,7 @@ pub fn write_text_in(fs: Arc<dyn FileSystem>, path: &Path, text: &str) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
-    use aerie_io::{FaultyFs, Faults};
+    use aerie_io::{Faults, FaultyFs};
 
     fn names(dir: &Path) -> Vec<String> {
         let mut v: Vec<String> = std::fs::read_dir(dir)
@@ -111,7 +111,10 @@ mod tests {
         assert!(names(dir.path()).is_empty(), "{:?}", names(dir.path()));
         let t = dir.path().join("frames.csv");
         let err = write_text_in(fs.shared(), &t, &"0,1,2\n".repeat(1000)).unwrap_err();
-        assert!(err.contains("frames.csv") && err.contains("No space left"), "{err}");
+        assert!(
+            err.contains("frames.csv") && err.contains("No space left"),
+            "{err}"
+        );
         assert!(names(dir.path()).is_empty(), "{:?}", names(dir.path()));
         // What fits is written whole.
         write_text_in(fs.shared(), &t, "frame\n0\n").unwrap();
@@ -130,10 +133,16 @@ mod tests {
         let px = noise(128, 128);
         let p = disk.path().join("out.png");
         let err = write_png(&p, 128, 128, &px).unwrap_err();
-        assert!(err.contains("out.png") && err.contains("No space left"), "{err}");
+        assert!(
+            err.contains("out.png") && err.contains("No space left"),
+            "{err}"
+        );
         let j = disk.path().join("out.json");
         let err = write_text(&j, &"x".repeat(64 * 1024)).unwrap_err();
-        assert!(err.contains("out.json") && err.contains("No space left"), "{err}");
+        assert!(
+            err.contains("out.json") && err.contains("No space left"),
+            "{err}"
+        );
         assert!(disk.entries().is_empty(), "{:?}", disk.entries());
     }
 }

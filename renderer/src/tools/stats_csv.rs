@@ -292,7 +292,10 @@ mod tests {
         let fs = aerie_io::FaultyFs::new(aerie_io::Faults::full_after(20_000));
         let mut w = StatsWriter::create_in(fs.shared(), &p, None).unwrap();
         let err = write_rows(&mut w, 5000).unwrap_err();
-        assert!(err.contains("--stats") && err.contains("stats.csv"), "{err}");
+        assert!(
+            err.contains("--stats") && err.contains("stats.csv"),
+            "{err}"
+        );
         assert!(err.contains("No space left on device"), "{err}");
         // Later rows are refused, not silently dropped.
         assert!(w.row(&row_n(0)).is_err());
@@ -335,7 +338,10 @@ mod tests {
         let p = disk.path().join("stats.csv");
         let mut w = StatsWriter::create(&p, None).unwrap();
         let err = write_rows(&mut w, 5000).unwrap_err();
-        assert!(err.contains("stats.csv") && err.contains("No space left"), "{err}");
+        assert!(
+            err.contains("stats.csv") && err.contains("No space left"),
+            "{err}"
+        );
         drop(w);
         assert!(disk.entries().is_empty(), "{:?}", disk.entries());
     }

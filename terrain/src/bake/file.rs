@@ -91,11 +91,7 @@ pub fn write_bake(path: &Path, b: &ErrorBake) -> Result<(), BakeError> {
 }
 
 /// [`write_bake`] on the given file system (tests inject faults through it).
-pub fn write_bake_in(
-    fs: Arc<dyn FileSystem>,
-    path: &Path,
-    b: &ErrorBake,
-) -> Result<(), BakeError> {
+pub fn write_bake_in(fs: Arc<dyn FileSystem>, path: &Path, b: &ErrorBake) -> Result<(), BakeError> {
     // The bake is small next to its dataset (under 1 % of the f32 samples), so it is encoded
     // on the heap and written in one checked pass.
     let mut buf = vec![0u8; b.file_size() as usize];

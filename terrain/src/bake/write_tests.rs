@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use aerie_io::{FaultyFs, Faults};
+use aerie_io::{Faults, FaultyFs};
 
 use super::tests::ds;
 use super::*;
@@ -54,7 +54,10 @@ fn enospc_midway_names_the_bake_keeps_the_old_one_and_leaves_no_temporary() {
     });
     let q = dir.path().join("other.aerie-bake");
     write_bake_in(short.shared(), &q, &b).unwrap();
-    assert_eq!(read_bake(&q, &d).unwrap().source_checksum, b.source_checksum);
+    assert_eq!(
+        read_bake(&q, &d).unwrap().source_checksum,
+        b.source_checksum
+    );
     let eio = FaultyFs::new(Faults {
         max_write: Some(100),
         eio_on_write: Some(3),
@@ -62,7 +65,10 @@ fn enospc_midway_names_the_bake_keeps_the_old_one_and_leaves_no_temporary() {
     });
     std::fs::remove_file(&q).unwrap();
     let err = write_bake_in(eio.shared(), &q, &b).unwrap_err().to_string();
-    assert!(err.contains("other.aerie-bake") && err.contains("Input/output error"), "{err}");
+    assert!(
+        err.contains("other.aerie-bake") && err.contains("Input/output error"),
+        "{err}"
+    );
     assert_eq!(names(dir.path()), ["dem.f32.aerie-bake"]);
 }
 
@@ -71,7 +77,9 @@ fn a_real_full_disk_is_an_error_not_sigbus() {
     let disk = match aerie_io::tmpfs::SmallTmpfs::mount(16 * 1024) {
         Ok(d) => d,
         Err(why) => {
-            eprintln!("skipped (no small tmpfs: {why}); the injected ENOSPC test covers the writer");
+            eprintln!(
+                "skipped (no small tmpfs: {why}); the injected ENOSPC test covers the writer"
+            );
             return;
         }
     };
