@@ -98,3 +98,17 @@ fn the_bake_next_to_a_dataset_on_a_full_disk_is_an_error_not_sigbus() {
     );
     assert_eq!(d.entries(), before, "a temporary or cut bake was left");
 }
+
+#[test]
+fn render_fly_run_prepare_bakes_in_memory_when_the_disk_next_to_the_dataset_is_full() {
+    let Some(d) = disk(96 * 1024) else { return };
+    let dem = d.path().join("dem.f32");
+    gen_dem(&dem, 129).unwrap_or_else(|f| panic!("{}", f.message));
+    let before = d.entries();
+    // The bake cannot be saved: the command goes on with the bake in memory, no crash, and
+    // neither a cut bake nor a temporary is left next to the dataset.
+    let (ds, b) = aerie::app::prepare::prepare_terrain(&dem, 3)
+        .unwrap_or_else(|f| panic!("{}", f.message));
+    assert_eq!(b.width as usize, ds.hf.width);
+    assert_eq!(d.entries(), before);
+}
