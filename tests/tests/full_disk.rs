@@ -107,8 +107,91 @@ fn render_fly_run_prepare_bakes_in_memory_when_the_disk_next_to_the_dataset_is_f
     let before = d.entries();
     // The bake cannot be saved: the command goes on with the bake in memory, no crash, and
     // neither a cut bake nor a temporary is left next to the dataset.
-    let (ds, b) = aerie::app::prepare::prepare_terrain(&dem, 3)
-        .unwrap_or_else(|f| panic!("{}", f.message));
+    let (ds, b) =
+        aerie::app::prepare::prepare_terrain(&dem, 3).unwrap_or_else(|f| panic!("{}", f.message));
     assert_eq!(b.width as usize, ds.hf.width);
     assert_eq!(d.entries(), before);
+}
+
+/// Fills the disk to its last byte with one file, so that no write at all fits.
+fn fill(d: &SmallTmpfs) {
+    use std::io::Write;
+    let mut f = std::fs::File::create(d.path().join("filler")).unwrap();
+    let block = vec![0u8; 4096];
+    loop {
+        match f.write(&block) {
+            Ok(0) => break,
+            Ok(_) => {}
+            Err(e) => {
+                assert_eq!(e.raw_os_error(), Some(28), "{e}");
+                break;
+            }
+        }
+    }
+}
+
+/// A small synthetic DEM (with its bake) on a normal disk.
+fn dem_elsewhere() -> (tempfile::TempDir, std::path::PathBuf) {
+    let src = tempfile::tempdir().unwrap();
+    let dem = src.path().join("dem.f32");
+    gen_dem(&dem, 129).unwrap_or_else(|f| panic!("{}", f.message));
+    aerie(&["bake", dem.to_str().unwrap()]).unwrap_or_else(|f| panic!("{}", f.message));
+    (src, dem)
+}
+
+#[test]
+fn render_onto_a_full_disk_exits_1_naming_the_png_and_leaves_no_empty_png() {
+    let Some(d) = disk(16 * 1024) else { return };
+    let (_src, dem) = dem_elsewhere();
+    fill(&d);
+    let out = d.path().join("out.png");
+    let f = aerie(&[
+        "render",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--camera",
+        "640,-300,900,0,-30,0",
+        "--size",
+        "64x48",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .unwrap_err();
+    assert_eq!(f.code, 1, "{}", f.message);
+    assert!(f.message.contains("out.png"), "{}", f.message);
+    assert!(
+        f.message.contains("No space left on device"),
+        "{}",
+        f.message
+    );
+    assert_eq!(d.entries(), ["filler"]);
+}
+
+#[test]
+fn run_stats_onto_a_full_disk_exits_1_naming_the_csv_and_leaves_no_cut_csv() {
+    let Some(d) = disk(16 * 1024) else { return };
+    let (_src, dem) = dem_elsewhere();
+    fill(&d);
+    let stats = d.path().join("stats.csv");
+    let f = aerie(&[
+        "run",
+        "--headless",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--frames",
+        "3",
+        "--size",
+        "64x48",
+        "--stats",
+        stats.to_str().unwrap(),
+    ])
+    .unwrap_err();
+    assert_eq!(f.code, 1, "{}", f.message);
+    assert!(f.message.contains("stats.csv"), "{}", f.message);
+    assert!(
+        f.message.contains("No space left on device"),
+        "{}",
+        f.message
+    );
+    assert_eq!(d.entries(), ["filler"]);
 }
