@@ -20,8 +20,11 @@ pub struct Faults {
     pub max_write: Option<usize>,
     /// The write call with this index (0-based, over all files) fails with `EIO`.
     pub eio_on_write: Option<u64>,
-    /// `fsync` of files fails with `EIO` (a disk that lost the data on the way).
-    pub fail_sync: bool,
+    /// `fsync` of files fails with this OS error: `EIO` (a disk that lost the data on the
+    /// way), or `ENOSPC` (delayed allocation: every `write` was taken into the page cache, the
+    /// blocks could not be found at writeback — how a full ext4/XFS disk turns an unsynced
+    /// file into a 0-byte one).
+    pub sync_errno: Option<i32>,
     /// Renames fail with `EIO`.
     pub fail_rename: bool,
     /// Each read returns at most this many bytes (short reads).
@@ -147,8 +150,8 @@ impl Write for FaultyOut {
 
 impl OutFile for FaultyOut {
     fn sync_all(&mut self) -> io::Result<()> {
-        if self.fs.faults.fail_sync {
-            return Err(eio());
+        if let Some(errno) = self.fs.faults.sync_errno {
+            return Err(io::Error::from_raw_os_error(errno));
         }
         self.file.sync_all()
     }

@@ -68,7 +68,7 @@ fn eio_fsync_and_rename_failures_leave_nothing_behind() {
         ),
         (
             Faults {
-                fail_sync: true,
+                sync_errno: Some(libc::EIO),
                 ..Faults::default()
             },
             "fsync",

@@ -122,6 +122,31 @@ mod tests {
     }
 
     #[test]
+    fn enospc_at_writeback_is_caught_before_the_rename() {
+        // Delayed allocation: every write is taken, the full disk shows only at fsync. An
+        // unsynced rename would put a 0-byte PNG under the name.
+        let dir = tempfile::tempdir().unwrap();
+        let fs = FaultyFs::new(Faults {
+            sync_errno: Some(28),
+            ..Faults::default()
+        });
+        let p = dir.path().join("frame_0025.png");
+        let err = write_png_in(fs.shared(), &p, 64, 64, &noise(64, 64)).unwrap_err();
+        assert!(
+            err.contains("frame_0025.png") && err.contains("No space left"),
+            "{err}"
+        );
+        assert!(err.contains("fsync"), "{err}");
+        let j = dir.path().join("summary.json");
+        let err = write_text_in(fs.shared(), &j, "{}\n").unwrap_err();
+        assert!(
+            err.contains("summary.json") && err.contains("No space left"),
+            "{err}"
+        );
+        assert!(names(dir.path()).is_empty(), "{:?}", names(dir.path()));
+    }
+
+    #[test]
     fn a_real_full_tmpfs_leaves_no_empty_png() {
         let disk = match aerie_io::tmpfs::SmallTmpfs::mount(32 * 1024) {
             Ok(d) => d,
