@@ -17,11 +17,13 @@
 //! | 8 | 4 | length u32 (≤ 65 535) |
 //! | 12 | length | the datagram's bytes, as received |
 
-use std::fs::File;
 use std::io::{self, Write};
 use std::net::{SocketAddr, UdpSocket};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
+
+use aerie_io::{FileSystem, OutFile};
 
 /// First eight bytes of a recording.
 pub const MAGIC: [u8; 8] = *b"AERIEREC";
@@ -43,6 +45,19 @@ pub enum RecordingError {
     Io {
         /// The recording.
         path: PathBuf,
+        /// The I/O error.
+        source: io::Error,
+    },
+    /// A write failed (a full disk): recording stopped, the file cut back to the last whole
+    /// record so it still reads.
+    #[error("{}: recording stopped at byte offset {offset} after {packets} datagrams: {source}; the file keeps those {packets} whole records", path.display())]
+    Stopped {
+        /// The recording.
+        path: PathBuf,
+        /// Datagrams in the file.
+        packets: u64,
+        /// Where the record that could not be written starts.
+        offset: u64,
         /// The I/O error.
         source: io::Error,
     },
@@ -101,56 +116,95 @@ fn header() -> [u8; HEADER_SIZE] {
     h
 }
 
-/// Writes datagrams to a recording as they arrive. Each record goes to the file in one write,
-/// so a recording cut short by a kill ends at a record boundary (or reports where it is cut).
-#[derive(Debug)]
+/// Writes datagrams to a recording as they arrive. Each record goes to the file in one checked
+/// write, so a recording cut short by a kill ends at a record boundary (or reports where it is
+/// cut); a failed write (a full disk) cuts the file back to the last whole record and stops
+/// the recording with the file named.
 pub struct Recorder {
-    file: File,
+    file: Option<Box<dyn OutFile>>,
     path: PathBuf,
     start_s: f64,
     last_ns: u64,
     packets: u64,
+    /// Bytes of the header and the whole records written.
+    len: u64,
     buf: Vec<u8>,
+}
+
+impl std::fmt::Debug for Recorder {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Recorder")
+            .field("path", &self.path)
+            .field("packets", &self.packets)
+            .field("len", &self.len)
+            .finish()
+    }
 }
 
 impl Recorder {
     /// Creates (or truncates) `path` and writes the header; arrival times are stored relative
     /// to `start_s` (seconds on the monotonic timeline).
     pub fn create(path: &Path, start_s: f64) -> Result<Self, RecordingError> {
+        Self::create_in(aerie_io::real(), path, start_s)
+    }
+
+    /// [`Recorder::create`] on the given file system (tests inject faults through it).
+    pub fn create_in(
+        fs: Arc<dyn FileSystem>,
+        path: &Path,
+        start_s: f64,
+    ) -> Result<Self, RecordingError> {
         let io = |source| RecordingError::Io {
             path: path.to_path_buf(),
             source,
         };
-        let mut file = File::create(path).map_err(io)?;
-        file.write_all(&header()).map_err(io)?;
+        let mut file = fs.create(path).map_err(io)?;
+        if let Err(e) = file.write_all(&header()) {
+            drop(file);
+            // Not even the header fits: leave no cut file.
+            let _ = fs.remove_file(path);
+            return Err(io(e));
+        }
         Ok(Self {
-            file,
+            file: Some(file),
             path: path.to_path_buf(),
             start_s,
             last_ns: 0,
             packets: 0,
+            len: HEADER_SIZE as u64,
             buf: Vec::with_capacity(2048),
         })
     }
 
     /// Appends one datagram that arrived at `arrival_s`. Datagrams longer than
-    /// [`MAX_PACKET`] are cut to that length.
+    /// [`MAX_PACKET`] are cut to that length. After a failed write every call fails.
     pub fn record(&mut self, arrival_s: f64, bytes: &[u8]) -> Result<(), RecordingError> {
+        let stopped = |r: &Self, source| RecordingError::Stopped {
+            path: r.path.clone(),
+            packets: r.packets,
+            offset: r.len,
+            source,
+        };
+        let Some(file) = self.file.as_mut() else {
+            let e = io::Error::other("an earlier write failed");
+            return Err(stopped(self, e));
+        };
         let t = ((arrival_s - self.start_s).max(0.0) * 1e9) as u64;
         let t = t.max(self.last_ns);
-        self.last_ns = t;
         let bytes = &bytes[..bytes.len().min(MAX_PACKET)];
         self.buf.clear();
         self.buf.extend_from_slice(&t.to_le_bytes());
         self.buf
             .extend_from_slice(&(bytes.len() as u32).to_le_bytes());
         self.buf.extend_from_slice(bytes);
-        self.file
-            .write_all(&self.buf)
-            .map_err(|source| RecordingError::Io {
-                path: self.path.clone(),
-                source,
-            })?;
+        if let Err(e) = file.write_all(&self.buf) {
+            // Cut the part of this record that reached the disk, then stop.
+            let _ = file.set_len(self.len).and_then(|_| file.sync_all());
+            self.file = None;
+            return Err(stopped(self, e));
+        }
+        self.last_ns = t;
+        self.len += self.buf.len() as u64;
         self.packets += 1;
         Ok(())
     }
@@ -164,19 +218,47 @@ impl Recorder {
     pub fn path(&self) -> &Path {
         &self.path
     }
+
+    /// Syncs the file to the disk; the recording goes on.
+    pub fn sync(&mut self) -> Result<(), RecordingError> {
+        match self.file.as_mut() {
+            Some(f) => f.sync_all().map_err(|source| RecordingError::Io {
+                path: self.path.clone(),
+                source,
+            }),
+            None => Ok(()),
+        }
+    }
 }
 
-/// Writes a whole recording at once.
+impl Drop for Recorder {
+    fn drop(&mut self) {
+        if let Err(e) = self.sync() {
+            tracing::error!("{e}");
+        }
+    }
+}
+
+/// Writes a whole recording at once, atomically (complete file or none).
 pub fn write_recording(path: &Path, packets: &[RecordedPacket]) -> Result<(), RecordingError> {
+    write_recording_in(aerie_io::real(), path, packets)
+}
+
+/// [`write_recording`] on the given file system.
+pub fn write_recording_in(
+    fs: Arc<dyn FileSystem>,
+    path: &Path,
+    packets: &[RecordedPacket],
+) -> Result<(), RecordingError> {
     let mut out = header().to_vec();
     for p in packets {
         out.extend_from_slice(&p.t_ns.to_le_bytes());
         out.extend_from_slice(&(p.bytes.len() as u32).to_le_bytes());
         out.extend_from_slice(&p.bytes);
     }
-    std::fs::write(path, out).map_err(|source| RecordingError::Io {
+    aerie_io::write_atomic_in(fs, path, &out).map_err(|e| RecordingError::Io {
         path: path.to_path_buf(),
-        source,
+        source: io::Error::new(e.source.kind(), format!("{} failed: {}", e.step, e.source)),
     })
 }
 
@@ -419,6 +501,37 @@ mod tests {
             vec![500_000_000, 500_000_000, 1_000_000_000]
         );
         assert_eq!(got[2].bytes, b"ccc");
+    }
+
+    #[test]
+    fn a_full_disk_stops_the_recording_at_a_record_boundary_and_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("live.aerie-rec");
+        // Room for the header, two 100-byte records and part of a third.
+        let fs = aerie_io::FaultyFs::new(aerie_io::Faults::full_after(16 + 2 * 112 + 50));
+        let mut r = Recorder::create_in(fs.shared(), &path, 0.0).unwrap();
+        r.record(0.1, &[1u8; 100]).unwrap();
+        r.record(0.2, &[2u8; 100]).unwrap();
+        let err = r.record(0.3, &[3u8; 100]).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.contains("live.aerie-rec"), "{msg}");
+        assert!(msg.contains("No space left on device"), "{msg}");
+        assert!(msg.contains("byte offset 240 after 2 datagrams"), "{msg}");
+        // Stopped: later datagrams are refused, not silently lost.
+        assert!(matches!(
+            r.record(0.4, b"x"),
+            Err(RecordingError::Stopped { .. })
+        ));
+        drop(r);
+        let got = read_recording(&path).unwrap();
+        assert_eq!(got.len(), 2);
+        assert_eq!(got[1].bytes, vec![2u8; 100]);
+        // A whole recording written at once on a full disk: nothing under the name.
+        let whole = dir.path().join("whole.aerie-rec");
+        let fs = aerie_io::FaultyFs::new(aerie_io::Faults::full_after(100));
+        let err = write_recording_in(fs.shared(), &whole, &sample()).unwrap_err();
+        assert!(err.to_string().contains("whole.aerie-rec"), "{err}");
+        assert!(!whole.exists());
     }
 
     #[test]

@@ -9,11 +9,12 @@ use aerie_tests::imports::ImportGraph;
 use aerie_tests::repo_root;
 
 /// The library crates of the workspace (their `src/` folders).
-const CRATES: [&str; 4] = [
+const CRATES: [&str; 5] = [
     "renderer/src",
     "terrain/src",
     "sim-bridge/src",
     "config/src",
+    "io/src",
 ];
 
 /// The renderer's layers, bottom first: a file may import its own layer or a lower one.

@@ -1,6 +1,8 @@
 //! `aerie run --stats <file.csv>`: one row per frame with the aircraft pose the renderer
 //! actually used (every channel's camera derives from it), where it came from, and what the frame
-//! cost. Buffered; flushed at the end, on error and when dropped.
+//! cost. Rows are buffered in an atomic writer ([`aerie_io::AtomicFile`]): the file appears
+//! under its name, complete, when the run ends (or the writer is dropped after another
+//! failure); a failed write (a full disk) stops the run naming the file and leaves no cut CSV.
 //!
 //! Columns (empty when not applicable):
 //!
@@ -23,9 +25,11 @@
 //! Floating-point values are written with Rust's shortest round-trip formatting, so a reader
 //! gets back exactly the f64 the renderer used.
 
-use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use aerie_io::{AtomicFile, FileSystem};
 
 use crate::sim::channel::AircraftPose;
 use crate::sim::pose_input::{state_name, GeoMapping, PoseInfo};
@@ -99,18 +103,28 @@ pub fn format_row(row: &FrameRow, geo: Option<&GeoMapping>) -> String {
 /// The open stats file.
 pub struct StatsWriter {
     path: PathBuf,
-    out: BufWriter<File>,
+    /// `None` once committed or after a failed write.
+    out: Option<BufWriter<AtomicFile>>,
     geo: Option<GeoMapping>,
     rows: u64,
 }
 
 impl StatsWriter {
-    /// Creates the file and writes the header; errors name the file.
+    /// Starts the file and writes the header; errors name the file.
     pub fn create(path: &Path, geo: Option<GeoMapping>) -> Result<Self, String> {
-        let file = File::create(path).map_err(|e| format!("--stats {}: {e}", path.display()))?;
+        Self::create_in(aerie_io::real(), path, geo)
+    }
+
+    /// [`StatsWriter::create`] on the given file system (tests inject faults through it).
+    pub fn create_in(
+        fs: Arc<dyn FileSystem>,
+        path: &Path,
+        geo: Option<GeoMapping>,
+    ) -> Result<Self, String> {
+        let file = AtomicFile::create_in(fs, path).map_err(|e| format!("--stats {e}"))?;
         let mut w = Self {
             path: path.to_path_buf(),
-            out: BufWriter::new(file),
+            out: Some(BufWriter::with_capacity(64 * 1024, file)),
             geo,
             rows: 0,
         };
@@ -118,16 +132,30 @@ impl StatsWriter {
         Ok(w)
     }
 
+    fn closed(&self) -> String {
+        format!(
+            "--stats {}: the file was already written or failed",
+            self.path.display()
+        )
+    }
+
     fn write_line(&mut self, line: &str) -> Result<(), String> {
-        self.out
-            .write_all(line.as_bytes())
-            .map_err(|e| format!("--stats {}: {e}", self.path.display()))
+        let Some(out) = self.out.as_mut() else {
+            return Err(self.closed());
+        };
+        if let Err(e) = out.write_all(line.as_bytes()) {
+            // Dropping the writer removes the temporary: no cut CSV is left.
+            self.out = None;
+            return Err(format!("--stats {e}"));
+        }
+        Ok(())
     }
 
     pub fn row(&mut self, row: &FrameRow) -> Result<(), String> {
         let line = format_row(row, self.geo.as_ref());
+        self.write_line(&line)?;
         self.rows += 1;
-        self.write_line(&line)
+        Ok(())
     }
 
     pub fn rows(&self) -> u64 {
@@ -138,16 +166,26 @@ impl StatsWriter {
         &self.path
     }
 
+    /// Writes the buffered rows, syncs the file and puts it in place under its name. Rows
+    /// after this are refused.
     pub fn flush(&mut self) -> Result<(), String> {
-        self.out
-            .flush()
-            .map_err(|e| format!("--stats {}: {e}", self.path.display()))
+        let out = self.out.take().ok_or_else(|| self.closed())?;
+        let file = out
+            .into_inner()
+            .map_err(|e| format!("--stats {}", e.error()))?;
+        file.commit().map_err(|e| format!("--stats {e}"))
     }
 }
 
 impl Drop for StatsWriter {
+    /// The run stopped for another reason: the rows so far are whole lines, so they are kept
+    /// (and if writing them fails, nothing is left).
     fn drop(&mut self) {
-        let _ = self.out.flush();
+        if self.out.is_some() {
+            if let Err(e) = self.flush() {
+                tracing::error!("{e}");
+            }
+        }
     }
 }
 
@@ -214,5 +252,97 @@ mod tests {
         assert_eq!(cols[2], "");
         assert_eq!(cols[8], "");
         assert_eq!(cols[16], "builtin");
+    }
+
+    fn row_n(frame: u64) -> FrameRow {
+        FrameRow {
+            frame,
+            wall_s: frame as f64 / 60.0,
+            pose: AircraftPose {
+                position: DVec3::new(1.0, 2.0, 3.0),
+                attitude: Attitude::from_degrees(10.0, 0.0, 0.0),
+            },
+            origin: PoseOrigin::Builtin,
+            triangles: Some(1000),
+            frame_ms: Some(16.0),
+        }
+    }
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    /// Writes `n` rows and finishes; the first error.
+    fn write_rows(w: &mut StatsWriter, n: u64) -> Result<(), String> {
+        for f in 0..n {
+            w.row(&row_n(f))?;
+        }
+        w.flush()
+    }
+
+    #[test]
+    fn a_full_disk_stops_with_the_file_named_and_leaves_no_cut_csv() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("stats.csv");
+        let fs = aerie_io::FaultyFs::new(aerie_io::Faults::full_after(20_000));
+        let mut w = StatsWriter::create_in(fs.shared(), &p, None).unwrap();
+        let err = write_rows(&mut w, 5000).unwrap_err();
+        assert!(
+            err.contains("--stats") && err.contains("stats.csv"),
+            "{err}"
+        );
+        assert!(err.contains("No space left on device"), "{err}");
+        // Later rows are refused, not silently dropped.
+        assert!(w.row(&row_n(0)).is_err());
+        drop(w);
+        assert!(names(dir.path()).is_empty(), "{:?}", names(dir.path()));
+    }
+
+    #[test]
+    fn rows_are_complete_when_finished_or_dropped_after_another_failure() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("stats.csv");
+        let mut w = StatsWriter::create(&p, None).unwrap();
+        // Nothing appears under the name until the run ends.
+        w.row(&row_n(0)).unwrap();
+        assert!(!p.exists());
+        write_rows(&mut w, 3).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(std::fs::read_to_string(&p).unwrap().lines().count(), 5);
+        // A run that stops early (dropped without `flush`) keeps its whole rows.
+        let q = dir.path().join("early.csv");
+        let mut w = StatsWriter::create(&q, None).unwrap();
+        for f in 0..10 {
+            w.row(&row_n(f)).unwrap();
+        }
+        drop(w);
+        let text = std::fs::read_to_string(&q).unwrap();
+        assert_eq!(text.lines().count(), 11);
+        assert!(text.ends_with('\n'));
+        assert_eq!(names(dir.path()), ["early.csv", "stats.csv"]);
+    }
+
+    #[test]
+    fn a_real_full_tmpfs_leaves_no_cut_csv() {
+        let disk = match aerie_io::tmpfs::SmallTmpfs::mount(16 * 1024) {
+            Ok(d) => d,
+            Err(why) => {
+                eprintln!("skipped (no small tmpfs: {why}); the injected ENOSPC test covers it");
+                return;
+            }
+        };
+        let p = disk.path().join("stats.csv");
+        let mut w = StatsWriter::create(&p, None).unwrap();
+        let err = write_rows(&mut w, 5000).unwrap_err();
+        assert!(
+            err.contains("stats.csv") && err.contains("No space left"),
+            "{err}"
+        );
+        drop(w);
+        assert!(disk.entries().is_empty(), "{:?}", disk.entries());
     }
 }

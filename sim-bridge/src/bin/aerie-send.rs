@@ -326,7 +326,9 @@ fn main() {
     let start = Instant::now();
     let mut next_progress = 1.0;
     let mut buf = [0u8; 256];
-    let mut log = match a.log.as_ref().map(|p| (p, std::fs::File::create(p))) {
+    // Through the atomic writer: a full disk leaves no cut log (row errors are remembered by
+    // the writer and reported when it is committed).
+    let mut log = match a.log.as_ref().map(|p| (p, aerie_io::AtomicFile::create(p))) {
         None => None,
         Some((_, Ok(f))) => {
             let mut w = std::io::BufWriter::new(f);
@@ -395,9 +397,15 @@ fn main() {
         }
     }
     sum.elapsed_s = start.elapsed().as_secs_f64();
-    if let Some(Err(e)) = log.as_mut().map(|w| w.flush()) {
-        eprintln!("aerie-send: --log: {e}");
-        std::process::exit(2);
+    if let Some(w) = log.take() {
+        let done = w
+            .into_inner()
+            .map_err(|e| e.error().to_string())
+            .and_then(|f| f.commit().map_err(|e| e.to_string()));
+        if let Err(e) = done {
+            eprintln!("aerie-send: --log {e}");
+            std::process::exit(1);
+        }
     }
     let achieved = if a.count > 1 && sum.elapsed_s > 0.0 {
         (a.count - 1) as f64 / sum.elapsed_s
@@ -437,9 +445,9 @@ fn main() {
             sum.cigi_answers,
             a.origin.is_some()
         );
-        if let Err(e) = std::fs::File::create(path).and_then(|mut f| f.write_all(json.as_bytes())) {
-            eprintln!("aerie-send: --json {}: {e}", path.display());
-            std::process::exit(2);
+        if let Err(e) = aerie_io::write_atomic(path, json.as_bytes()) {
+            eprintln!("aerie-send: --json {e}");
+            std::process::exit(1);
         }
     }
     if sum.sent == 0 && a.count > 0 {

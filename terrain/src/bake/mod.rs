@@ -79,10 +79,12 @@ pub use error::BakeError;
 pub use exact::{bake, round_up_f32};
 pub use file::{
     bake_path_for, check_existing, load_or_bake, read_bake, read_bake_file, write_bake,
-    BakeOutcome, Existing,
+    write_bake_in, BakeOutcome, Existing,
 };
 pub use format::{BAKE_EXTENSION, BAKE_MAGIC, BAKE_VERSION, HEADER_SIZE};
 pub use table::{report_csv, BakeParams, ErrorBake, LevelStats, LevelTable, REPORT_CSV_HEADER};
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod write_tests;

@@ -6,7 +6,7 @@ use crate::dataset::Dataset;
 use crate::mesh::quad_surface;
 use crate::Heightfield;
 
-fn ds(w: usize, h: usize, f: impl Fn(usize, usize) -> f32) -> Dataset {
+pub(super) fn ds(w: usize, h: usize, f: impl Fn(usize, usize) -> f32) -> Dataset {
     let mut heights = Vec::with_capacity(w * h);
     for r in 0..h {
         for c in 0..w {

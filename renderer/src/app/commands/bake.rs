@@ -177,8 +177,7 @@ fn report(b: &ErrorBake, out: &std::path::Path) -> Result<(), Failure> {
         );
     }
     let csv = with_suffix(out, ".csv");
-    std::fs::write(&csv, report_csv(&stats))
-        .map_err(|e| runtime(format!("{}: cannot write: {e}", csv.display())))?;
+    aerie_io::write_atomic(&csv, report_csv(&stats).as_bytes()).map_err(runtime)?;
     println!("report: {}", csv.display());
     Ok(())
 }

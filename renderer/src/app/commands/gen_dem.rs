@@ -1,8 +1,9 @@
 //! `aerie gen-dem`: writes a deterministic synthetic terrain ([`aerie_terrain::gen`]) as raw
 //! little-endian f32 plus the JSON sidecar the raw loader reads (`<out>.json`), so the result
 //! loads with `--dem <out>` / `aerie bake <out>` like any other DEM. Rows are south first
-//! (`"north_up": false`). The file is filled through a memory map by all cores and renamed into
-//! place when complete.
+//! (`"north_up": false`). The file is filled through a memory map by all cores (its blocks
+//! reserved first, so a full disk is an error, not `SIGBUS`) and renamed into place when
+//! complete ([`aerie_io::AtomicFile`]); on any failure no temporary is left.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -85,22 +86,9 @@ pub fn run(a: GenDemArgs) -> Result<(), Failure> {
     let bytes = samples * 4;
     let t = Instant::now();
     let bar = progress_bar(samples, &format!("generating {} {n}×{n}", kind.name()));
-    let mut tmp_name = a.out.file_name().map(|n| n.to_owned()).unwrap_or_default();
-    tmp_name.push(format!(".tmp{}", std::process::id()));
-    let tmp = a.out.with_file_name(tmp_name);
-    let wfail =
-        |e: &dyn std::fmt::Display| runtime(format!("{}: cannot write: {e}", tmp.display()));
-    let result = (|| -> Result<(f32, f32), Failure> {
-        let f = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(&tmp)
-            .map_err(|e| wfail(&e))?;
-        f.set_len(bytes).map_err(|e| wfail(&e))?;
-        // SAFETY: a file this process just created under a private name, not resized while mapped.
-        let mut map = unsafe { memmap2::MmapMut::map_mut(&f) }.map_err(|e| wfail(&e))?;
+    let result = (|| -> Result<(f32, f32), aerie_io::WriteError> {
+        let mut file = aerie_io::AtomicFile::create(&a.out)?;
+        let mut map = file.map_preallocated(bytes)?;
         let heights: &mut [f32] = bytemuck::cast_slice_mut(&mut map[..]);
         generate_into(&p, 0, heights, &|rows| bar.set_position(rows * n as u64));
         let (lo, hi) = heights
@@ -113,20 +101,13 @@ pub fn run(a: GenDemArgs) -> Result<(), Failure> {
                 *v = f32::from_bits(v.to_bits().to_le());
             }
         }
-        map.flush().map_err(|e| wfail(&e))?;
+        file.flush_map(&map)?;
         drop(map);
-        std::fs::rename(&tmp, &a.out)
-            .map_err(|e| runtime(format!("{}: cannot write: {e}", a.out.display())))?;
+        file.commit()?;
         Ok((lo, hi))
     })();
     bar.finish_and_clear();
-    let (lo, hi) = match result {
-        Ok(r) => r,
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(e);
-        }
-    };
+    let (lo, hi) = result.map_err(runtime)?;
     let json = serde_json::json!({
         "width": n,
         "height": n,
@@ -141,8 +122,7 @@ pub fn run(a: GenDemArgs) -> Result<(), Failure> {
         },
     });
     let side = sidecar(&a.out);
-    std::fs::write(&side, format!("{json:#}\n"))
-        .map_err(|e| runtime(format!("{}: cannot write: {e}", side.display())))?;
+    aerie_io::write_atomic(&side, format!("{json:#}\n").as_bytes()).map_err(runtime)?;
     let secs = t.elapsed().as_secs_f64();
     println!(
         "generated {}: {n}×{n} {} (seed {}), {} m spacing, {lo:.1}..{hi:.1} m, {} in {secs:.2} s ({:.1} M samples/s); sidecar {}",
