@@ -7,7 +7,7 @@ use crate::Heightfield;
 
 use super::error::{format_err, show, size_err, DemError};
 use super::placement::Placement;
-use super::sidecar::implausible_spacing;
+use super::sidecar::{implausible_spacing, short};
 
 /// Largest plausible height magnitude, metres (ten times Everest, and the ocean floor).
 pub const MAX_HEIGHT_M: f32 = 1e5;
@@ -58,7 +58,11 @@ pub(crate) fn finish(
     if let Some(why) = implausible_spacing(spacing_x).or(implausible_spacing(spacing_y)) {
         return Err(format_err(
             path,
-            format!("{why} ({spacing_x} m × {spacing_y} m, {spacing_note})"),
+            format!(
+                "{why} ({} m × {} m, {spacing_note})",
+                short(spacing_x),
+                short(spacing_y)
+            ),
         ));
     }
     if let Some(i) = samples

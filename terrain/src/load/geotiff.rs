@@ -18,7 +18,7 @@ use super::error::{format_err, io_err, size_err, DemError};
 use super::finish::{check_dims, finish};
 use super::geo::geographic_spacing_m;
 use super::placement::Placement;
-use super::sidecar::{implausible_spacing, DEFAULT_SPACING_M};
+use super::sidecar::{implausible_spacing, short, DEFAULT_SPACING_M};
 use crate::{GeoReference, Heightfield};
 
 /// Largest grid accepted (samples): 32769², so a lying header cannot ask for terabytes.
@@ -234,13 +234,18 @@ fn placement(
             implausible_spacing(sx.to_radians() * 6_378_137.0).or(implausible_spacing(ns))
         {
             return Err(scale_err(format!(
-                "{why} (degrees per pixel, {ew} m E-W, {ns} m N-S)"
+                "{why} (degrees per pixel, {} m E-W, {} m N-S)",
+                short(ew),
+                short(ns)
             )));
         }
         let north = south + (height - 1) as f64 * sy;
         if !(south >= -90.0 && north <= 90.0 && (-360.0..=360.0).contains(&west)) {
             return Err(tie_err(format!(
-                "the grid spans latitudes {south}° to {north}° from longitude {west}°, not a place on Earth"
+                "the grid spans latitudes {}° to {}° from longitude {}°, not a place on Earth",
+                short(south),
+                short(north),
+                short(west)
             )));
         }
         let mut place = Placement::geographic(south, west, sy, sx, height);
@@ -269,7 +274,8 @@ fn placement(
     for (name, v) in [("easting", west * unit), ("northing", south * unit)] {
         if v.abs() > MAX_MODEL_COORD_M {
             return Err(tie_err(format!(
-                "{name} {v} m of the south-west sample is beyond ±{MAX_MODEL_COORD_M} m"
+                "{name} {} m of the south-west sample is beyond ±{MAX_MODEL_COORD_M:e} m",
+                short(v)
             )));
         }
     }

@@ -19,8 +19,20 @@ pub const MAX_HEIGHT_OFFSET_M: f64 = 1e5;
 /// Why `spacing_m` is not a plausible grid spacing, if it is not (1 mm to 100 km).
 pub(crate) fn implausible_spacing(spacing_m: f64) -> Option<String> {
     (!(MIN_SPACING_M..=MAX_SPACING_M).contains(&spacing_m)).then(|| {
-        format!("grid spacing {spacing_m} m is outside the plausible 0.001 m (1 mm) to 100000 m (100 km)")
+        format!(
+            "grid spacing {} m is outside the plausible 0.001 m (1 mm) to 100000 m (100 km)",
+            short(spacing_m)
+        )
     })
+}
+
+/// `v` as a short number: scientific notation where plain would be long (1e300, 1e-9).
+pub(crate) fn short(v: f64) -> String {
+    if v != 0.0 && !(1e-3..1e9).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
 }
 
 /// `<file>.json` next to `<file>` (the whole name plus `.json`, e.g. `foo.png.json`).
@@ -133,7 +145,7 @@ impl Sidecar {
         if scale == 0.0 || scale.abs() > MAX_HEIGHT_SCALE {
             return Err(self.err(
                 "scale",
-                format!("{scale} is not a plausible height scale (non-zero, within ±{MAX_HEIGHT_SCALE} m per unit)"),
+                format!("{} is not a plausible height scale (non-zero, within ±{MAX_HEIGHT_SCALE} m per unit)", short(scale)),
             ));
         }
         let offset = self.f64("offset")?.unwrap_or(0.0);
