@@ -3,6 +3,8 @@
 use std::fmt;
 use std::path::PathBuf;
 
+use crate::limits::MAX_CONFIG_BYTES;
+
 /// A 1-based line and column (in characters) inside a config file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Location {
@@ -47,8 +49,8 @@ pub enum ConfigError {
         /// The underlying error.
         source: std::io::Error,
     },
-    /// The file (or text) is larger than [`MAX_CONFIG_BYTES`](crate::MAX_CONFIG_BYTES).
-    #[error("{source_name}: config file is larger than the {} KiB limit{}", crate::MAX_CONFIG_BYTES / 1024, fmt_size(size))]
+    /// The file (or text) is larger than [`MAX_CONFIG_BYTES`](crate::limits::MAX_CONFIG_BYTES).
+    #[error("{source_name}: config file is larger than the {} KiB limit{}", MAX_CONFIG_BYTES / 1024, fmt_size(size))]
     TooLarge {
         /// The path, or the source name given to `parse`.
         source_name: String,

@@ -33,6 +33,7 @@
 mod channels;
 mod error;
 mod input;
+mod limits;
 mod locate;
 mod path_de;
 mod settings;
@@ -48,6 +49,7 @@ pub use channels::{
 };
 pub use error::{ConfigError, Location};
 pub use input::{InputProtocolName, InputSettings, MAX_SYNC_FRAMES, MAX_WORLD_BOUND_M};
+pub use limits::{MAX_CHANNELS, MAX_CONFIG_BYTES};
 pub use locate::key_location;
 pub use settings::{
     is_valid_tile_size, DemSettings, RenderSettings, MAX_STAGING_BUDGET_MIB, TILE_SIZES,
@@ -76,11 +78,6 @@ impl RenderConfig {
         toml::to_string(self)
     }
 }
-
-/// Largest config file, bytes (1 MiB: a 64-channel config is a few KiB).
-pub const MAX_CONFIG_BYTES: u64 = 1 << 20;
-/// Most `[[channel]]` tables a config may have (well above any projector wall).
-pub const MAX_CHANNELS: usize = 64;
 
 /// Reads and validates the config file at `path`; errors name `path`. Reads at most
 /// [`MAX_CONFIG_BYTES`] + 1 bytes, so a device or pipe (`/dev/zero`) is refused, not slurped.
