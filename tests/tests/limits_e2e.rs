@@ -182,7 +182,7 @@ fn absurd_native_poses_are_counted_and_never_drawn() {
             let mut seq = 1u32;
             let mut f = 0u64;
             while !done.load(Ordering::Relaxed) && f < 60 * 60 {
-                let sign = if f % 2 == 0 { 1.0 } else { -1.0 };
+                let sign = if f.is_multiple_of(2) { 1.0 } else { -1.0 };
                 let _ = s.send_to(&native::encode(&local(sign * 1.797e308, f), seq), &to);
                 seq += 1;
                 let _ = s.send_to(&native::encode(&local(900.0, f), seq), &to);
