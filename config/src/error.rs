@@ -3,6 +3,8 @@
 use std::fmt;
 use std::path::PathBuf;
 
+use crate::limits::MAX_CONFIG_BYTES;
+
 /// A 1-based line and column (in characters) inside a config file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Location {
@@ -47,6 +49,14 @@ pub enum ConfigError {
         /// The underlying error.
         source: std::io::Error,
     },
+    /// The file (or text) is larger than [`MAX_CONFIG_BYTES`](crate::limits::MAX_CONFIG_BYTES).
+    #[error("{source_name}: config file is larger than the {} KiB limit{}", MAX_CONFIG_BYTES / 1024, fmt_size(size))]
+    TooLarge {
+        /// The path, or the source name given to `parse`.
+        source_name: String,
+        /// Its size in bytes, when known (not for pipes and devices, read only up to the limit).
+        size: Option<u64>,
+    },
     /// The text is not valid TOML.
     #[error("{source_name}:{location}: TOML syntax error: {message}")]
     Syntax {
@@ -85,13 +95,17 @@ impl ConfigError {
         match self {
             ConfigError::Syntax { location, .. } => Some(*location),
             ConfigError::Invalid { location, .. } => *location,
-            ConfigError::Io { .. } => None,
+            ConfigError::Io { .. } | ConfigError::TooLarge { .. } => None,
         }
     }
 }
 
 fn fmt_location(location: &Option<Location>) -> String {
     location.map(|l| format!(":{l}")).unwrap_or_default()
+}
+
+fn fmt_size(size: &Option<u64>) -> String {
+    size.map(|n| format!(" ({n} bytes)")).unwrap_or_default()
 }
 
 fn fmt_key(key: &str) -> &str {

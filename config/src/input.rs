@@ -13,11 +13,16 @@
 //! max_extrapolation_ms = 100.0  # carry a pose forward at most this much, ms, ≥ 0
 //! sync_frames = 1               # frame-locked: draw host frame newest − K, 0..=63
 //! wait_pose_s = 10.0            # headless: wait this long for the first pose, s, > 0
+//! world_bound_m = 1.0e7         # local poses beyond ±this (any axis) are dropped, m, (0, 1e9]
 //! ```
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 
 use serde::{Deserialize, Serialize, Serializer};
+
+/// Largest `world_bound_m`, metres (the bound every pose decoder applies:
+/// `aerie_sim_bridge::pose::MAX_WORLD_BOUND_M`).
+pub const MAX_WORLD_BOUND_M: f64 = 1.0e9;
 
 /// Largest `sync_frames`: the frame-locked history keeps the newest 64 host frames.
 pub const MAX_SYNC_FRAMES: u32 = 63;
@@ -95,6 +100,9 @@ pub struct InputSettings {
     /// Seconds, finite, > 0.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub wait_pose_s: Option<f64>,
+    /// Metres, finite, in (0, [`MAX_WORLD_BOUND_M`]]: local poses beyond ±this are dropped.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub world_bound_m: Option<f64>,
 }
 
 impl InputSettings {
@@ -124,9 +132,19 @@ pub(crate) struct RawInput {
     max_extrapolation_ms: Option<f64>,
     sync_frames: Option<i64>,
     wait_pose_s: Option<f64>,
+    world_bound_m: Option<f64>,
 }
 
 type Invalid = (&'static str, String);
+
+/// `v` as a short number: scientific notation when plain would be long (1e300, not 301 digits).
+fn short(v: f64) -> String {
+    if v != 0.0 && !(1e-3..1e9).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
 
 fn ipv4(key: &'static str, s: &str) -> Result<Ipv4Addr, Invalid> {
     s.trim().parse().map_err(|_| {
@@ -222,6 +240,17 @@ impl RawInput {
                 ));
             }
         }
+        if let Some(b) = self.world_bound_m {
+            if !(b.is_finite() && b > 0.0 && b <= MAX_WORLD_BOUND_M) {
+                return Err((
+                    "input.world_bound_m",
+                    format!(
+                        "must be a finite number of metres greater than 0 and at most {MAX_WORLD_BOUND_M:e}, got {}",
+                        short(b)
+                    ),
+                ));
+            }
+        }
         // Keys that cannot apply together are refused here, as the flags are.
         if multicast_if.is_some() && multicast.is_none() {
             return Err((
@@ -262,6 +291,7 @@ impl RawInput {
             max_extrapolation_ms: self.max_extrapolation_ms,
             sync_frames,
             wait_pose_s: self.wait_pose_s,
+            world_bound_m: self.world_bound_m,
         })
     }
 }

@@ -33,6 +33,7 @@
 mod channels;
 mod error;
 mod input;
+mod limits;
 mod locate;
 mod path_de;
 mod settings;
@@ -47,7 +48,8 @@ pub use channels::{
     PresentMode, ViewOffset,
 };
 pub use error::{ConfigError, Location};
-pub use input::{InputProtocolName, InputSettings, MAX_SYNC_FRAMES};
+pub use input::{InputProtocolName, InputSettings, MAX_SYNC_FRAMES, MAX_WORLD_BOUND_M};
+pub use limits::{MAX_CHANNELS, MAX_CONFIG_BYTES};
 pub use locate::key_location;
 pub use settings::{
     is_valid_tile_size, DemSettings, RenderSettings, MAX_STAGING_BUDGET_MIB, TILE_SIZES,
@@ -77,12 +79,40 @@ impl RenderConfig {
     }
 }
 
-/// Reads and validates the config file at `path`; errors name `path`.
+/// Reads and validates the config file at `path`; errors name `path`. Reads at most
+/// [`MAX_CONFIG_BYTES`] + 1 bytes, so a device or pipe (`/dev/zero`) is refused, not slurped.
 pub fn load(path: impl AsRef<Path>) -> Result<RenderConfig, ConfigError> {
+    use std::io::Read;
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+    let io = |source| ConfigError::Io {
         path: path.to_path_buf(),
         source,
+    };
+    let too_large = |size| ConfigError::TooLarge {
+        source_name: path.display().to_string(),
+        size,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    if let Ok(m) = file.metadata() {
+        if m.is_file() && m.len() > MAX_CONFIG_BYTES {
+            return Err(too_large(Some(m.len())));
+        }
+    }
+    let mut bytes = Vec::new();
+    file.take(MAX_CONFIG_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    if bytes.len() as u64 > MAX_CONFIG_BYTES {
+        return Err(too_large(None));
+    }
+    let text = String::from_utf8(bytes).map_err(|e| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "not UTF-8 text (invalid byte at offset {})",
+                e.utf8_error().valid_up_to()
+            ),
+        ))
     })?;
     parse(&text, &path.display().to_string())
 }
@@ -90,6 +120,12 @@ pub fn load(path: impl AsRef<Path>) -> Result<RenderConfig, ConfigError> {
 /// Parses and validates config `text`; `source_name` (usually the file name) starts every
 /// error message.
 pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError> {
+    if text.len() as u64 > MAX_CONFIG_BYTES {
+        return Err(ConfigError::TooLarge {
+            source_name: source_name.to_owned(),
+            size: Some(text.len() as u64),
+        });
+    }
     // 1. TOML syntax.
     let table: toml::Table = toml::from_str(text).map_err(|e| ConfigError::Syntax {
         source_name: source_name.to_owned(),
@@ -122,6 +158,17 @@ pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError>
     // 3. Ranges and cross-key rules.
     let mut raw = raw;
     let raw_channels = std::mem::take(&mut raw.channel);
+    if raw_channels.len() > MAX_CHANNELS {
+        return Err(ConfigError::Invalid {
+            source_name: source_name.to_owned(),
+            location: locate::key_location(text, "channel"),
+            key: "channel".to_owned(),
+            message: format!(
+                "{} [[channel]] tables, more than the limit of {MAX_CHANNELS}",
+                raw_channels.len()
+            ),
+        });
+    }
     let mut cfg = raw
         .validate()
         .map_err(|(key, message)| ConfigError::Invalid {

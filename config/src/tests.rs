@@ -303,6 +303,7 @@ fn input_table_parses_and_round_trips() {
         max_extrapolation_ms = 0
         sync_frames = 2
         wait_pose_s = 2.5
+        world_bound_m = 5e7
     "#;
     let cfg = parse(text, FILE).unwrap();
     let i = &cfg.input;
@@ -315,6 +316,7 @@ fn input_table_parses_and_round_trips() {
         (i.max_extrapolation_ms, i.sync_frames, i.wait_pose_s),
         (Some(0.0), Some(2), Some(2.5))
     );
+    assert_eq!(i.world_bound_m, Some(5e7));
     assert_eq!(cfg.render.fps, Some(30.0));
     assert!(i.wants_input());
     assert_eq!(parse(&cfg.to_toml().unwrap(), FILE).unwrap(), cfg);
@@ -375,6 +377,16 @@ fn input_errors_name_the_key_line_and_reason() {
         (
             "[input]\nwait_pose_s = 0\n",
             "input.wait_pose_s",
+            "greater than 0",
+        ),
+        (
+            "[input]\nworld_bound_m = 1e300\n",
+            "input.world_bound_m",
+            "at most 1e9, got 1e300",
+        ),
+        (
+            "[input]\nworld_bound_m = 0\n",
+            "input.world_bound_m",
             "greater than 0",
         ),
         (

@@ -7,9 +7,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::codec::cigi::{CigiMessage, ViewTable};
-use crate::codec::{decode, Protocol, ProtocolChoice};
+use crate::codec::{decode, DecodeError, Decoded, Protocol, ProtocolChoice};
 use crate::handoff::{latest, Publisher, Subscriber};
-use crate::pose::Pose;
+use crate::pose::{Pose, PoseLimits};
 use crate::stats::{Counters, DropReason, StatsSnapshot};
 use crate::timing::{
     extrapolate, instant_s, monotonic_s, ExtrapolationParams, FramePose, SeqVerdict,
@@ -57,6 +57,8 @@ pub struct InputParams {
     pub sequence: SequenceParams,
     /// Extrapolation limits used by the reader.
     pub extrapolation: ExtrapolationParams,
+    /// Plausibility limits every pose must meet before it is published.
+    pub limits: PoseLimits,
 }
 
 impl Default for InputParams {
@@ -66,6 +68,7 @@ impl Default for InputParams {
             protocol: ProtocolChoice::Auto,
             sequence: SequenceParams::default(),
             extrapolation: ExtrapolationParams::default(),
+            limits: PoseLimits::default(),
         }
     }
 }
@@ -80,6 +83,7 @@ pub fn input_channel(params: InputParams) -> (Ingest, PoseReader) {
         Ingest {
             name: name.clone(),
             protocol: params.protocol,
+            limits: params.limits,
             trackers: std::array::from_fn(|_| SequenceTracker::new(params.sequence)),
             counters: counters.clone(),
             last: None,
@@ -104,6 +108,7 @@ pub fn input_channel(params: InputParams) -> (Ingest, PoseReader) {
 pub struct Ingest {
     name: Arc<str>,
     protocol: ProtocolChoice,
+    limits: PoseLimits,
     /// One per protocol (indexed like [`Protocol::ALL`]): a port in auto mode may carry
     /// several senders' streams, each with its own numbering.
     trackers: [SequenceTracker; 4],
@@ -148,7 +153,7 @@ impl Ingest {
     /// Decodes and, when valid and in order, publishes one datagram that arrived at `arrival_s`.
     pub fn datagram(&mut self, bytes: &[u8], arrival_s: f64) -> Outcome {
         self.counters.received();
-        match decode(self.protocol, bytes) {
+        match decode(self.protocol, bytes).and_then(|d| within(&self.limits, d)) {
             Err(e) => {
                 let reason = e.reason();
                 self.drop_with(reason, &e);
@@ -220,14 +225,15 @@ impl Ingest {
     /// Publishes a pose read from shared memory (validated here) that was new at `arrival_s`.
     pub fn pose(&mut self, pose: Pose, arrival_s: f64) -> Verdict {
         self.counters.received();
-        match pose.validate() {
+        match pose.validate_within(&self.limits) {
             Ok(()) => {
                 self.accept(pose, arrival_s);
                 Verdict::Accepted(None)
             }
             Err(e) => {
-                self.drop_with(DropReason::Invalid, &e);
-                Verdict::Dropped(DropReason::Invalid)
+                let reason = e.reason();
+                self.drop_with(reason, &e);
+                Verdict::Dropped(reason)
             }
         }
     }
@@ -250,6 +256,19 @@ impl Ingest {
         self.poses.publish(Some(PoseSample { latest, previous }));
         self.counters.accepted(arrival_s);
     }
+}
+
+/// `d` when its pose (if any) is within the input's configured limits; the decoders checked
+/// only the widest configurable ones.
+fn within(limits: &PoseLimits, d: Decoded) -> Result<Decoded, DecodeError> {
+    if let Some(pose) = &d.pose {
+        pose.validate_within(limits)
+            .map_err(|error| DecodeError::Invalid {
+                protocol: d.protocol,
+                error,
+            })?;
+    }
+    Ok(d)
 }
 
 /// Frame-loop side of an input. Never blocks: every call is a handful of atomic operations plus

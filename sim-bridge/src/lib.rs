@@ -38,7 +38,7 @@ pub use geodesy::{
     WGS84_EP2, WGS84_F,
 };
 pub use ingest::{input_channel, Ingest, InputParams, PoseReader, PoseSample, Verdict};
-pub use pose::{Pose, PoseError, PosePosition};
+pub use pose::{Pose, PoseError, PoseLimits, PosePosition};
 pub use stats::{DropReason, StatsSnapshot};
 pub use timing::{ExtrapolationParams, FramePose, Motion, StreamState};
 pub use udp::{RposRequest, UdpConfig, UdpReceiver, DEFAULT_PORT};

@@ -3,11 +3,61 @@
 use glam::DVec3;
 
 use crate::geodesy::{Geodetic, LocalTangentPlane};
+use crate::stats::DropReason;
 
-/// Lowest geodetic altitude a pose may have, metres (below the Dead Sea shore, with margin).
-pub const MIN_ALT_M: f64 = -1000.0;
-/// Highest geodetic altitude a pose may have, metres.
-pub const MAX_ALT_M: f64 = 100_000.0;
+/// Lowest geodetic altitude a pose may have, metres (below the deepest ocean floor).
+pub const MIN_ALT_M: f64 = -12_000.0;
+/// Highest geodetic altitude a pose may have, metres (low Earth orbit, with margin).
+pub const MAX_ALT_M: f64 = 1_000_000.0;
+/// Default bound on local ENU positions, metres (each axis within ±this).
+pub const DEFAULT_WORLD_BOUND_M: f64 = 1.0e7;
+/// Largest world bound a configuration may ask for, metres: the bound every decoder applies
+/// before the configured one (f64 still resolves 0.1 µm out there).
+pub const MAX_WORLD_BOUND_M: f64 = 1.0e9;
+/// Fastest plausible velocity component, m/s (above orbital speed).
+pub const MAX_SPEED_M_S: f64 = 10_000.0;
+/// Fastest plausible heading/pitch/roll rate, degrees per second (ten turns a second).
+pub const MAX_RATE_DEG_S: f64 = 3600.0;
+/// Largest plausible heading or roll magnitude, degrees (two turns either way: senders may
+/// send [0, 360), [−180, 180) or a slightly unwrapped angle, never more).
+pub const MAX_ANGLE_DEG: f64 = 720.0;
+/// Largest plausible simulation time magnitude, seconds (some senders use Unix time).
+pub const MAX_SIM_TIME_S: f64 = 1.0e10;
+
+/// Plausibility limits of an input: what a decoded pose may be before it is drawn. The
+/// physical ranges are fixed; the world bound on local positions is configurable
+/// (`[input] world_bound_m`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PoseLimits {
+    /// Local ENU positions must have every axis within ±this, metres; in (0, [`MAX_WORLD_BOUND_M`]].
+    pub world_bound_m: f64,
+}
+
+impl Default for PoseLimits {
+    fn default() -> Self {
+        Self {
+            world_bound_m: DEFAULT_WORLD_BOUND_M,
+        }
+    }
+}
+
+impl PoseLimits {
+    /// The widest limits any configuration may set: what every decoder checks.
+    pub const CEILING: PoseLimits = PoseLimits {
+        world_bound_m: MAX_WORLD_BOUND_M,
+    };
+
+    /// Limits with this world bound, or why it is not a usable bound.
+    pub fn with_world_bound(world_bound_m: f64) -> Result<Self, String> {
+        if world_bound_m.is_finite() && world_bound_m > 0.0 && world_bound_m <= MAX_WORLD_BOUND_M {
+            Ok(Self { world_bound_m })
+        } else {
+            Err(format!(
+                "world bound must be a number of metres in (0, {MAX_WORLD_BOUND_M:e}], got {world_bound_m}"
+            ))
+        }
+    }
+}
 
 /// Where the aircraft is: WGS84 geodetic, or already in the world's local ENU frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -87,14 +137,50 @@ pub enum PoseError {
         /// The allowed range in interval notation, e.g. `[-180, 360)`.
         range: &'static str,
     },
+    /// The field is finite and well formed but physically implausible (a position beyond the
+    /// world bound, a speed above orbital speed, …): an outlier, not drawn.
+    #[error("pose field `{field}` = {value} is implausible (beyond ±{limit})")]
+    Implausible {
+        /// Dotted field name, e.g. `position.x`.
+        field: &'static str,
+        /// The offending value.
+        value: f64,
+        /// The plausibility limit on its magnitude.
+        limit: f64,
+    },
 }
 
 impl PoseError {
     /// The dotted name of the offending field.
     pub fn field(&self) -> &'static str {
         match self {
-            PoseError::NotFinite { field, .. } | PoseError::OutOfRange { field, .. } => field,
+            PoseError::NotFinite { field, .. }
+            | PoseError::OutOfRange { field, .. }
+            | PoseError::Implausible { field, .. } => field,
         }
+    }
+
+    /// The counter this rejection is reported under: outliers are counted apart from
+    /// malformed values.
+    pub fn reason(&self) -> DropReason {
+        match self {
+            PoseError::Implausible { .. } => DropReason::Implausible,
+            _ => DropReason::Invalid,
+        }
+    }
+}
+
+/// Finite, and within ±`limit`.
+fn plausible(field: &'static str, value: f64, limit: f64) -> Result<(), PoseError> {
+    finite(field, value)?;
+    if value.abs() <= limit {
+        Ok(())
+    } else {
+        Err(PoseError::Implausible {
+            field,
+            value,
+            limit,
+        })
     }
 }
 
@@ -130,10 +216,19 @@ impl Pose {
         DVec3::from_array(self.attitude_deg).map(f64::to_radians)
     }
 
-    /// Checks that every value is finite, latitude is in [−90, 90], longitude in [−180, 360),
-    /// geodetic altitude in [−1,000, 100,000] m and pitch in [−90, 90]. Returns the first problem
-    /// found, naming its field.
+    /// [`validate_within`](Self::validate_within) the widest configurable limits
+    /// ([`PoseLimits::CEILING`]): what every decoder checks.
     pub fn validate(&self) -> Result<(), PoseError> {
+        self.validate_within(&PoseLimits::CEILING)
+    }
+
+    /// Checks that every value is finite, latitude is in [−90, 90], longitude in [−180, 360),
+    /// pitch in [−90, 90], and that the pose is plausible: geodetic altitude in
+    /// [[`MIN_ALT_M`], [`MAX_ALT_M`]], local positions within ±`limits.world_bound_m`, heading
+    /// and roll within ±[`MAX_ANGLE_DEG`], velocity components within ±[`MAX_SPEED_M_S`],
+    /// rates within ±[`MAX_RATE_DEG_S`], sim time within ±[`MAX_SIM_TIME_S`]. Returns the first
+    /// problem found, naming its field.
+    pub fn validate_within(&self, limits: &PoseLimits) -> Result<(), PoseError> {
         match self.position {
             PosePosition::Geodetic {
                 lat_deg,
@@ -152,38 +247,41 @@ impl Pose {
                     (-180.0..360.0).contains(&lon_deg),
                     "[-180, 360)",
                 )?;
-                in_range(
-                    "position.alt_m",
-                    alt_m,
-                    (MIN_ALT_M..=MAX_ALT_M).contains(&alt_m),
-                    "[-1000, 100000] m",
-                )?;
+                finite("position.alt_m", alt_m)?;
+                if !(MIN_ALT_M..=MAX_ALT_M).contains(&alt_m) {
+                    return Err(PoseError::Implausible {
+                        field: "position.alt_m",
+                        value: alt_m,
+                        limit: if alt_m < 0.0 { -MIN_ALT_M } else { MAX_ALT_M },
+                    });
+                }
             }
             PosePosition::LocalEnu { x, y, z } => {
-                finite("position.x", x)?;
-                finite("position.y", y)?;
-                finite("position.z", z)?;
+                let b = limits.world_bound_m;
+                plausible("position.x", x, b)?;
+                plausible("position.y", y, b)?;
+                plausible("position.z", z, b)?;
             }
         }
         let [heading, pitch, roll] = self.attitude_deg;
-        finite("attitude_deg.heading", heading)?;
+        plausible("attitude_deg.heading", heading, MAX_ANGLE_DEG)?;
         in_range(
             "attitude_deg.pitch",
             pitch,
             (-90.0..=90.0).contains(&pitch),
             "[-90, 90]",
         )?;
-        finite("attitude_deg.roll", roll)?;
-        finite("sim_time_s", self.sim_time_s)?;
+        plausible("attitude_deg.roll", roll, MAX_ANGLE_DEG)?;
+        plausible("sim_time_s", self.sim_time_s, MAX_SIM_TIME_S)?;
         if let Some([e, n, u]) = self.velocity_enu {
-            finite("velocity_enu.east", e)?;
-            finite("velocity_enu.north", n)?;
-            finite("velocity_enu.up", u)?;
+            plausible("velocity_enu.east", e, MAX_SPEED_M_S)?;
+            plausible("velocity_enu.north", n, MAX_SPEED_M_S)?;
+            plausible("velocity_enu.up", u, MAX_SPEED_M_S)?;
         }
         if let Some([h, p, r]) = self.angular_rates_deg_s {
-            finite("angular_rates_deg_s.heading", h)?;
-            finite("angular_rates_deg_s.pitch", p)?;
-            finite("angular_rates_deg_s.roll", r)?;
+            plausible("angular_rates_deg_s.heading", h, MAX_RATE_DEG_S)?;
+            plausible("angular_rates_deg_s.pitch", p, MAX_RATE_DEG_S)?;
+            plausible("angular_rates_deg_s.roll", r, MAX_RATE_DEG_S)?;
         }
         Ok(())
     }
@@ -296,10 +394,13 @@ mod tests {
 
     #[test]
     fn altitude_out_of_range_is_rejected() {
-        with_position(0.0, 0.0, -1000.0).validate().unwrap();
-        with_position(0.0, 0.0, 100_000.0).validate().unwrap();
-        expect_err(with_position(0.0, 0.0, -1000.5), "position.alt_m", false);
-        expect_err(with_position(0.0, 0.0, 100_001.0), "position.alt_m", false);
+        with_position(0.0, 0.0, MIN_ALT_M).validate().unwrap();
+        with_position(0.0, 0.0, MAX_ALT_M).validate().unwrap();
+        for alt in [MIN_ALT_M - 0.5, MAX_ALT_M + 1.0, 1.797e308, -1.797e308] {
+            let e = with_position(0.0, 0.0, alt).validate().unwrap_err();
+            assert_eq!(e.field(), "position.alt_m", "{e}");
+            assert_eq!(e.reason(), DropReason::Implausible, "{e}");
+        }
     }
 
     #[test]
@@ -420,5 +521,110 @@ mod tests {
         );
         let local = enu_pose().position.to_enu(&ltp);
         assert_eq!(local, DVec3::new(1.0e7, -2.0, 300.0));
+    }
+
+    fn implausible(pose: Pose, limits: &PoseLimits, field: &str) {
+        let e = pose.validate_within(limits).expect_err("outlier accepted");
+        assert_eq!(e.field(), field, "{e}");
+        assert!(matches!(e, PoseError::Implausible { .. }), "{e:?}");
+        assert_eq!(e.reason(), DropReason::Implausible);
+    }
+
+    #[test]
+    fn absurd_finite_values_are_implausible() {
+        let l = PoseLimits::default();
+        for v in [f64::MAX, -f64::MAX, 1.797e308, 1.8e7] {
+            for (i, field) in ["position.x", "position.y", "position.z"]
+                .iter()
+                .enumerate()
+            {
+                let mut p = [0.0; 3];
+                p[i] = v;
+                let pose = Pose {
+                    position: PosePosition::LocalEnu {
+                        x: p[0],
+                        y: p[1],
+                        z: p[2],
+                    },
+                    ..enu_pose()
+                };
+                implausible(pose, &l, field);
+            }
+        }
+        let big = f64::MAX;
+        let base = geodetic_pose();
+        implausible(
+            Pose {
+                attitude_deg: [big, 0.0, 0.0],
+                ..base
+            },
+            &l,
+            "attitude_deg.heading",
+        );
+        implausible(
+            Pose {
+                attitude_deg: [0.0, 0.0, -big],
+                ..base
+            },
+            &l,
+            "attitude_deg.roll",
+        );
+        implausible(
+            Pose {
+                velocity_enu: Some([0.0, big, 0.0]),
+                ..base
+            },
+            &l,
+            "velocity_enu.north",
+        );
+        implausible(
+            Pose {
+                angular_rates_deg_s: Some([0.0, 0.0, big]),
+                ..base
+            },
+            &l,
+            "angular_rates_deg_s.roll",
+        );
+        implausible(
+            Pose {
+                sim_time_s: big,
+                ..base
+            },
+            &l,
+            "sim_time_s",
+        );
+        // Fast but physical values pass.
+        Pose {
+            velocity_enu: Some([7_800.0, -300.0, 50.0]),
+            angular_rates_deg_s: Some([720.0, -360.0, 1_000.0]),
+            ..base
+        }
+        .validate_within(&l)
+        .unwrap();
+    }
+
+    #[test]
+    fn world_bound_is_configurable() {
+        let far = Pose {
+            position: PosePosition::LocalEnu {
+                x: 5.0e7,
+                y: 0.0,
+                z: 0.0,
+            },
+            ..enu_pose()
+        };
+        implausible(far, &PoseLimits::default(), "position.x");
+        let wide = PoseLimits::with_world_bound(1.0e8).unwrap();
+        far.validate_within(&wide).unwrap();
+        // What the decoders check is the widest configurable bound.
+        far.validate().unwrap();
+        implausible(
+            far,
+            &PoseLimits::with_world_bound(1.0e3).unwrap(),
+            "position.x",
+        );
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY, 2.0 * MAX_WORLD_BOUND_M] {
+            assert!(PoseLimits::with_world_bound(bad).is_err(), "{bad}");
+        }
     }
 }

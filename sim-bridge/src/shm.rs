@@ -29,7 +29,7 @@ use std::time::{Duration, Instant};
 use memmap2::{MmapOptions, MmapRaw};
 
 use crate::ingest::{input_channel, Ingest, InputParams, PoseReader};
-use crate::pose::Pose;
+use crate::pose::{Pose, PoseLimits};
 use crate::stats::{Counters, StatsSnapshot};
 use crate::timing::{monotonic_s, ExtrapolationParams};
 
@@ -392,6 +392,8 @@ pub struct ShmConfig {
     pub max_retries: u32,
     /// Extrapolation limits for the reader.
     pub extrapolation: ExtrapolationParams,
+    /// Plausibility limits: poses beyond them are dropped as implausible.
+    pub limits: PoseLimits,
 }
 
 impl Default for ShmConfig {
@@ -401,6 +403,7 @@ impl Default for ShmConfig {
             poll_interval: Duration::from_micros(500),
             max_retries: DEFAULT_MAX_RETRIES,
             extrapolation: ExtrapolationParams::default(),
+            limits: PoseLimits::default(),
         }
     }
 }
@@ -422,6 +425,7 @@ impl ShmSource {
         let (ingest, reader) = input_channel(InputParams {
             name: format!("shm {}", cfg.path.display()),
             extrapolation: cfg.extrapolation,
+            limits: cfg.limits,
             ..InputParams::default()
         });
         let counters = ingest.counters().clone();

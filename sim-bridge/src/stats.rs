@@ -19,8 +19,11 @@ pub enum DropReason {
     BadCrc,
     /// Structurally broken: bad packet size inside a CIGI message, reserved bits set, …
     Malformed,
-    /// A pose value is NaN/infinite or out of range (latitude, altitude, pitch, …).
+    /// A pose value is NaN/infinite or outside its definition (latitude, pitch, …).
     Invalid,
+    /// A finite pose value beyond the plausibility limits (position outside the world bound,
+    /// altitude, speed, rate or angle no aircraft reaches): an outlier.
+    Implausible,
     /// Well formed but asks for something aerie does not do (e.g. an attached ownship).
     Unsupported,
     /// The sender's address is not on the allow-list.
@@ -33,13 +36,14 @@ pub enum DropReason {
 
 impl DropReason {
     /// Every reason, in reporting order.
-    pub const ALL: [DropReason; 10] = [
+    pub const ALL: [DropReason; 11] = [
         DropReason::Unknown,
         DropReason::BadSize,
         DropReason::BadVersion,
         DropReason::BadCrc,
         DropReason::Malformed,
         DropReason::Invalid,
+        DropReason::Implausible,
         DropReason::Unsupported,
         DropReason::NotAllowed,
         DropReason::OutOfOrder,
@@ -55,6 +59,7 @@ impl DropReason {
             DropReason::BadCrc => "bad_crc",
             DropReason::Malformed => "malformed",
             DropReason::Invalid => "invalid",
+            DropReason::Implausible => "implausible",
             DropReason::Unsupported => "unsupported",
             DropReason::NotAllowed => "not_allowed",
             DropReason::OutOfOrder => "out_of_order",

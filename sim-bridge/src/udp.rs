@@ -13,6 +13,7 @@ use std::time::Duration;
 
 use crate::codec::ProtocolChoice;
 use crate::ingest::{input_channel, Ingest, InputParams, PoseReader, Verdict};
+use crate::pose::PoseLimits;
 use crate::record::Recorder;
 use crate::stats::{Counters, StatsSnapshot};
 use crate::timing::{monotonic_s, ExtrapolationParams, SequenceParams};
@@ -74,6 +75,8 @@ pub struct UdpConfig {
     pub sequence: SequenceParams,
     /// Extrapolation limits for the reader.
     pub extrapolation: ExtrapolationParams,
+    /// Plausibility limits: poses beyond them are dropped as implausible.
+    pub limits: PoseLimits,
     /// Kernel receive buffer (`SO_RCVBUF`) to ask for, bytes; `None` keeps the system default
     /// (≈ 200 kB on Linux, ~1,500 datagrams). The kernel may cap it (`net.core.rmem_max`).
     pub recv_buffer_bytes: Option<usize>,
@@ -92,6 +95,7 @@ impl Default for UdpConfig {
             xplane_rpos: None,
             sequence: SequenceParams::default(),
             extrapolation: ExtrapolationParams::default(),
+            limits: PoseLimits::default(),
             recv_buffer_bytes: None,
         }
     }
@@ -239,6 +243,7 @@ impl UdpReceiver {
             protocol: cfg.protocol,
             sequence: cfg.sequence,
             extrapolation: cfg.extrapolation,
+            limits: cfg.limits,
         });
         let counters = ingest.counters().clone();
         let stop = Arc::new(AtomicBool::new(false));

@@ -60,6 +60,8 @@ pub struct TerrainRenderer {
     /// Channels sharing one selection (issue 7): when set, every frame selects tiles for all of
     /// them (per tile the largest ρ/τ among the channels that see it), whichever one is drawn.
     channels: Vec<(Camera, (u32, u32), f64)>,
+    /// Counts `set_channels` calls: the plan reuses the shared selection while it is unchanged.
+    channels_generation: u64,
     /// Statistics panel copied into the top-left corner of every frame while set.
     overlay: Option<Panel>,
     destroyed: bool,
@@ -125,6 +127,7 @@ impl TerrainRenderer {
             frame_counter: 0,
             selection: Selection::default(),
             channels: Vec::new(),
+            channels_generation: 0,
             overlay: None,
             destroyed: false,
         };
@@ -185,6 +188,7 @@ impl TerrainRenderer {
     /// Empty = select for the camera being drawn only.
     pub fn set_channels(&mut self, channels: Vec<(Camera, (u32, u32), f64)>) {
         self.channels = channels;
+        self.channels_generation += 1;
     }
 
     /// Draws `panel` over the top-left corner of the following frames (None: no overlay).
@@ -309,6 +313,7 @@ impl TerrainRenderer {
             camera,
             viewport: (self.target.width, self.target.height),
             channels: &self.channels,
+            channels_generation: self.channels_generation,
             select: &self.desc.select,
             prefetch_frames: self.desc.prefetch_frames,
             skirt_factor: self.desc.skirt_factor,

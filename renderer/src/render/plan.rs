@@ -28,7 +28,7 @@ use glam::DVec3;
 
 use aerie_terrain::bake::ErrorBake;
 use aerie_terrain::camera::Camera;
-use aerie_terrain::clipmap::{place_levels, CacheRegion, ClipmapDesc};
+use aerie_terrain::clipmap::{place_levels, CacheRegion, ClipmapDesc, LevelPlacement};
 use aerie_terrain::pool::{RefinedTilePool, Request, TileKey};
 use aerie_terrain::select::{
     neighbour_eps, select_tiles, select_tiles_multi, DrawItem, SelectParams, Selection, View,
@@ -87,6 +87,19 @@ pub struct PlanState {
     /// Eye of the previous planned frame.
     pub prev_eye: Option<DVec3>,
     prefetch_selection: Selection,
+    shared: SharedSelection,
+    /// Shared (multi-channel) selections made so far: one per frame, whatever the channel count.
+    pub shared_selections: u64,
+}
+
+/// The selection shared by a set of channels, kept while the set and the level placement stay
+/// the same: a frame renders each of its n channels once, and they all draw this one selection,
+/// so it is made once per frame, not n times (each costs O(n): a frame would be O(n²)).
+#[derive(Default)]
+struct SharedSelection {
+    /// The channels' generation, the placement and the parameters it was made for.
+    key: Option<(u64, Vec<LevelPlacement>, SelectParams)>,
+    selection: Selection,
 }
 
 impl PlanState {
@@ -111,6 +124,8 @@ impl PlanState {
             pools,
             prev_eye: None,
             prefetch_selection: Selection::default(),
+            shared: SharedSelection::default(),
+            shared_selections: 0,
         }
     }
 
@@ -129,6 +144,9 @@ pub struct FrameInputs<'a> {
     pub viewport: (u32, u32),
     /// Channels (camera, viewport, τ) sharing one selection; empty: select for `camera` only.
     pub channels: &'a [(Camera, (u32, u32), f64)],
+    /// Changes whenever `channels` does (the renderer counts its `set_channels` calls): the
+    /// shared selection is reused while it stays the same.
+    pub channels_generation: u64,
     pub select: &'a SelectParams,
     /// Prefetch looks this many frames ahead along the eye's motion (≤ 0: off).
     pub prefetch_frames: f64,
@@ -217,6 +235,12 @@ pub fn select_frame(
             out,
         );
     } else {
+        let key = (inputs.channels_generation, placements, *inputs.select);
+        if state.shared.key.as_ref() == Some(&key) {
+            out.clone_from(&state.shared.selection);
+            return strips;
+        }
+        let placements = &key.1;
         let views: Vec<View> = inputs
             .channels
             .iter()
@@ -229,11 +253,14 @@ pub fn select_frame(
         select_tiles_multi(
             &state.bake,
             &state.clipmap,
-            &placements,
+            placements,
             &views,
             inputs.select,
             out,
         );
+        state.shared_selections += 1;
+        state.shared.selection.clone_from(out);
+        state.shared.key = Some(key);
     }
     strips
 }

@@ -74,6 +74,7 @@ fn inputs<'a>(
         camera,
         viewport: (320, 180),
         channels: &[],
+        channels_generation: 0,
         select,
         prefetch_frames: 0.0,
         skirt_factor: 2.0,
@@ -583,4 +584,55 @@ fn channels_share_one_selection_whichever_is_drawn() {
         a.iter().any(|i| i.refinement > 0),
         "the fixture must refine"
     );
+}
+
+/// Channels sharing a selection: the n renders of a frame (one per channel) select once, so a
+/// frame costs O(n), not O(n²); each render gets the selection made for all the channels, and
+/// a new channel set (the next frame's cameras) selects again.
+#[test]
+fn channels_sharing_a_selection_select_once_per_frame() {
+    let mut st = state(&[8, 8, 8, 8, 8, 0]);
+    let select = SelectParams::default();
+    let n = 12;
+    for frame in 0..3u64 {
+        let chans: Vec<(Camera, (u32, u32), f64)> = (0..n)
+            .map(|k| {
+                let heading = k as f64 * 360.0 / n as f64;
+                (
+                    camera(1280.0 + 40.0 * frame as f64, 1280.0, 300.0, heading),
+                    (320, 180),
+                    1.0,
+                )
+            })
+            .collect();
+        // What one selection for all of them gives.
+        let views: Vec<View> = chans
+            .iter()
+            .map(|(camera, viewport, tau_px)| View {
+                camera,
+                viewport: *viewport,
+                tau_px: *tau_px,
+            })
+            .collect();
+        let placements = place_levels(&st.clipmap, eye_samples(chans[0].0.position, st.spacing));
+        let mut want = Selection::default();
+        select_tiles_multi(
+            &st.bake,
+            &st.clipmap,
+            &placements,
+            &views,
+            &select,
+            &mut want,
+        );
+        assert!(!want.items.is_empty());
+        for (cam, _, _) in &chans {
+            let mut inp = inputs(frame, cam, &select, 1 << 24);
+            inp.channels = &chans;
+            inp.channels_generation = frame + 1;
+            let mut sel = Selection::default();
+            select_frame(&mut st, &inp, &mut sel);
+            assert_eq!(sel.items, want.items, "frame {frame}");
+        }
+    }
+    assert_eq!(st.shared_selections, 3, "one shared selection per frame");
 }

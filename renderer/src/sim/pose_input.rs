@@ -19,7 +19,7 @@ use aerie_sim_bridge::codec::ProtocolChoice;
 use aerie_sim_bridge::shm::{shm_path, ShmConfig, ShmSource};
 use aerie_sim_bridge::timing::{extrapolate, monotonic_s, ExtrapolationParams, Stamped};
 use aerie_sim_bridge::udp::{UdpConfig, UdpReceiver};
-use aerie_sim_bridge::{Pose, PosePosition, PoseReader, StatsSnapshot, StreamState};
+use aerie_sim_bridge::{Pose, PoseLimits, PosePosition, PoseReader, StatsSnapshot, StreamState};
 use glam::DVec3;
 
 use crate::sim::channel::AircraftPose;
@@ -293,6 +293,8 @@ pub struct InputSpec {
     pub cap_s: f64,
     /// Frame-locked mode: render host frame newest − k.
     pub sync_frames: Option<u32>,
+    /// Local poses beyond ±this (any axis), metres, are dropped as implausible.
+    pub world_bound_m: f64,
 }
 
 /// How long without a pose before the stream is reported lost when the extrapolation cap is
@@ -379,12 +381,14 @@ impl SimInput {
             cap_s: spec.cap_s.max(MIN_LOST_AFTER_S),
             ..params
         };
+        let limits = PoseLimits::with_world_bound(spec.world_bound_m)?;
         let (transport, reader, what) = match spec.protocol {
             InputProtocol::Shm => {
                 let path = shm_path(&spec.shm_name);
                 let (src, reader) = ShmSource::spawn(ShmConfig {
                     path: path.clone(),
                     extrapolation: monitor,
+                    limits,
                     ..ShmConfig::default()
                 })
                 .map_err(|e| format!("shared memory {}: {e}", path.display()))?;
@@ -402,6 +406,7 @@ impl SimInput {
                     multicast_interface: spec.multicast_interface,
                     allow: spec.allow.clone(),
                     extrapolation: monitor,
+                    limits,
                     ..UdpConfig::default()
                 })
                 .map_err(|e| e.to_string())?;

@@ -330,8 +330,8 @@ mod tests {
         v25[3] = 25;
         assert_eq!(r(&v25), DropReason::BadVersion);
         let mut b = golden();
-        b[24..32].copy_from_slice(&(-5000.0f64).to_be_bytes());
-        assert_eq!(r(&b), DropReason::Invalid);
+        b[24..32].copy_from_slice(&(-50_000.0f64).to_be_bytes());
+        assert_eq!(r(&b), DropReason::Implausible);
         let mut b = golden();
         b[44..48].copy_from_slice(&f32::NAN.to_be_bytes());
         assert_eq!(r(&b), DropReason::Invalid);

@@ -290,7 +290,7 @@ mod tests {
         for (off, value, field) in [
             (32, 91.0, "position.lat_deg"),
             (40, f64::NAN, "position.lon_deg"),
-            (48, 150_000.0, "position.alt_m"),
+            (48, 1_500_000.0, "position.alt_m"),
             (64, 95.0, "attitude_deg.pitch"),
             (16, f64::INFINITY, "sim_time_s"),
             (88, f64::NAN, "velocity_enu.north"),

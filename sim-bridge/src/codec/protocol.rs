@@ -152,7 +152,7 @@ impl DecodeError {
             DecodeError::BadVersion { .. } => DropReason::BadVersion,
             DecodeError::BadCrc { .. } => DropReason::BadCrc,
             DecodeError::Malformed { .. } => DropReason::Malformed,
-            DecodeError::Invalid { .. } => DropReason::Invalid,
+            DecodeError::Invalid { error, .. } => error.reason(),
             DecodeError::Unsupported { .. } => DropReason::Unsupported,
         }
     }
@@ -170,7 +170,8 @@ impl DecodeError {
     }
 }
 
-/// Validates a decoded pose, tagging an error with the protocol.
+/// Validates a decoded pose within the widest configurable limits ([`Pose::validate`]; the
+/// input applies its configured world bound after), tagging an error with the protocol.
 pub(crate) fn validated(protocol: Protocol, pose: Pose) -> Result<Pose, DecodeError> {
     pose.validate()
         .map(|()| pose)

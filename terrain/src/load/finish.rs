@@ -7,6 +7,10 @@ use crate::Heightfield;
 
 use super::error::{format_err, show, size_err, DemError};
 use super::placement::Placement;
+use super::sidecar::{implausible_spacing, short};
+
+/// Largest plausible height magnitude, metres (ten times Everest, and the ocean floor).
+pub const MAX_HEIGHT_M: f32 = 1e5;
 
 /// Rejects degenerate sizes with a message naming the problem (zero or below 2×2).
 pub(crate) fn check_dims(path: &Path, width: usize, height: usize) -> Result<(), DemError> {
@@ -49,17 +53,26 @@ pub(crate) fn finish(
             format!("{} samples for a {}×{} grid", samples.len(), width, height),
         ));
     }
-    if !(spacing_x.is_finite() && spacing_x > 0.0 && spacing_y.is_finite() && spacing_y > 0.0) {
-        return Err(format_err(
-            path,
-            format!("invalid grid spacing {} m × {} m", spacing_x, spacing_y),
-        ));
-    }
-    if let Some(i) = samples.iter().position(|v| v.is_infinite()) {
+    // Every loader names its keys first; this catches what a geo-reference computes (a lat/lon
+    // step of 1e300° is finite but not a grid), naming where the spacing came from.
+    if let Some(why) = implausible_spacing(spacing_x).or(implausible_spacing(spacing_y)) {
         return Err(format_err(
             path,
             format!(
-                "height out of range ({}) at (col {}, row {}) in file order after scale/offset",
+                "{why} ({} m × {} m, {spacing_note})",
+                short(spacing_x),
+                short(spacing_y)
+            ),
+        ));
+    }
+    if let Some(i) = samples
+        .iter()
+        .position(|v| v.is_infinite() || v.abs() > MAX_HEIGHT_M)
+    {
+        return Err(format_err(
+            path,
+            format!(
+                "height out of range ({} m, plausible within ±{MAX_HEIGHT_M} m) at (col {}, row {}) in file order after scale/offset",
                 samples[i],
                 i % width,
                 i / width

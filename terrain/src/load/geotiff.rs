@@ -16,14 +16,17 @@ use tiff::ColorType;
 
 use super::error::{format_err, io_err, size_err, DemError};
 use super::finish::{check_dims, finish};
+use super::geo::geographic_spacing_m;
 use super::placement::Placement;
-use super::sidecar::DEFAULT_SPACING_M;
+use super::sidecar::{implausible_spacing, short, DEFAULT_SPACING_M};
 use crate::{GeoReference, Heightfield};
 
 /// Largest grid accepted (samples): 32769², so a lying header cannot ask for terabytes.
 const MAX_SAMPLES: u64 = 1 << 30;
 
 // GeoKey ids (GeoTIFF 1.0 spec, section 6.2).
+/// Largest plausible projected model coordinate, metres.
+const MAX_MODEL_COORD_M: f64 = 1e8;
 const GT_MODEL_TYPE: u16 = 1024;
 const GT_RASTER_TYPE: u16 = 1025;
 const GEOGRAPHIC_TYPE: u16 = 2048;
@@ -220,7 +223,31 @@ fn placement(
     let west = x + (centre - ti) * sx;
     let south = y - ((height - 1) as f64 + centre - tj) * sy;
     let model = key(keys, GT_MODEL_TYPE);
+    let scale_err =
+        |what: String| format_err(path, format!("tag ModelPixelScale: {scale:?}: {what}"));
+    let tie_err = |what: String| format_err(path, format!("tag ModelTiepoint: {what}"));
     if model == Some(2) {
+        // Degrees: the steps must give a plausible ground spacing, the corner a place on Earth.
+        let (ew, ns) = geographic_spacing_m(south.clamp(-90.0, 90.0), sy, sx);
+        // E-W at the equator: near the poles a fine step is still a real grid.
+        if let Some(why) =
+            implausible_spacing(sx.to_radians() * 6_378_137.0).or(implausible_spacing(ns))
+        {
+            return Err(scale_err(format!(
+                "{why} (degrees per pixel, {} m E-W, {} m N-S)",
+                short(ew),
+                short(ns)
+            )));
+        }
+        let north = south + (height - 1) as f64 * sy;
+        if !(south >= -90.0 && north <= 90.0 && (-360.0..=360.0).contains(&west)) {
+            return Err(tie_err(format!(
+                "the grid spans latitudes {}° to {}° from longitude {}°, not a place on Earth",
+                short(south),
+                short(north),
+                short(west)
+            )));
+        }
         let mut place = Placement::geographic(south, west, sy, sx, height);
         let epsg = key(keys, GEOGRAPHIC_TYPE)
             .filter(|&c| c != 0 && c != 32767)
@@ -240,6 +267,18 @@ fn placement(
         _ => "projected (unknown CRS)".to_string(),
     };
     let (spacing_x, spacing_y) = (sx * unit, sy * unit);
+    if let Some(why) = implausible_spacing(spacing_x).or(implausible_spacing(spacing_y)) {
+        return Err(scale_err(format!("{why} ({unit_name})")));
+    }
+    // Model coordinates beyond 1e8 m (a thousand times the Earth's radius) are no map.
+    for (name, v) in [("easting", west * unit), ("northing", south * unit)] {
+        if v.abs() > MAX_MODEL_COORD_M {
+            return Err(tie_err(format!(
+                "{name} {} m of the south-west sample is beyond ±{MAX_MODEL_COORD_M:e} m",
+                short(v)
+            )));
+        }
+    }
     let note = format!(
         "GeoTIFF {kind} {crs} grid (ModelPixelScale in {unit_name}): {spacing_x} m E-W, {spacing_y} m N-S"
     );

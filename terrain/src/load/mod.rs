@@ -26,4 +26,6 @@ pub use error::DemError;
 pub use geo::geographic_spacing_m;
 
 #[cfg(test)]
+mod limits_tests;
+#[cfg(test)]
 mod tests;

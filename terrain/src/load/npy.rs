@@ -471,7 +471,7 @@ pub(super) fn load_npz(path: &Path) -> Result<Heightfield, DemError> {
         .or(geo_guess.map(|g| g.0))
         .unwrap_or(true);
     let has_spacing = match sc {
-        Some(s) => s.positive("spacing_x")?.is_some() || s.positive("spacing_y")?.is_some(),
+        Some(s) => s.spacing("spacing_x")?.is_some() || s.spacing("spacing_y")?.is_some(),
         None => false,
     };
     let place = match geo_guess {

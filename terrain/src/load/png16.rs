@@ -64,16 +64,10 @@ pub(super) fn load_png(path: &Path) -> Result<Heightfield, DemError> {
         .map_err(|e| format_err(path, format!("corrupt PNG data: {e}")))?;
 
     let sc = sidecar.as_ref();
-    let scale = sc
-        .map(|s| s.f64("scale"))
-        .transpose()?
-        .flatten()
-        .unwrap_or(1.0);
-    let offset = sc
-        .map(|s| s.f64("offset"))
-        .transpose()?
-        .flatten()
-        .unwrap_or(0.0);
+    let (scale, offset) = match sc {
+        Some(s) => s.height_scale_offset()?,
+        None => (1.0, 0.0),
+    };
     let north_up = sc
         .map(|s| s.bool("north_up"))
         .transpose()?

@@ -89,10 +89,7 @@ pub(super) fn load_raw(path: &Path, default: SampleFormat) -> Result<Heightfield
         }
         (1.0, 0.0)
     } else {
-        (
-            sc.f64("scale")?.unwrap_or(1.0),
-            sc.f64("offset")?.unwrap_or(0.0),
-        )
+        sc.height_scale_offset()?
     };
     let north_up = sc.bool("north_up")?.unwrap_or(true);
     let place = Placement::metric(Some(&sc))?;

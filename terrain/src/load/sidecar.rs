@@ -6,6 +6,34 @@ use super::error::{one_line, show, DemError};
 
 /// Default grid spacing (metres) when a file carries none and no sidecar gives one.
 pub(crate) const DEFAULT_SPACING_M: f64 = 30.0;
+/// Finest plausible grid spacing, metres (1 mm).
+pub const MIN_SPACING_M: f64 = 1e-3;
+/// Coarsest plausible grid spacing, metres (100 km).
+pub const MAX_SPACING_M: f64 = 1e5;
+/// Largest plausible magnitude of a height scale, metres per stored unit (a u16 then spans
+/// 65 km).
+pub const MAX_HEIGHT_SCALE: f64 = 1e3;
+/// Largest plausible magnitude of a height offset, metres.
+pub const MAX_HEIGHT_OFFSET_M: f64 = 1e5;
+
+/// Why `spacing_m` is not a plausible grid spacing, if it is not (1 mm to 100 km).
+pub(crate) fn implausible_spacing(spacing_m: f64) -> Option<String> {
+    (!(MIN_SPACING_M..=MAX_SPACING_M).contains(&spacing_m)).then(|| {
+        format!(
+            "grid spacing {} m is outside the plausible 0.001 m (1 mm) to 100000 m (100 km)",
+            short(spacing_m)
+        )
+    })
+}
+
+/// `v` as a short number: scientific notation where plain would be long (1e300, 1e-9).
+pub(crate) fn short(v: f64) -> String {
+    if v != 0.0 && !(1e-3..1e9).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
 
 /// `<file>.json` next to `<file>` (the whole name plus `.json`, e.g. `foo.png.json`).
 pub(crate) fn sidecar_path(path: &Path) -> PathBuf {
@@ -98,12 +126,38 @@ impl Sidecar {
         }
     }
 
-    /// A finite number > 0 (spacings).
-    pub(crate) fn positive(&self, key: &str) -> Result<Option<f64>, DemError> {
+    /// A grid spacing in metres: a finite number from 1 mm to 100 km.
+    pub(crate) fn spacing(&self, key: &str) -> Result<Option<f64>, DemError> {
         match self.f64(key)? {
             Some(x) if x <= 0.0 => Err(self.err(key, format!("must be > 0, found {x}"))),
-            other => Ok(other),
+            Some(x) => match implausible_spacing(x) {
+                Some(why) => Err(self.err(key, why)),
+                None => Ok(Some(x)),
+            },
+            None => Ok(None),
         }
+    }
+
+    /// A height `scale` (metres per stored unit) and `offset` (metres): finite, non-zero scale,
+    /// magnitudes at most [`MAX_HEIGHT_SCALE`] and [`MAX_HEIGHT_OFFSET_M`]; defaults 1 and 0.
+    pub(crate) fn height_scale_offset(&self) -> Result<(f64, f64), DemError> {
+        let scale = self.f64("scale")?.unwrap_or(1.0);
+        if scale == 0.0 || scale.abs() > MAX_HEIGHT_SCALE {
+            return Err(self.err(
+                "scale",
+                format!("{} is not a plausible height scale (non-zero, within ±{MAX_HEIGHT_SCALE} m per unit)", short(scale)),
+            ));
+        }
+        let offset = self.f64("offset")?.unwrap_or(0.0);
+        if offset.abs() > MAX_HEIGHT_OFFSET_M {
+            return Err(self.err(
+                "offset",
+                format!(
+                    "{offset} m is not a plausible height offset (within ±{MAX_HEIGHT_OFFSET_M} m)"
+                ),
+            ));
+        }
+        Ok((scale, offset))
     }
 
     pub(crate) fn bool(&self, key: &str) -> Result<Option<bool>, DemError> {
@@ -149,11 +203,11 @@ fn json_type(v: &serde_json::Value) -> String {
 /// sentence for `spacing_note`.
 pub(crate) fn metric_spacing(sidecar: Option<&Sidecar>) -> Result<(f64, f64, String), DemError> {
     let sx = match sidecar {
-        Some(s) => s.positive("spacing_x")?,
+        Some(s) => s.spacing("spacing_x")?,
         None => None,
     };
     let sy = match sidecar {
-        Some(s) => s.positive("spacing_y")?,
+        Some(s) => s.spacing("spacing_y")?,
         None => None,
     };
     let note = match (sidecar, sx, sy) {

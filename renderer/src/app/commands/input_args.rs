@@ -49,6 +49,24 @@ pub struct InputArgs {
     /// as lost. Default: 100 (run: input.max_extrapolation_ms first).
     #[arg(long, alias = "cap-ms", value_name = "MS", allow_hyphen_values = true)]
     pub max_extrapolation_ms: Option<f64>,
+    /// Drop local (ENU) poses with any axis beyond ±this many metres as implausible, (0, 1e9].
+    /// Default: 1e7 (run: input.world_bound_m first).
+    #[arg(
+        long,
+        value_name = "M",
+        value_parser = parse_world_bound,
+        allow_hyphen_values = true
+    )]
+    pub world_bound_m: Option<f64>,
+}
+
+/// `--world-bound-m`: metres in (0, 1e9].
+pub fn parse_world_bound(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a number of metres, got {s:?}"))?;
+    aerie_sim_bridge::PoseLimits::with_world_bound(v).map(|l| l.world_bound_m)
 }
 
 /// `--protocol`: the command-line words (`aerie` is the old name of `native`).

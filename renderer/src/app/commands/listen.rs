@@ -13,7 +13,7 @@ use aerie_sim_bridge::codec::ProtocolChoice;
 use aerie_sim_bridge::shm::{shm_path, ShmConfig, ShmSource, DEFAULT_SHM_NAME};
 use aerie_sim_bridge::timing::{monotonic_s, ExtrapolationParams, StreamState};
 use aerie_sim_bridge::udp::{CigiReply, RposRequest, UdpConfig, UdpReceiver};
-use aerie_sim_bridge::{DropReason, PosePosition, PoseReader, StatsSnapshot};
+use aerie_sim_bridge::{DropReason, PoseLimits, PosePosition, PoseReader, StatsSnapshot};
 use clap::Args;
 
 use crate::app::commands::input_args::InputArgs;
@@ -140,6 +140,11 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
         cap_s: cap_ms / 1e3,
         ..ExtrapolationParams::default()
     };
+    let limits = match input.world_bound_m {
+        Some(b) => PoseLimits::with_world_bound(b)
+            .map_err(|e| bad_input(format!("--world-bound-m: {e}")))?,
+        None => PoseLimits::default(),
+    };
     let shm_name = input.wants_shm().then(|| {
         input
             .shm_name
@@ -156,6 +161,7 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
             let (src, reader) = ShmSource::spawn(ShmConfig {
                 path: path.clone(),
                 extrapolation,
+                limits,
                 ..ShmConfig::default()
             })
             .map_err(runtime)?;
@@ -183,6 +189,7 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
                     rate_hz: a.xplane_rate,
                 }),
                 extrapolation,
+                limits,
                 ..UdpConfig::default()
             })
             .map_err(runtime)?;

@@ -5,6 +5,7 @@ use std::net::Ipv4Addr;
 
 use aerie_config::{InputProtocolName, RenderConfig};
 use aerie_sim_bridge::codec::ProtocolChoice;
+use aerie_sim_bridge::pose::DEFAULT_WORLD_BOUND_M;
 use aerie_sim_bridge::shm::DEFAULT_SHM_NAME;
 
 use crate::app::commands::input_args::InputArgs;
@@ -51,6 +52,11 @@ pub fn resolve_settings(a: &RunArgs, config: &RenderConfig) -> Result<RunSetting
         .unwrap_or(DEFAULT_WAIT_POSE_S);
     let fps = a.fps.or(config.render.fps).unwrap_or(DEFAULT_FPS);
     let sync_frames = a.sync_frames.or(c.sync_frames);
+    let world_bound_m = a
+        .input
+        .world_bound_m
+        .or(c.world_bound_m)
+        .unwrap_or(DEFAULT_WORLD_BOUND_M);
     let cli_udp = a.input.wants_udp();
     let wanted = a.input.any() || c.wants_input();
     if let Some(k) = sync_frames.filter(|&k| k > aerie_config::MAX_SYNC_FRAMES) {
@@ -117,6 +123,7 @@ pub fn resolve_settings(a: &RunArgs, config: &RenderConfig) -> Result<RunSetting
                 .unwrap_or_else(|| DEFAULT_SHM_NAME.to_string()),
             cap_s: max_extrapolation_ms / 1e3,
             sync_frames,
+            world_bound_m,
         }),
         max_extrapolation_ms,
         wait_pose_s,

@@ -149,6 +149,31 @@ fn settings_of(config: &str, extra: &[&str]) -> Result<RunSettings, Failure> {
     resolve_settings(&Cli::try_parse_from(argv).unwrap().args, &cfg)
 }
 
+/// The world bound: the default, else `input.world_bound_m`, else `--world-bound-m`; a bad
+/// flag value is refused by the parser.
+#[test]
+fn world_bound_comes_from_the_flag_the_config_or_the_default() {
+    let bound = |cfg: &str, extra: &[&str]| {
+        settings_of(cfg, extra)
+            .unwrap()
+            .input
+            .expect("an input")
+            .world_bound_m
+    };
+    let udp = "[input]\nprotocol = \"native\"\n";
+    assert_eq!(bound(udp, &[]), 1.0e7);
+    let cfg = "[input]\nprotocol = \"native\"\nworld_bound_m = 5e7\n";
+    assert_eq!(bound(cfg, &[]), 5.0e7);
+    assert_eq!(bound(cfg, &["--world-bound-m", "2e3"]), 2.0e3);
+    use clap::Parser;
+    for bad in ["1e300", "0", "-5", "nan", "x"] {
+        let Err(e) = Cli::try_parse_from(["run", "--dem", "x", "--world-bound-m", bad]) else {
+            panic!("--world-bound-m {bad} accepted");
+        };
+        assert!(e.to_string().contains("--world-bound-m"), "{e}");
+    }
+}
+
 /// `[input]` of the config is used; each flag given overrides its key; a flag choosing the
 /// other transport drops the config's keys of the first.
 #[test]
@@ -303,6 +328,7 @@ fn stream_source_waits_then_follows_then_fails_on_unplaceable_poses() {
         shm_name: String::new(),
         cap_s: 0.0,
         sync_frames: None,
+        world_bound_m: 1.0e7,
     };
     let input = SimInput::open(&spec, GeoMapping::of_dataset(&ds)).unwrap();
     let to = input.local_addr().unwrap();
