@@ -44,9 +44,12 @@ fn scratch() -> &'static Path {
     })
 }
 
+/// A DEM input's parts: file name, sidecar (if any), file bytes.
+pub type DemParts<'a> = (&'static str, Option<&'a [u8]>, &'a [u8]);
+
 /// Splits a DEM input: byte 0 picks the file name (`DEM_NAMES`), byte 1 is the sidecar's
 /// length (0: no sidecar), then the sidecar JSON, then the DEM file itself.
-pub fn split_dem_input(b: &[u8]) -> Option<(&'static str, Option<&[u8]>, &[u8])> {
+pub fn split_dem_input(b: &[u8]) -> Option<DemParts<'_>> {
     let (&kind, rest) = b.split_first()?;
     let (&n, rest) = rest.split_first()?;
     let n = usize::from(n).min(rest.len());
@@ -57,7 +60,10 @@ pub fn split_dem_input(b: &[u8]) -> Option<(&'static str, Option<&[u8]>, &[u8])>
 
 /// Builds a DEM input (the inverse of [`split_dem_input`]; the seed writer uses it).
 pub fn dem_input(name: &str, sidecar: Option<&str>, dem: &[u8]) -> Vec<u8> {
-    let kind = DEM_NAMES.iter().position(|n| *n == name).expect("a DEM name") as u8;
+    let kind = DEM_NAMES
+        .iter()
+        .position(|n| *n == name)
+        .expect("a DEM name") as u8;
     let side = sidecar.unwrap_or("").as_bytes();
     assert!(side.len() <= 255, "sidecar over 255 bytes");
     let mut v = vec![kind, side.len() as u8];
@@ -85,9 +91,17 @@ pub fn dem(b: &[u8]) -> bool {
     }
     match load_dem(&path) {
         Ok(hf) => {
-            assert!(hf.width >= 2 && hf.height >= 2, "{}×{}", hf.width, hf.height);
+            assert!(
+                hf.width >= 2 && hf.height >= 2,
+                "{}×{}",
+                hf.width,
+                hf.height
+            );
             assert_eq!(hf.heights.len(), hf.width * hf.height);
-            assert!(hf.heights.iter().all(|h| h.is_finite()), "non-finite height");
+            assert!(
+                hf.heights.iter().all(|h| h.is_finite()),
+                "non-finite height"
+            );
             for s in [hf.spacing_x, hf.spacing_y] {
                 assert!(s.is_finite() && s > 0.0, "spacing {s}");
             }
@@ -113,13 +127,20 @@ pub fn bake(b: &[u8]) -> bool {
             for s in [bake.spacing_x, bake.spacing_y] {
                 assert!(s.is_finite() && s > 0.0, "spacing {s}");
             }
-            assert_eq!(bake.file_size(), b.len() as u64, "every byte is accounted for");
+            assert_eq!(
+                bake.file_size(),
+                b.len() as u64,
+                "every byte is accounted for"
+            );
             true
         }
         Err(e) => {
             let msg = e.to_string();
             assert!(!msg.contains('\n'), "multi-line error: {msg:?}");
-            assert!(msg.contains("dem.aerie-bake"), "error does not name the file: {msg}");
+            assert!(
+                msg.contains("dem.aerie-bake"),
+                "error does not name the file: {msg}"
+            );
             false
         }
     }
@@ -142,7 +163,10 @@ pub fn config(b: &[u8]) -> bool {
         Err(e) => {
             let msg = e.to_string();
             assert!(!msg.contains('\n'), "multi-line error: {msg:?}");
-            assert!(msg.starts_with("fuzz.toml"), "error does not start with the file: {msg}");
+            assert!(
+                msg.starts_with("fuzz.toml"),
+                "error does not start with the file: {msg}"
+            );
             false
         }
     }

@@ -8,15 +8,21 @@ mod bodies;
 
 use std::path::{Path, PathBuf};
 
+/// A target body: arbitrary bytes in, "accepted" out.
+type Body = fn(&[u8]) -> bool;
+
 /// Target name (= `fuzz/fuzz_targets/<name>.rs`, `fuzz/corpus/<name>/`) and body.
-const TARGETS: [(&str, fn(&[u8]) -> bool); 3] = [
+const TARGETS: [(&str, Body); 3] = [
     ("dem", bodies::dem),
     ("bake", bodies::bake),
     ("config", bodies::config),
 ];
 
 fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
 }
 
 fn files(dir: &Path) -> Vec<PathBuf> {
