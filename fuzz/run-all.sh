@@ -34,8 +34,15 @@ for entry in "${PROJECTS[@]}"; do
         -runs="$RUNS" -print_final_stats=1 -max_len=4096 >"$LOGS/$t.log" 2>&1) || {
       tail -40 "$LOGS/$t.log"; echo "fuzz: $t failed (log $LOGS/$t.log)"; exit 1; }
     end=$(date +%s)
+    # cmin drops inputs whose coverage others repeat; the named seeds and regression inputs
+    # stay (the replay tests rely on them).
+    keep=$(mktemp -d)
+    find "$dir/corpus/$t" -maxdepth 1 -type f \( -name 'seed_*' -o -name 'regression_*' \) \
+        -exec cp {} "$keep/" \;
     (cd "$dir" && cargo fuzz cmin -s "$SAN" "$t" "corpus/$t" -- -max_len=4096 \
         >"$LOGS/$t.cmin.log" 2>&1)
+    cp "$keep"/* "$dir/corpus/$t/" 2>/dev/null || true
+    rm -rf "$keep"
     files=$(find "$dir/corpus/$t" -type f | wc -l)
     bytes=$(du -sb "$dir/corpus/$t" | cut -f1)
     last=$(grep -E '^#[0-9]+' "$LOGS/$t.log" | tail -1 || true)
