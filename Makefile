@@ -50,3 +50,14 @@ bench-run: setup
 	cargo build --release -p aerie
 	$(AERIE_RELEASE) bench --dem $(DEM) --out $(BENCH_OUT) --overwrite \
 	    --size 1280x720 --frames 60 --modes bounded,clipmap,distance,full --tau 0.5,1,2,5
+
+# Every fuzz target (sim-bridge/fuzz: the pose decoders; fuzz/: DEM, bake and config parsers)
+# for FUZZ_RUNS inputs each on the stable toolchain (RUSTC_BOOTSTRAP=1; cargo-fuzz is installed
+# when missing), then each corpus minimised in place; commit the corpora, `cargo test` replays
+# them. FUZZ_TARGETS="native dem" runs some; FUZZ_SANITIZER=address adds ASan (slower).
+FUZZ_RUNS ?= 10000000
+FUZZ_SANITIZER ?= none
+.PHONY: fuzz
+fuzz:
+	FUZZ_RUNS=$(FUZZ_RUNS) FUZZ_SANITIZER=$(FUZZ_SANITIZER) FUZZ_TARGETS="$(FUZZ_TARGETS)" \
+	    RUSTC_BOOTSTRAP=1 fuzz/run-all.sh

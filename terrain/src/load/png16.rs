@@ -58,6 +58,18 @@ pub(super) fn load_png(path: &Path) -> Result<Heightfield, DemError> {
             format!("decoder reports {total} bytes for {width}×{height} 16-bit samples"),
         ));
     }
+    // A header may claim any size; deflate packs at most ~1032 bytes into one, so a claim
+    // beyond that ratio is refused before allocating (a 91-byte file could ask for petabytes).
+    let most = (bytes.len() as u64).saturating_mul(1100);
+    if total > most {
+        return Err(size_err(
+            path,
+            format!(
+                "header claims {width}×{height} 16-bit samples ({total} bytes), more than a {}-byte PNG can hold",
+                bytes.len()
+            ),
+        ));
+    }
     let mut buf = vec![0u8; total as usize];
     decoder
         .read_image(&mut buf)
