@@ -4,7 +4,7 @@
 //! is missing (CI installs it: scripts/setup-debian.sh).
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
@@ -27,8 +27,16 @@ fn aerie() -> &'static Path {
     })
 }
 
-fn listen(path: &Path, seconds: &str, json: &Path) -> std::process::Child {
-    Command::new(aerie())
+/// `aerie listen` on the shm file, with its stderr read by a thread so the test can wait until
+/// it reads (a loaded machine can take seconds to start the process).
+struct Listener {
+    child: std::process::Child,
+    ready: std::sync::mpsc::Receiver<()>,
+    stderr: std::thread::JoinHandle<String>,
+}
+
+fn listen(path: &Path, seconds: &str, json: &Path) -> Listener {
+    let mut child = Command::new(aerie())
         .args(["listen", "--protocol", "shm", "--shm-name"])
         .arg(path)
         .args(["--seconds", seconds, "--json"])
@@ -36,17 +44,45 @@ fn listen(path: &Path, seconds: &str, json: &Path) -> std::process::Child {
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .expect("start aerie listen")
+        .expect("start aerie listen");
+    let err = child.stderr.take().expect("piped stderr");
+    let (tx, ready) = std::sync::mpsc::channel();
+    let stderr = std::thread::spawn(move || {
+        use std::io::BufRead;
+        let mut all = String::new();
+        for line in std::io::BufReader::new(err).lines().map_while(Result::ok) {
+            if line.starts_with("listening on") {
+                let _ = tx.send(());
+            }
+            all.push_str(&line);
+            all.push('\n');
+        }
+        all
+    });
+    Listener {
+        child,
+        ready,
+        stderr,
+    }
 }
 
-fn summary(out: &Output, json: &Path) -> serde_json::Value {
-    assert!(
-        out.status.success(),
-        "aerie listen: {}\n{}",
-        out.status,
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
+impl Listener {
+    /// Blocks until `aerie listen` says it is listening (or gave up).
+    fn wait_ready(&self) {
+        let _ = self.ready.recv_timeout(Duration::from_secs(120));
+    }
+
+    /// Waits for the exit and returns the JSON summary.
+    fn summary(self, json: &Path) -> serde_json::Value {
+        let out = self.child.wait_with_output().unwrap();
+        let stderr = self.stderr.join().unwrap_or_default();
+        assert!(
+            out.status.success(),
+            "aerie listen: {}\n{stderr}",
+            out.status
+        );
+        serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
+    }
 }
 
 fn u(v: &serde_json::Value, key: &str) -> u64 {
@@ -90,7 +126,7 @@ fn a_cxx11_writer_from_the_header_feeds_aerie_listen() {
     // aerie waits for the file; the writer creates it and writes 10,000 poses (~1 s).
     let status = Command::new(&exe).arg(&file).arg("10000").status().unwrap();
     assert!(status.success(), "writer: {status}");
-    let s = summary(&child.wait_with_output().unwrap(), &json);
+    let s = child.summary(&json);
     eprintln!("aerie listen fed by the C++11 writer: {s}");
     assert!(u(&s, "accepted") > 0, "{s}");
     assert_eq!(s["last_pose"]["frame"].as_u64(), Some(10_000), "{s}");
@@ -121,7 +157,8 @@ fn aerie_listen_survives_a_file_shrinking_under_it() {
     let mut w = ShmWriter::create(&file).unwrap();
     w.write(&pose(1));
     let _ = aerie();
-    let child = listen(&file, "3", &json);
+    let child = listen(&file, "4", &json);
+    child.wait_ready();
     // 20 Hz for 2 s: cut the file, regrow it, write for the rest of the 50 ms.
     let (start, mut k) = (Instant::now(), 1u64);
     for cycle in 0..40u32 {
@@ -140,7 +177,7 @@ fn aerie_listen_survives_a_file_shrinking_under_it() {
             std::thread::sleep(Duration::from_millis(2));
         }
     }
-    let s = summary(&child.wait_with_output().unwrap(), &json);
+    let s = child.summary(&json);
     eprintln!("aerie listen under a shrinking file: {s}");
     assert!(u(&s, "shm_shrinks") >= 10, "{s}");
     assert!(u(&s, "shm_shrinks") <= 40, "{s}");
