@@ -1,7 +1,7 @@
-//! Shared memory against the real `aerie listen` process (issue 16 items 2 and 8): a C++11
-//! writer built from `aerie_pose.h` feeds it, and a writer that shrinks and regrows the file
-//! cannot crash it. Both read the `--json` summary. The C++ test skips with a note when `g++`
-//! is missing (CI installs it: scripts/setup-debian.sh).
+//! Shared memory against the real processes (issue 16 items 2 and 8): a C++11 writer built from
+//! `aerie_pose.h` feeds `aerie listen`, a C99 writer drives `aerie run --headless`, and a writer
+//! that shrinks and regrows the file cannot crash the reader. The compiler tests skip with a note
+//! when `gcc`/`g++` is missing (CI installs them: scripts/setup-debian.sh).
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -193,4 +193,67 @@ fn aerie_listen_survives_a_file_shrinking_under_it() {
         u(d, "unknown") + u(d, "bad_crc") + u(d, "bad_size") + u(d, "bad_version"),
         "{s}"
     );
+}
+
+#[test]
+fn a_c99_writer_from_the_header_drives_aerie_run() {
+    if Command::new("gcc").arg("--version").output().is_err() {
+        eprintln!("skipped: no gcc (CI installs it: scripts/setup-debian.sh)");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let root = aerie_tests::repo_root();
+    let exe = dir.path().join("writer");
+    let out = Command::new("gcc")
+        .args(["-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror", "-I"])
+        .arg(root.join("sim-bridge/include"))
+        .arg(root.join("sim-bridge/tests/c/shm_writer.c"))
+        .arg("-o")
+        .arg(&exe)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let dem = dir.path().join("N47E011.hgt.zip");
+    std::fs::copy(aerie_tests::demo_dem(), &dem).unwrap();
+    let (file, stats) = (dir.path().join("pose"), dir.path().join("stats.csv"));
+    // The writer starts first and holds its last pose; the IG then renders 30 frames from it.
+    let status = Command::new(&exe).arg(&file).arg("3000").status().unwrap();
+    assert!(status.success(), "writer: {status}");
+    let run = Command::new(aerie())
+        .args(["run", "--headless", "--size", "64x36", "--frames", "30"])
+        .arg("--dem")
+        .arg(&dem)
+        .args(["--protocol", "shm", "--shm-name"])
+        .arg(&file)
+        .arg("--stats")
+        .arg(&stats)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "aerie run: {}\n{}",
+        run.status,
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let csv = std::fs::read_to_string(&stats).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 30, "{csv}");
+    for r in &rows {
+        // Every frame drew the C writer's last pose (frame 3000 at x = 3000, y = −6000 m).
+        assert_eq!(r[col("host_frame")], "3000", "{csv}");
+        let x: f64 = r[col("x_m")].parse().unwrap();
+        let y: f64 = r[col("y_m")].parse().unwrap();
+        assert!(x.is_finite() && y.is_finite(), "{csv}");
+        assert!(
+            (x - 3000.0).abs() < 1000.0 && (y + 6000.0).abs() < 1000.0,
+            "{csv}"
+        );
+    }
 }
