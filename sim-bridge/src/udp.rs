@@ -350,7 +350,7 @@ fn receive_loop(
         let bytes = &buf[..n];
         if let Some(r) = recorder.as_mut() {
             if let Err(e) = r.record(arrival, bytes) {
-                tracing::error!("recording stopped: {e}");
+                tracing::error!("{e}");
                 record_error = Some(e.to_string());
                 recorder = None;
             }
