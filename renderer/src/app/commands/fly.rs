@@ -209,7 +209,7 @@ fn fly_one_camera(
     });
     let done = write_csv_and_summary(&a.out, &csv, summary, &mut failures);
     println!(
-        "{} frames ({} PNGs) in {}: frame median {:.1} ms, p99 {:.1} ms, max {:.1} ms (GPU median {:.1} ms); triangles median {:.0}; {} tiles refined, {} late; validation clean",
+        "{} frames ({} PNGs) in {}: frame median {:.1} ms, p99 {:.1} ms, max {:.1} ms (GPU median {:.1} ms); triangles median {:.0}; {} tiles refined, {} late; validation clean{}",
         a.frames,
         pngs,
         a.out.display(),
@@ -219,9 +219,20 @@ fn fly_one_camera(
         percentile(&gpu_ms, 0.5),
         percentile(&triangles, 0.5),
         refined,
-        late
+        late,
+        not_written_note(&done),
     );
     done
+}
+
+/// Said at the end of the one-line summary when some files were not written, so the line does
+/// not read like a success before the error that follows it.
+fn not_written_note(done: &Result<(), Failure>) -> &'static str {
+    if done.is_err() {
+        "; some files were NOT written (below)"
+    } else {
+        ""
+    }
 }
 
 /// The end of every flight: `frames.csv`, then `summary.json` with `failed_frames` and
@@ -512,7 +523,7 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
     });
     let done = write_csv_and_summary(&a.out, &csv, summary, &mut failures);
     println!(
-        "{} frames × {} channels ({} PNGs, {} panoramas {}x{}) in {}: frame median {:.1} ms, max {:.1} ms (all channels); validation clean",
+        "{} frames × {} channels ({} PNGs, {} panoramas {}x{}) in {}: frame median {:.1} ms, max {:.1} ms (all channels); validation clean{}",
         a.frames,
         chans.len(),
         pngs,
@@ -522,6 +533,7 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
         a.out.display(),
         percentile(&frame_ms, 0.5),
         percentile(&frame_ms, 1.0),
+        not_written_note(&done),
     );
     done
 }
