@@ -1,6 +1,6 @@
 //! The architecture holds (ARCHITECTURE.md): no file imports a file that imports it back, the
 //! renderer's layers import only downwards, no source file over 800 lines, and the terrain
-//! decisions build without any Vulkan or windowing crate.
+//! decisions build without any Vulkan or windowing crate; the frame plan names no Vulkan type.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -174,4 +174,23 @@ fn commands_do_not_import_the_command_enum() {
         .map(|(from, _)| from)
         .collect();
     assert!(importers.is_empty(), "import app/cli.rs: {importers:?}");
+}
+
+#[test]
+fn the_frame_plan_names_no_vulkan_type() {
+    // The decisions of a frame are plain data (ARCHITECTURE.md "What is pure"): no `ash` import
+    // and no `vk::` type in their code (doc comments may mention what the recording makes).
+    let root = repo_root().join("renderer/src/render");
+    for file in ["plan.rs", "jobs.rs", "stats.rs", "uniforms.rs"] {
+        let text = std::fs::read_to_string(root.join(file)).unwrap();
+        assert!(text.lines().count() > 20, "{file} is not the plan I know");
+        for (i, line) in text.lines().enumerate() {
+            let code = line.split("//").next().unwrap_or("");
+            assert!(
+                !code.contains("ash::") && !code.contains("vk::") && !code.contains("use ash"),
+                "render/{file}:{}: {line}",
+                i + 1
+            );
+        }
+    }
 }
