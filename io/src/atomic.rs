@@ -173,9 +173,9 @@ impl AtomicFile {
             self.fail("allocate", &e);
             return Err(self.error("allocate", e));
         }
-        // SAFETY: the temporary was created by this process with O_EXCL under a name no one
-        // else uses, its `len` bytes are allocated (posix_fallocate), and it is not resized
-        // while the map lives (the map must be dropped before `commit`, which takes `self`).
+        // The temporary was created by this process with O_EXCL under a name no one else uses,
+        // and it is not resized while the map lives (the map is dropped before `commit`).
+        // SAFETY: its `len` bytes are allocated (posix_fallocate) and nobody else maps or resizes it.
         let map = unsafe {
             memmap2::MmapOptions::new()
                 .len(len as usize)

@@ -115,8 +115,8 @@ fn allocate(f: &File, len: u64) -> io::Result<()> {
     let len = libc::off_t::try_from(len)
         .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "file too large"))?;
     loop {
-        // SAFETY: a valid open descriptor owned by `f` for the duration of the call; the
-        // function reads no memory of ours.
+        // The function reads no memory of ours.
+        // SAFETY: a valid open descriptor owned by `f` for the duration of the call.
         let r = unsafe { libc::posix_fallocate(f.as_raw_fd(), 0, len) };
         match r {
             0 => return Ok(()),

@@ -17,9 +17,10 @@ struct Shared<T> {
     middle: AtomicU8,
 }
 
-// SAFETY: each slot is owned by exactly one side at a time — the producer's back slot, the
-// consumer's front slot, and the middle slot owned by neither (only its index moves, through
-// the `middle` atomic with acquire/release ordering). Values cross threads, so `T: Send`.
+// Each slot is owned by exactly one side at a time — the producer's back slot, the consumer's
+// front slot, and the middle slot owned by neither (only its index moves, through the `middle`
+// atomic with acquire/release ordering). Values cross threads, so `T: Send`.
+// SAFETY: no slot is ever reached from two threads at once.
 unsafe impl<T: Send> Sync for Shared<T> {}
 
 /// Producer side: publishes values.
@@ -81,9 +82,10 @@ impl<T: Send> Subscriber<T> {
     }
 }
 
-// SAFETY: each side only touches the slot it owns; moving a side to another thread moves
-// that ownership with it.
+// Moving a side to another thread moves that ownership with it.
+// SAFETY: each side only touches the slot it owns.
 unsafe impl<T: Send> Send for Publisher<T> {}
+// SAFETY: as for `Publisher`: the subscriber only touches the slot it owns.
 unsafe impl<T: Send> Send for Subscriber<T> {}
 
 #[cfg(test)]

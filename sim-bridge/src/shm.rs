@@ -94,9 +94,9 @@ struct Words {
 impl Words {
     fn word(&self, i: usize) -> &AtomicU64 {
         assert!(i < WORDS && self.map.len() >= SHM_SIZE);
-        // SAFETY: the mapping is at least SHM_SIZE bytes, page-aligned (so every 8-byte offset
-        // is aligned for AtomicU64), lives as long as `self`, and is only ever accessed through
-        // atomics on our side.
+        // The mapping is at least SHM_SIZE bytes and page-aligned (every 8-byte offset is aligned
+        // for AtomicU64), lives as long as `self` and is only accessed through atomics here.
+        // SAFETY: the pointer is valid, aligned and atomically accessed for the reference's life.
         unsafe { AtomicU64::from_ptr(self.map.as_mut_ptr().add(i * 8).cast::<u64>()) }
     }
 

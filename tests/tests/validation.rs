@@ -14,8 +14,9 @@ fn validation_layer_counts_a_deliberate_error() {
     let info = vk::BufferCreateInfo::default()
         .size(0)
         .usage(vk::BufferUsageFlags::TRANSFER_SRC);
-    // SAFETY: `device` is live; the invalid size is the point (the layer must report it), and a
-    // buffer the driver made anyway is destroyed at once, before the device.
+    // The invalid size is the point (the layer must report it), and a buffer the driver made anyway
+    // is destroyed at once, before the device.
+    // SAFETY: `device` is live.
     if let Ok(b) = unsafe { device.raw.create_buffer(&info, None) } {
         // SAFETY: `b` was created by `device` above and is used by nothing.
         unsafe { device.raw.destroy_buffer(b, None) };

@@ -674,9 +674,9 @@ impl FakeUser {
     /// The mapped top-level window at (x, y) of size w×h.
     fn find(&self, x: i32, y: i32, w: i32, h: i32) -> Option<u64> {
         use x11_dl::xlib;
-        // SAFETY: `display` is an open connection (checked non-null in `open`, closed only in
-        // Drop); XQueryTree's `children` holds `n` windows until XFree, which we copy first;
-        // XWindowAttributes is plain data that XGetWindowAttributes fills.
+        // XQueryTree's `children` holds `n` windows until XFree, which we copy first; XWindowAttributes is plain data that
+        // XGetWindowAttributes fills.
+        // SAFETY: `display` is an open connection (checked non-null in `open`, closed only in Drop).
         unsafe {
             let root = (self.xlib.XDefaultRootWindow)(self.display);
             let (mut r, mut p, mut children, mut n) = (0, 0, std::ptr::null_mut(), 0);
@@ -722,8 +722,9 @@ impl FakeUser {
 
     fn close(&self, window: u64) {
         use x11_dl::xlib;
-        // SAFETY: `display` is an open connection (see `find`); atom names are NUL-terminated C
-        // string literals; the event is a fully initialised ClientMessage that XSendEvent reads.
+        // Atom names are NUL-terminated C string literals; the event is a fully initialised
+        // ClientMessage that XSendEvent reads.
+        // SAFETY: `display` is an open connection (see `find`).
         unsafe {
             let atom = |name: &std::ffi::CStr| {
                 (self.xlib.XInternAtom)(self.display, name.as_ptr(), xlib::False)
@@ -760,8 +761,8 @@ impl FakeUser {
     /// restores it.
     fn set_minimised(&self, window: u64, minimised: bool) {
         use x11_dl::xlib;
-        // SAFETY: `display` is an open connection (see `find`); the property data is one atom
-        // (32-bit format, 1 element) that outlives the call.
+        // The property data is one atom (32-bit format, 1 element) that outlives the call.
+        // SAFETY: `display` is an open connection (see `find`).
         unsafe {
             let atom = |name: &std::ffi::CStr| {
                 (self.xlib.XInternAtom)(self.display, name.as_ptr(), xlib::False)

@@ -463,9 +463,10 @@ impl RecordParts<'_> {
                 dst_offset: 0,
                 size: size as u64,
             };
-            // SAFETY: `cmd` is recording; `size` bytes were staged at `offset` of the live
-            // staging buffer, and `dst` is this frame's live buffer, sized for them (the
-            // instance buffer was grown to the plan's count before staging).
+            // `size` bytes were staged at `offset` of the live staging buffer, and `dst` is this
+            // frame's live buffer, sized for them (the instance buffer was grown to the plan's
+            // count before staging).
+            // SAFETY: `cmd` is recording.
             unsafe { d.raw.cmd_copy_buffer(cmd, src, dst, &[region]) }
         };
         copy(

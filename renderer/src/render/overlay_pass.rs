@@ -67,9 +67,10 @@ pub fn record_panel_copy(
             height: h,
             depth: 1,
         });
-    // SAFETY: `cmd` is recording; `image` is the live colour target, in TRANSFER_DST_OPTIMAL
-    // after the barrier above; the region is clipped to the image and reads `panel.width ×
-    // panel.height` texels the caller staged at `offset` of the live buffer `src`.
+    // `image` is the live colour target, in TRANSFER_DST_OPTIMAL after the barrier above; the
+    // region is clipped to the image and reads `panel.width × panel.height` texels the caller
+    // staged at `offset` of the live buffer `src`.
+    // SAFETY: `cmd` is recording.
     unsafe {
         device.raw.cmd_copy_buffer_to_image(
             cmd,

@@ -80,9 +80,10 @@ pub fn write_descriptors(
             .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
             .image_info(&pool_info),
     ];
-    // SAFETY: `set` was allocated from this frame's pool, whose previous submission has
-    // completed (the frame context), so no pending command buffer uses it; every buffer, view
-    // and the sampler written are live, and the info arrays outlive the call.
+    // `set` comes from this frame's pool, whose previous submission has completed (the frame
+    // context); every buffer, view and the sampler written are live; the info arrays outlive
+    // the call.
+    // SAFETY: no pending command buffer uses `set`, and every handle written is live.
     unsafe { d.raw.update_descriptor_sets(&writes, &[]) };
 }
 
@@ -132,10 +133,10 @@ pub fn record_terrain_pass(
         .layer_count(1)
         .color_attachments(&colour_attachment)
         .depth_attachment(&depth_attachment);
-    // SAFETY: `cmd` is recording outside any rendering; the target's views are live and in the
-    // attachment layouts named (its `record_begin` put them there); the pipeline, `set` (written
-    // for this frame), the index buffer and `indirect` (draw_count commands of the stride
-    // given, staged this frame) are live.
+    // The target's views are live and in the attachment layouts named (its `record_begin` put them
+    // there); the pipeline, `set` (written for this frame), the index buffer and `indirect`
+    // (draw_count commands of the stride given, staged this frame) are live.
+    // SAFETY: `cmd` is recording outside any rendering.
     unsafe {
         d.raw.cmd_begin_rendering(cmd, &rendering);
         d.raw.cmd_set_viewport(

@@ -74,9 +74,10 @@ pub fn record_image_copies(
     }
     let colour = vk::ImageAspectFlags::COLOR;
     image_barrier(device, cmd, image, colour, &SAMPLED, &COPY_DST, false);
-    // SAFETY: `cmd` is recording; `image` is live and in TRANSFER_DST_OPTIMAL after the barrier;
-    // every region was staged inside `staging` by `stage_gather` and lies inside the image
-    // (the plan's texel rectangles are within the texture side and its layers).
+    // `image` is live and in TRANSFER_DST_OPTIMAL after the barrier; every region was staged inside
+    // `staging` by `stage_gather` and lies inside the image (the plan's texel rectangles are within
+    // the texture side and its layers).
+    // SAFETY: `cmd` is recording.
     unsafe {
         device.raw.cmd_copy_buffer_to_image(
             cmd,
@@ -135,8 +136,9 @@ pub fn stream_buffer(
             dst_offset: done as u64,
             size: n as u64,
         };
-        // SAFETY: `cmd` is recording; `n` bytes were staged at `offset` of the live staging
-        // buffer, and `dst` (live, TRANSFER_DST) is at least `bytes.len()` long (the caller's).
+        // `n` bytes were staged at `offset` of the live staging buffer, and `dst` (live,
+        // TRANSFER_DST) is at least `bytes.len()` long (the caller's).
+        // SAFETY: `cmd` is recording.
         unsafe { device.raw.cmd_copy_buffer(cmd, src, dst, &[region]) };
         memory_barrier(
             device,

@@ -35,9 +35,9 @@ pub fn image_barrier(
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .image(image)
         .subresource_range(subresource_range(aspect));
-    // SAFETY: `device.raw` is a live device (a `Device` is usable until its `destroy`); `cmd` is
-    // recording on it and `image` is one of its images (this function's contract above). The
-    // barrier struct and the slice outlive the call, and the layouts come from the named uses.
+    // `cmd` is recording on it and `image` is one of its images (this function's contract above).
+    // The barrier struct and the slice outlive the call, and the layouts come from the named uses.
+    // SAFETY: `device.raw` is a live device (a `Device` is usable until its `destroy`).
     unsafe {
         device.raw.cmd_pipeline_barrier(
             cmd,
@@ -58,8 +58,8 @@ pub fn memory_barrier(device: &Device, cmd: vk::CommandBuffer, prev: &[Access], 
     let barrier = vk::MemoryBarrier::default()
         .src_access_mask(b.src_access)
         .dst_access_mask(b.dst_access);
-    // SAFETY: as in `image_barrier`: the device is live and `cmd` is recording on it; a global
-    // memory barrier names no resource.
+    // A global memory barrier names no resource.
+    // SAFETY: as in `image_barrier`: the device is live and `cmd` is recording on it.
     unsafe {
         device.raw.cmd_pipeline_barrier(
             cmd,

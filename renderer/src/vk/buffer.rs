@@ -83,8 +83,8 @@ impl Buffer {
     pub fn destroy(&mut self, device: &Device) {
         if let Some(a) = self.allocation.take() {
             let _ = device.allocator().free(a);
-            // SAFETY: no pending submission uses the buffer (the caller's contract above), and
-            // taking the allocation makes this run once per buffer.
+            // Taking the allocation makes this run once per buffer.
+            // SAFETY: no pending submission uses the buffer (the caller's contract above).
             unsafe { device.raw.destroy_buffer(self.raw, None) };
             self.raw = vk::Buffer::null();
         }

@@ -40,8 +40,8 @@ impl FrameDescriptorPools {
     /// Frees every set of `frame`'s pool: no submission that bound them is in flight.
     pub fn reset(&self, device: &Device, frame: &SignalledFrame) -> Result<(), VkError> {
         let pool = self.pools[frame.index()];
-        // SAFETY: `frame`'s fence has signalled (the token says so), so no command buffer that
-        // uses a set of this pool is pending; the pool is live.
+        // `frame`'s fence has signalled (the token says so); the pool is live.
+        // SAFETY: no command buffer that uses a set of this pool is pending.
         unsafe {
             device
                 .raw
@@ -61,8 +61,9 @@ impl FrameDescriptorPools {
         let info = vk::DescriptorSetAllocateInfo::default()
             .descriptor_pool(self.pools[frame.index()])
             .set_layouts(&layouts);
-        // SAFETY: the pool and `layout` are live; only the thread holding `frame` allocates
-        // from this pool (pools are externally synchronised).
+        // Only the thread holding `frame` allocates from this pool (pools are externally
+        // synchronised).
+        // SAFETY: the pool and `layout` are live.
         unsafe { device.raw.allocate_descriptor_sets(&info) }
             .call("vkAllocateDescriptorSets")
             .map(|s| s[0])
@@ -71,8 +72,8 @@ impl FrameDescriptorPools {
     /// Call after the device is idle.
     pub fn destroy(&mut self, device: &Device) {
         for p in self.pools.drain(..) {
-            // SAFETY: the device is idle (caller), so no set of `p` is in use; `p` is dropped
-            // from the list, so it is destroyed once.
+            // `p` is dropped from the list, so it is destroyed once.
+            // SAFETY: the device is idle (caller), so no set of `p` is in use.
             unsafe { device.raw.destroy_descriptor_pool(p, None) };
         }
     }

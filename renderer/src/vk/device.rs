@@ -49,8 +49,9 @@ fn candidate(
     pd: vk::PhysicalDevice,
     desc: &DeviceDesc,
 ) -> (DeviceCandidate, Option<u32>) {
-    // SAFETY (every call in this function): `instance` is live (borrowed from an `Instance`
-    // not yet destroyed) and `pd` was enumerated from it; the queries only fill plain structs.
+    // Every call in this function: `instance` is borrowed from an `Instance` not yet destroyed
+    // and `pd` was enumerated from it; the queries only fill plain structs.
+    // SAFETY: `instance` is live and `pd` is one of its physical devices.
     let props = unsafe { instance.get_physical_device_properties(pd) };
     let name = props
         .device_name_as_c_str()
@@ -63,8 +64,8 @@ fn candidate(
         .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS))
         .map(|i| i as u32);
     let swapchain_extension = desc.swapchain.then(|| {
-        // SAFETY: see above.
         let exts =
+            // SAFETY: see the top of this function.
             unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
         exts.iter()
             .any(|e| e.extension_name_as_c_str().ok() == Some(ash::khr::swapchain::NAME))
@@ -74,8 +75,9 @@ fn candidate(
     let dynamic_rendering = props.api_version >= vk::API_VERSION_1_3 && {
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
         let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
-        // SAFETY: see above; the device is 1.3, so the 1.3 feature struct in the chain is
-        // known to it, and both structs outlive the call.
+        // The device is 1.3, so the 1.3 feature struct in the chain is known to it, and both
+        // structs outlive the call.
+        // SAFETY: see above.
         unsafe { instance.get_physical_device_features2(pd, &mut f2) };
         f13.dynamic_rendering == vk::TRUE
     };
@@ -147,9 +149,10 @@ impl Device {
             .enabled_extension_names(&extensions)
             .enabled_features(&features)
             .push_next(&mut f13);
-        // SAFETY: the instance is live; `physical` is its device and was found suitable, so it
-        // has the queue family, the features and (when asked) the extension enabled here; every
-        // array and chained struct the create-info points to lives until the call returns.
+        // `physical` is its device and was found suitable, so it has the queue family, the features
+        // and (when asked) the extension enabled here; every array and chained struct the
+        // create-info points to lives until the call returns.
+        // SAFETY: the instance is live.
         let raw = unsafe { instance.raw.create_device(physical, &create_info, None) }
             .call("vkCreateDevice")?;
         // SAFETY: queue 0 of `queue_family` was requested in `queue_infos` above.
@@ -198,8 +201,9 @@ impl Device {
         if self.destroyed {
             return;
         }
-        // SAFETY: the device is live (not destroyed: checked above); waiting touches no object.
-        // Teardown path: a lost device leaves nothing better to do than continue destroying.
+        // Waiting touches no object. Teardown path: a lost device leaves nothing better to do than
+        // continue destroying.
+        // SAFETY: the device is live (not destroyed: checked above).
         let _ = unsafe { self.raw.device_wait_idle() };
     }
 
@@ -213,9 +217,9 @@ impl Device {
         }
         self.wait_idle();
         self.destroyed = true;
-        // SAFETY: `destroyed` was false, so the allocator is still there and is dropped exactly
-        // once; nothing reads it afterwards (`allocator()` asserts). The device is idle, its
-        // memory blocks were freed by that drop, and it is destroyed once, after them.
+        // Nothing reads it afterwards (`allocator()` asserts). The device is idle, its memory blocks were freed by that drop, and
+        // it is destroyed once, after them.
+        // SAFETY: `destroyed` was false, so the allocator is still there and is dropped exactly once.
         unsafe {
             ManuallyDrop::drop(&mut self.allocator);
             self.raw.destroy_device(None);

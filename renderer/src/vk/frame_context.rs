@@ -228,8 +228,8 @@ impl InFlight {
     }
 
     fn destroy(mut self, device: &Device) {
-        // SAFETY: waiting first makes the last submission complete, so the fence, the pool's
-        // command buffer and the deferred objects are unused when destroyed; `self` is consumed.
+        // Waiting first makes the last submission complete; `self` is consumed.
+        // SAFETY: the fence, the pool's command buffer and the deferred objects are unused here.
         unsafe {
             let _ = device.raw.wait_for_fences(&[self.fence], true, u64::MAX);
             device.raw.destroy_fence(self.fence, None);
@@ -281,8 +281,8 @@ impl FrameContext<'_> {
     /// Resets the fence and the command pool and begins the command buffer.
     pub fn begin_recording(&mut self, device: &Device) -> Result<vk::CommandBuffer, VkError> {
         let f = &self.ring.frames[self.frame.index()];
-        // SAFETY: the fence has signalled (the context holds the proof), so the command buffer
-        // is not pending and the fence and pool may be reset; recording begins on a reset buffer.
+        // The context holds the proof that the fence signalled; recording begins on a reset buffer.
+        // SAFETY: the command buffer is not pending, so the fence and pool may be reset.
         unsafe {
             device.raw.reset_fences(&[f.fence]).call("vkResetFences")?;
             device
@@ -332,8 +332,8 @@ impl FrameContext<'_> {
         let i = self.frame.index();
         let ring = self.ring;
         let f = &mut ring.frames[i];
-        // SAFETY: `f.cmd` is recording (begun by `begin_recording`), the fence was reset there
-        // and is unsignalled, and the semaphore slices outlive the call.
+        // `f.cmd` was begun by `begin_recording`, which also reset the fence.
+        // SAFETY: the buffer is recording, the fence unsignalled, the semaphore slices outlive the call.
         unsafe {
             device
                 .raw

@@ -45,8 +45,9 @@ impl Image2d {
             .usage(desc.usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
-        // SAFETY: the device is live; `info` is a fully initialised create-info that outlives the
-        // call (one mip, at least one layer, a 2-D extent).
+        // `info` is a fully initialised create-info that outlives the call (one mip, at least one
+        // layer, a 2-D extent).
+        // SAFETY: the device is live.
         let raw = unsafe { device.raw.create_image(&info, None) }.call("vkCreateImage")?;
         // SAFETY: `raw` was just created on this device and is not yet destroyed.
         let requirements = unsafe { device.raw.get_image_memory_requirements(raw) };
@@ -74,8 +75,9 @@ impl Image2d {
             desc,
             allocation: None,
         };
-        // SAFETY: `raw` is a live, not yet bound image of this device; the allocation was made
-        // for its memory requirements, so memory and offset satisfy size and alignment.
+        // The allocation was made for its memory requirements, so memory and offset satisfy size
+        // and alignment.
+        // SAFETY: `raw` is a live, not yet bound image of this device.
         let bound = unsafe {
             device
                 .raw
@@ -101,8 +103,9 @@ impl Image2d {
                 layer_count: desc.layers.max(1),
                 ..subresource_range(desc.aspect)
             });
-        // SAFETY: `raw` is live and bound to memory; the view's format and range match its
-        // creation (same format, its aspect, its layer count).
+        // The view's format and range match its creation (same format, its aspect, its layer
+        // count).
+        // SAFETY: `raw` is live and bound to memory.
         match unsafe { device.raw.create_image_view(&view_info, None) } {
             Ok(v) => image.view = v,
             Err(result) => {
@@ -121,14 +124,15 @@ impl Image2d {
     /// `Device::wait_idle`).
     pub fn destroy(&mut self, device: &Device) {
         if self.view != vk::ImageView::null() {
-            // SAFETY: the view was created by `new` on this device and is destroyed once (nulled
-            // right after); no command using it is pending (see above).
+            // No command using it is pending (see above).
+            // SAFETY: the view was created by `new` on this device and is destroyed once (nulled right after).
             unsafe { device.raw.destroy_image_view(self.view, None) };
             self.view = vk::ImageView::null();
         }
         if let Some(a) = self.allocation.take() {
-            // SAFETY: as for the view; the allocation is taken, so this runs once per image, and
-            // the memory is freed only after the image bound to it is gone.
+            // The allocation is taken, so this runs once per image, and the memory is freed only
+            // after the image bound to it is gone.
+            // SAFETY: as for the view.
             unsafe { device.raw.destroy_image(self.raw, None) };
             let _ = device.allocator().free(a);
             self.raw = vk::Image::null();

@@ -111,14 +111,14 @@ unsafe extern "system" fn debug_callback(
     let message = if data.is_null() {
         String::from("(no message)")
     } else {
-        // SAFETY: non-null `data` is valid for this call (the layer's contract above), and its
-        // message is a NUL-terminated string (or null, which `message_as_c_str` handles).
+        // The layer's contract (above) makes non-null `data` valid for this call.
+        // SAFETY: its message is a NUL-terminated string or null (`message_as_c_str` handles it).
         unsafe { (*data).message_as_c_str() }
             .map(|m| m.to_string_lossy().into_owned())
             .unwrap_or_default()
     };
-    // SAFETY: `user` is null or points to the live `ValidationCounters` (contract above); only
-    // shared references are made, and the counters are atomics and a mutex.
+    // Only shared references are made, and the counters are atomics and a mutex.
+    // SAFETY: `user` is null or points to the live `ValidationCounters` (contract above).
     let counters = unsafe { (user as *const ValidationCounters).as_ref() };
     count_message(counters, severity, kind, message);
     vk::FALSE
@@ -134,8 +134,9 @@ impl Instance {
     /// As [`Self::new`], also enabling `extra` instance extensions (e.g. the surface extensions
     /// `ash_window::enumerate_required_extensions` names for a window).
     pub fn with_extensions(validation: bool, extra: &[&CStr]) -> Result<Self, VkError> {
-        // SAFETY: loading the system Vulkan loader runs its initialisation; the `Entry` keeps the
-        // library loaded for as long as it lives (as long as the instance: see `Instance`).
+        // The `Entry` keeps the library loaded for as long as it lives (as long as the instance:
+        // see `Instance`).
+        // SAFETY: loading the system Vulkan loader runs its initialisation.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::Loader(e.to_string()))?;
         let counters = Arc::new(ValidationCounters::default());
 
@@ -182,16 +183,16 @@ impl Instance {
             // Also catches messages from vkCreateInstance / vkDestroyInstance themselves.
             create_info = create_info.push_next(&mut messenger_info);
         }
-        // SAFETY: the create-info and every name, layer and chained struct it points to live
-        // until the call returns; the layer was found above and the extensions are the
-        // caller's (window-system ones) plus debug-utils, which the validation layer provides.
-        // The messenger's user data (`counters`) is kept alive by `Self`.
+        // The layer was found above and the extensions are the caller's (window-system ones) plus debug-utils, which the
+        // validation layer provides. The messenger's user data (`counters`) is kept alive by `Self`.
+        // SAFETY: the create-info and every name, layer and chained struct it points to live until the call returns.
         let raw = unsafe { entry.create_instance(&create_info, None) }.call("vkCreateInstance")?;
 
         let debug = if validation {
             let loader = ext::debug_utils::Instance::new(&entry, &raw);
-            // SAFETY: `raw` is live and has the debug-utils extension enabled; the user data
-            // points into `counters`, which `Self` keeps until the messenger is destroyed.
+            // The user data points into `counters`, which `Self` keeps until the messenger is
+            // destroyed.
+            // SAFETY: `raw` is live and has the debug-utils extension enabled.
             let messenger = unsafe { loader.create_debug_utils_messenger(&messenger_info, None) };
             match messenger {
                 Ok(m) => Some((loader, m)),
@@ -230,12 +231,12 @@ impl Instance {
         }
         self.destroyed = true;
         if let Some((loader, messenger)) = self.debug.take() {
-            // SAFETY: the messenger was created on this live instance and is taken, so it is
-            // destroyed once; after this the layer no longer calls back into `counters`.
+            // After this the layer no longer calls back into `counters`.
+            // SAFETY: the messenger was created on this live instance and is taken, so it is destroyed once.
             unsafe { loader.destroy_debug_utils_messenger(messenger, None) };
         }
-        // SAFETY: `destroyed` was false, so the instance is live and destroyed exactly once;
-        // its children were destroyed by their owners first (contract above).
+        // Its children were destroyed by their owners first (contract above).
+        // SAFETY: `destroyed` was false, so the instance is live and destroyed exactly once.
         unsafe { self.raw.destroy_instance(None) };
     }
 }

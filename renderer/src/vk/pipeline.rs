@@ -30,8 +30,9 @@ fn shader_module(device: &Device, spv: &[u8]) -> Result<vk::ShaderModule, VkErro
     let words = ash::util::read_spv(&mut std::io::Cursor::new(spv))
         .map_err(|e| VkError::Other(format!("embedded SPIR-V is malformed: {e}")))?;
     let info = vk::ShaderModuleCreateInfo::default().code(&words);
-    // SAFETY: the device is live; `read_spv` gave aligned, whole SPIR-V words (it checks the
-    // magic number and length), and the shaders were validated by shaderc at build time.
+    // `read_spv` gave aligned, whole SPIR-V words (it checks the magic number and length), and the
+    // shaders were validated by shaderc at build time.
+    // SAFETY: the device is live.
     unsafe { device.raw.create_shader_module(&info, None) }.call("vkCreateShaderModule")
 }
 
@@ -59,8 +60,8 @@ impl TerrainPipeline {
             .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
             .max_lod(0.0);
-        // SAFETY: the device is live; the create-info is complete and outlives the call.
         self.height_sampler =
+            // SAFETY: the device is live; the create-info is complete and outlives the call.
             unsafe { device.raw.create_sampler(&sampler_info, None) }.call("vkCreateSampler")?;
 
         let vs_fs = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
@@ -106,8 +107,9 @@ impl TerrainPipeline {
             }
         };
         let result = self.create_pipeline(device, vert, frag);
-        // SAFETY: both modules are live and ours; a pipeline does not need its modules after
-        // creation, so they are destroyed whether or not it succeeded.
+        // A pipeline does not need its modules after creation, so they are destroyed whether or not
+        // it succeeded.
+        // SAFETY: both modules are live and ours.
         unsafe {
             device.raw.destroy_shader_module(frag, None);
             device.raw.destroy_shader_module(vert, None);
@@ -172,9 +174,10 @@ impl TerrainPipeline {
             .dynamic_state(&dynamic)
             .layout(self.layout)
             .push_next(&mut rendering);
-        // SAFETY: the device is live; the modules and the layout were created on it and are
-        // live; every state struct, array and the chained rendering info outlive the call, and
-        // the dynamic-rendering formats match the offscreen target's attachments.
+        // The modules and the layout were created on it and are live; every state struct, array and
+        // the chained rendering info outlive the call, and the dynamic-rendering formats match the
+        // offscreen target's attachments.
+        // SAFETY: the device is live.
         unsafe {
             device
                 .raw
@@ -191,8 +194,8 @@ impl TerrainPipeline {
     /// Idempotent: the handles are nulled, and destroying a null handle does nothing. Commands
     /// using the pipeline must have completed (owners destroy after `Device::wait_idle`).
     pub fn destroy(&mut self, device: &Device) {
-        // SAFETY: each handle is null or was created by `new` on this device and is destroyed
-        // once (all are nulled below); no command using them is pending (contract above).
+        // No command using them is pending (contract above).
+        // SAFETY: each handle is null or was created by `new` on this device and is destroyed once (all are nulled below).
         unsafe {
             device.raw.destroy_pipeline(self.raw, None);
             device.raw.destroy_pipeline_layout(self.layout, None);

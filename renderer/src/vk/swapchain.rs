@@ -66,8 +66,8 @@ impl Surface {
 
     /// Whether the device's queue family can present to this surface.
     pub fn supports_queue(&self, device: &Device) -> Result<bool, VkError> {
-        // SAFETY: the surface is live (see `Surface`), `device.physical` belongs to the same
-        // instance and `queue_family` is one of its families.
+        // `device.physical` belongs to the surface's instance; `queue_family` is one of its families.
+        // SAFETY: the surface is live (see `Surface`) and the query names valid handles.
         unsafe {
             self.loader.get_physical_device_surface_support(
                 device.physical,
@@ -100,8 +100,8 @@ impl Surface {
     /// Idempotent. The swapchain made on it must be destroyed first.
     pub fn destroy(&mut self) {
         if self.raw != vk::SurfaceKHR::null() {
-            // SAFETY: the surface is live and destroyed once (nulled right after); its
-            // swapchain is gone (contract above), so nothing else uses it.
+            // Its swapchain is gone (contract above), so nothing else uses it.
+            // SAFETY: the surface is live and destroyed once (nulled right after).
             unsafe { self.loader.destroy_surface(self.raw, None) };
             self.raw = vk::SurfaceKHR::null();
         }
@@ -186,8 +186,8 @@ fn create_semaphores(device: &Device, n: usize) -> Result<Vec<vk::Semaphore>, Vk
 /// The caller has waited for the device, so no submission or present still uses them.
 fn destroy_semaphores(device: &Device, semaphores: &mut Vec<vk::Semaphore>) {
     for s in semaphores.drain(..) {
-        // SAFETY: `s` was created on this device by `create_semaphores` and is drained, so it
-        // is destroyed once; no pending operation waits on or signals it (contract above).
+        // No pending operation waits on or signals it (contract above).
+        // SAFETY: `s` was created on this device by `create_semaphores` and is drained, so it is destroyed once.
         unsafe { device.raw.destroy_semaphore(s, None) };
     }
 }
@@ -224,9 +224,10 @@ impl Swapchain {
         else {
             return Ok(None);
         };
-        // SAFETY: `raw` was just created by `loader` and no image of it was acquired yet.
-        let unwind =
-            |loader: &khr::swapchain::Device| unsafe { loader.destroy_swapchain(raw, None) };
+        let unwind = |loader: &khr::swapchain::Device| {
+            // SAFETY: `raw` was just created by `loader` and no image of it was acquired yet.
+            unsafe { loader.destroy_swapchain(raw, None) }
+        };
         let rendered = match create_semaphores(device, images.len()) {
             Ok(s) => s,
             Err(e) => {
@@ -326,10 +327,11 @@ impl Swapchain {
             .present_mode(present_mode)
             .clipped(true)
             .old_swapchain(old.unwrap_or_default());
-        // SAFETY: the surface is live and the device's queue family can present to it (checked
-        // in `new`: the surface of a swapchain never changes); extent, image count, usage, format and
-        // present mode were chosen from this surface's capabilities, formats and modes; `old`,
-        // when given, is the live swapchain of this surface, retired by this call.
+        // The device's queue family can present to the surface (checked in `new`: a swapchain's
+        // surface never changes); extent, image count, usage, format and present mode come from
+        // this surface's capabilities, formats and modes; `old`, when given, is this surface's
+        // live swapchain, retired by this call.
+        // SAFETY: the surface and device are live and the create-info is valid for them.
         let raw = unsafe { loader.create_swapchain(&info, None) }.call("vkCreateSwapchainKHR")?;
         // SAFETY: `raw` was just created by `loader`.
         let images = match unsafe { loader.get_swapchain_images(raw) } {
@@ -374,8 +376,8 @@ impl Swapchain {
             return Ok(false);
         };
         self.needs_recreate = false;
-        // SAFETY: the device is idle (waited above), so no frame still uses the old swapchain's
-        // images or presents it; it was retired by `create_raw` and is destroyed once.
+        // It was retired by `create_raw` and is destroyed once.
+        // SAFETY: the device is idle (waited above), so no frame still uses the old swapchain's images or presents it.
         unsafe { self.loader.destroy_swapchain(self.raw, None) };
         self.raw = raw;
         self.format = format;
@@ -394,10 +396,10 @@ impl Swapchain {
             return Ok(Acquire::OutOfDate);
         }
         let semaphore = self.acquire[self.next_acquire];
-        // SAFETY: the swapchain is live (not destroyed: `destroy` empties `images`, checked
-        // above); `semaphore` is unsignaled with no pending wait: the ring is one longer
-        // than the frames in flight and the renderer waits for frame n − FRAMES_IN_FLIGHT
-        // (which consumed it) before acquiring for frame n.
+        // `semaphore` is unsignaled with no pending wait: the ring is one longer than the frames in
+        // flight and the renderer waits for frame n − FRAMES_IN_FLIGHT (which consumed it) before
+        // acquiring for frame n.
+        // SAFETY: the swapchain is live (not destroyed: `destroy` empties `images`, checked above).
         let result = unsafe {
             self.loader
                 .acquire_next_image(self.raw, u64::MAX, semaphore, vk::Fence::null())
@@ -434,9 +436,10 @@ impl Swapchain {
             .wait_semaphores(&wait)
             .swapchains(&swapchains)
             .image_indices(&indices);
-        // SAFETY: the swapchain and `device.queue` are live; `index` was acquired (callers pass
-        // `AcquiredImage::index`) and its `rendered` semaphore is signaled by the submission that
-        // copied into it; the arrays live until the call returns.
+        // `index` was acquired (callers pass `AcquiredImage::index`) and its `rendered` semaphore
+        // is signaled by the submission that copied into it; the arrays live until the call
+        // returns.
+        // SAFETY: the swapchain and `device.queue` are live.
         match unsafe { self.loader.queue_present(device.queue, &info) } {
             Ok(false) => Ok(Presented::Optimal),
             Ok(true) => Ok(Presented::Suboptimal),
@@ -454,8 +457,9 @@ impl Swapchain {
         destroy_semaphores(device, &mut self.acquire);
         destroy_semaphores(device, &mut self.rendered);
         if self.raw != vk::SwapchainKHR::null() {
-            // SAFETY: the device is idle, so no frame or present uses the swapchain; it is
-            // destroyed once (nulled right after), before its surface (see `Surface::destroy`).
+            // It is destroyed once (nulled right after), before its surface (see
+            // `Surface::destroy`).
+            // SAFETY: the device is idle, so no frame or present uses the swapchain.
             unsafe { self.loader.destroy_swapchain(self.raw, None) };
             self.raw = vk::SwapchainKHR::null();
         }

@@ -170,11 +170,10 @@ impl OffscreenTarget {
                     depth: 1,
                 })
         };
-        // SAFETY: the device is live and `cmd` is recording on it (callers record between the
-        // begin and end of a frame's command buffer); the images and buffers are owned by `self`
-        // and live until `destroy`; each buffer holds width * height * 4 bytes, exactly one
-        // RGBA8 or D32 copy of the extent, and the images are in TRANSFER_SRC_OPTIMAL (barriers
-        // above).
+        // Callers record between the begin and end of a frame's command buffer; the images and
+        // buffers are owned by `self` until `destroy`; each buffer holds width × height × 4 bytes,
+        // one RGBA8 or D32 copy of the extent; the images are in TRANSFER_SRC_OPTIMAL (above).
+        // SAFETY: the device is live, `cmd` is recording on it and every copy fits its buffer.
         unsafe {
             device.raw.cmd_copy_image_to_buffer(
                 cmd,
@@ -239,10 +238,11 @@ impl OffscreenTarget {
             dst_subresource: layers,
             dst_offsets: [vk::Offset3D::default(), corner(extent.width, extent.height)],
         };
-        // SAFETY: the device is live and `cmd` is recording on it; `self.colour` is owned by
-        // `self` and in TRANSFER_SRC_OPTIMAL, `image` is the caller's acquired swapchain image
-        // (`PresentTarget::image`, live until the swapchain is recreated, which waits for the
-        // device) in TRANSFER_DST_OPTIMAL (barriers above); the regions lie within both extents.
+        // `self.colour` is owned by `self` and in TRANSFER_SRC_OPTIMAL, `image` is the caller's
+        // acquired swapchain image (`PresentTarget::image`, live until the swapchain is recreated,
+        // which waits for the device) in TRANSFER_DST_OPTIMAL (barriers above); the regions lie
+        // within both extents.
+        // SAFETY: the device is live and `cmd` is recording on it.
         unsafe {
             device.raw.cmd_blit_image(
                 cmd,

@@ -28,8 +28,8 @@ impl GpuTimer {
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(QUERIES_PER_FRAME * FRAMES_IN_FLIGHT as u32);
-        // SAFETY: `device` is live and `info` outlives the call.
         let pool =
+            // SAFETY: `device` is live and `info` outlives the call.
             unsafe { device.raw.create_query_pool(&info, None) }.call("vkCreateQueryPool")?;
         Ok(Self {
             pool,
@@ -43,8 +43,9 @@ impl GpuTimer {
 
     /// Resets `frame`'s queries; recorded at the start of its command buffer.
     pub fn reset(&self, device: &Device, cmd: vk::CommandBuffer, frame: &SignalledFrame) {
-        // SAFETY: `cmd` is recording; the queries reset are `frame`'s, whose previous
-        // submission has completed (the token), so no pending command writes them.
+        // The queries reset are `frame`'s, whose previous submission has completed (the token), so
+        // no pending command writes them.
+        // SAFETY: `cmd` is recording.
         unsafe {
             device.raw.cmd_reset_query_pool(
                 cmd,
@@ -80,8 +81,8 @@ impl GpuTimer {
         query: u32,
         stage: vk::PipelineStageFlags,
     ) {
-        // SAFETY: `cmd` is recording and `query` is inside the pool (frame index < FRAMES_IN_FLIGHT,
-        // slot < QUERIES_PER_FRAME); the query was reset earlier in the same command buffer.
+        // The query was reset earlier in the same command buffer.
+        // SAFETY: `cmd` is recording and `query` is inside the pool (frame index < FRAMES_IN_FLIGHT, slot < QUERIES_PER_FRAME).
         unsafe { device.raw.cmd_write_timestamp(cmd, stage, self.pool, query) };
     }
 
@@ -92,8 +93,8 @@ impl GpuTimer {
             return Ok([0.0; PASS_COUNT as usize]);
         };
         let mut ticks = [0u64; QUERIES_PER_FRAME as usize];
-        // SAFETY: `frame`'s fence has signalled (the token), so its queries are available;
         // `ticks` holds exactly QUERIES_PER_FRAME 64-bit results (TYPE_64).
+        // SAFETY: `frame`'s fence has signalled (the token), so its queries are available.
         unsafe {
             device.raw.get_query_pool_results(
                 self.pool,
@@ -113,8 +114,8 @@ impl GpuTimer {
 
     /// Call after the device is idle.
     pub fn destroy(&mut self, device: &Device) {
-        // SAFETY: the device is idle (caller), so no command uses the pool; it is nulled so a
-        // second destroy is a no-op (destroying VK_NULL_HANDLE is allowed).
+        // It is nulled so a second destroy is a no-op (destroying VK_NULL_HANDLE is allowed).
+        // SAFETY: the device is idle (caller), so no command uses the pool.
         unsafe { device.raw.destroy_query_pool(self.pool, None) };
         self.pool = vk::QueryPool::null();
     }

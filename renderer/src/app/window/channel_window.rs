@@ -120,8 +120,9 @@ pub(crate) fn open_window(
     let (display, handle) = handles.map_err(|e| {
         WindowError::System(format!("channel {:?}: no window handle: {e}", ch.name))
     })?;
-    // SAFETY: the window outlives the surface (ChannelWindow::destroy runs before the window is
-    // dropped) and the renderer's instance has the display's surface extensions.
+    // ChannelWindow::destroy runs before the window is dropped; the renderer's instance has the
+    // display's surface extensions.
+    // SAFETY: the window outlives the surface and the instance can make surfaces for it.
     let mut surface = unsafe { Surface::new(instance, display, handle) }?;
     let present_mode = vk_present_mode(ch.present_mode);
     let checked = (|| {
