@@ -27,6 +27,32 @@ fn aerie() -> &'static Path {
     })
 }
 
+/// Builds `sim-bridge/tests/c/shm_writer.c` from `aerie_pose.h` with `compiler` and `std_args`,
+/// warnings as errors, into `dir`; `None` (with a note) when the compiler is missing.
+fn build_writer(dir: &Path, compiler: &str, std_args: &[&str]) -> Option<PathBuf> {
+    if Command::new(compiler).arg("--version").output().is_err() {
+        eprintln!("skipped: no {compiler} (CI installs it: scripts/setup-debian.sh)");
+        return None;
+    }
+    let root = aerie_tests::repo_root();
+    let exe = dir.join("writer");
+    let out = Command::new(compiler)
+        .args(std_args)
+        .args(["-Wall", "-Wextra", "-pedantic", "-Werror", "-I"])
+        .arg(root.join("sim-bridge/include"))
+        .arg(root.join("sim-bridge/tests/c/shm_writer.c"))
+        .arg("-o")
+        .arg(&exe)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{compiler}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    Some(exe)
+}
+
 /// `aerie listen` on the shm file, with its stderr read by a thread so the test can wait until
 /// it reads (a loaded machine can take seconds to start the process).
 struct Listener {
@@ -91,35 +117,10 @@ fn u(v: &serde_json::Value, key: &str) -> u64 {
 
 #[test]
 fn a_cxx11_writer_from_the_header_feeds_aerie_listen() {
-    if Command::new("g++").arg("--version").output().is_err() {
-        eprintln!("skipped: no g++ (CI installs it: scripts/setup-debian.sh)");
-        return;
-    }
     let dir = tempfile::tempdir().unwrap();
-    let root = aerie_tests::repo_root();
-    let exe = dir.path().join("writer");
-    let out = Command::new("g++")
-        .args([
-            "-x",
-            "c++",
-            "-std=c++11",
-            "-Wall",
-            "-Wextra",
-            "-pedantic",
-            "-Werror",
-            "-I",
-        ])
-        .arg(root.join("sim-bridge/include"))
-        .arg(root.join("sim-bridge/tests/c/shm_writer.c"))
-        .arg("-o")
-        .arg(&exe)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let Some(exe) = build_writer(dir.path(), "g++", &["-x", "c++", "-std=c++11"]) else {
+        return;
+    };
     let (file, json) = (dir.path().join("pose"), dir.path().join("listen.json"));
     let _ = aerie();
     let child = listen(&file, "4", &json);
@@ -197,26 +198,10 @@ fn aerie_listen_survives_a_file_shrinking_under_it() {
 
 #[test]
 fn a_c99_writer_from_the_header_drives_aerie_run() {
-    if Command::new("gcc").arg("--version").output().is_err() {
-        eprintln!("skipped: no gcc (CI installs it: scripts/setup-debian.sh)");
-        return;
-    }
     let dir = tempfile::tempdir().unwrap();
-    let root = aerie_tests::repo_root();
-    let exe = dir.path().join("writer");
-    let out = Command::new("gcc")
-        .args(["-std=c99", "-Wall", "-Wextra", "-pedantic", "-Werror", "-I"])
-        .arg(root.join("sim-bridge/include"))
-        .arg(root.join("sim-bridge/tests/c/shm_writer.c"))
-        .arg("-o")
-        .arg(&exe)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let Some(exe) = build_writer(dir.path(), "gcc", &["-std=c99"]) else {
+        return;
+    };
     let dem = dir.path().join("N47E011.hgt.zip");
     std::fs::copy(aerie_tests::demo_dem(), &dem).unwrap();
     let (file, stats) = (dir.path().join("pose"), dir.path().join("stats.csv"));
