@@ -83,6 +83,19 @@ pub enum PosePosition {
 }
 
 impl PosePosition {
+    /// The three numbers the wire formats carry — (lat, lon, alt) or local (x, y, z) — and
+    /// whether they are local ENU metres (the formats' "local" flag).
+    pub fn wire(&self) -> ([f64; 3], bool) {
+        match *self {
+            PosePosition::Geodetic {
+                lat_deg,
+                lon_deg,
+                alt_m,
+            } => ([lat_deg, lon_deg, alt_m], false),
+            PosePosition::LocalEnu { x, y, z } => ([x, y, z], true),
+        }
+    }
+
     /// The position in world ENU metres; geodetic positions go through `ltp`.
     pub fn to_enu(&self, ltp: &LocalTangentPlane) -> DVec3 {
         match *self {

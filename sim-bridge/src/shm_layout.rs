@@ -179,17 +179,10 @@ pub(crate) fn check_record(v: &[u64; WORDS]) -> Result<(), RecordError> {
 /// The record words of `pose`, checksum included (header and seq left 0).
 pub(crate) fn pose_to_words(pose: &Pose) -> [u64; WORDS] {
     let mut flags = 0;
-    let position = match pose.position {
-        PosePosition::Geodetic {
-            lat_deg,
-            lon_deg,
-            alt_m,
-        } => [lat_deg, lon_deg, alt_m],
-        PosePosition::LocalEnu { x, y, z } => {
-            flags |= SHM_FLAG_LOCAL_ENU;
-            [x, y, z]
-        }
-    };
+    let (position, local) = pose.position.wire();
+    if local {
+        flags |= SHM_FLAG_LOCAL_ENU;
+    }
     if pose.velocity_enu.is_some() {
         flags |= SHM_FLAG_VELOCITY;
     }

@@ -50,17 +50,10 @@ pub struct NativePose {
 /// Encodes `pose` with datagram sequence number `sequence`.
 pub fn encode(pose: &Pose, sequence: u32) -> [u8; SIZE] {
     let mut flags = 0u16;
-    let position = match pose.position {
-        PosePosition::Geodetic {
-            lat_deg,
-            lon_deg,
-            alt_m,
-        } => [lat_deg, lon_deg, alt_m],
-        PosePosition::LocalEnu { x, y, z } => {
-            flags |= FLAG_LOCAL_ENU;
-            [x, y, z]
-        }
-    };
+    let (position, local) = pose.position.wire();
+    if local {
+        flags |= FLAG_LOCAL_ENU;
+    }
     if pose.velocity_enu.is_some() {
         flags |= FLAG_VELOCITY;
     }
