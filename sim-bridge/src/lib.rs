@@ -23,6 +23,7 @@ pub mod geodesy;
 pub mod handoff;
 pub mod ingest;
 pub mod pose;
+pub mod query;
 pub mod record;
 pub mod script;
 pub mod send;
