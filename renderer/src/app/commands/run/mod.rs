@@ -14,6 +14,7 @@
 //! per frame ([`crate::tools::stats_csv`]).
 
 pub mod args;
+pub mod database;
 pub mod headless;
 pub mod plan;
 pub mod poses;
