@@ -7,6 +7,7 @@
 pub mod cigi;
 pub mod fgfs;
 pub mod native;
+mod native_query;
 pub(crate) mod protocol;
 pub(crate) mod wire;
 pub mod xplane;
