@@ -639,8 +639,6 @@ fn listen_and_replay_commands() {
         seconds: Some(1.2),
         json: Some(json.clone()),
         no_cigi_reply: false,
-        xplane: None,
-        xplane_rate: 60,
     };
     let listener = std::thread::spawn(move || listen::run(args));
     std::thread::sleep(Duration::from_millis(300));
