@@ -21,6 +21,9 @@ pub enum DatabaseReport {
     Ready(i8),
     /// Database n is loading (Start of Frame sends −n).
     Loading(i8),
+    /// The host's last request names a number the table does not have (CIGI: −128); the
+    /// current terrain stays drawn.
+    Unavailable,
 }
 
 /// What to do about a host's database request this frame.
@@ -44,6 +47,8 @@ pub struct DatabaseChoice {
     loading: Option<i8>,
     /// The last request acted on (a host repeats its number in every IG Control).
     last_request: i8,
+    /// The last request was for a number the table does not have.
+    unavailable: bool,
 }
 
 impl DatabaseChoice {
@@ -61,6 +66,7 @@ impl DatabaseChoice {
             current,
             loading: None,
             last_request: 0,
+            unavailable: false,
         }
     }
 
@@ -68,6 +74,7 @@ impl DatabaseChoice {
     pub fn report(&self) -> DatabaseReport {
         match self.loading {
             Some(n) => DatabaseReport::Loading(n),
+            None if self.unavailable => DatabaseReport::Unavailable,
             None => DatabaseReport::Ready(self.current),
         }
     }
@@ -79,6 +86,7 @@ impl DatabaseChoice {
             return DatabaseAction::None;
         }
         self.last_request = requested;
+        self.unavailable = false;
         if requested == self.current && self.loading.is_none() {
             return DatabaseAction::None;
         }
@@ -92,7 +100,10 @@ impl DatabaseChoice {
                 self.loading = Some(requested);
                 DatabaseAction::Load(requested, self.base.join(p))
             }
-            None => DatabaseAction::Unknown(requested),
+            None => {
+                self.unavailable = true;
+                DatabaseAction::Unknown(requested)
+            }
         }
     }
 
@@ -203,7 +214,12 @@ mod tests {
         assert_eq!(c.request(-2), DatabaseAction::None);
         assert_eq!(c.request(9), DatabaseAction::Unknown(9));
         assert_eq!(c.request(9), DatabaseAction::None, "told once");
-        assert_eq!(c.report(), DatabaseReport::Ready(0));
+        assert_eq!(c.report(), DatabaseReport::Unavailable);
+        // Asking for the drawn one again clears it.
+        let mut c2 = DatabaseChoice::new(table(), Path::new("/cfg"), Path::new("/cfg/a.hgt"));
+        assert_eq!(c2.request(9), DatabaseAction::Unknown(9));
+        assert_eq!(c2.request(1), DatabaseAction::None);
+        assert_eq!(c2.report(), DatabaseReport::Ready(1));
         assert_eq!(c.configured(), vec![1, 2]);
     }
 
