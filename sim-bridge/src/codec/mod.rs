@@ -1,4 +1,4 @@
-//! Packet codecs: aerie native v1, CIGI 3.3 (host → IG subset), X-Plane `RPOS`, FlightGear
+//! Packet codecs: aerie native v1, CIGI 3.0–3.3 (the IG side), X-Plane `RPOS`, FlightGear
 //! FGNetFDM v24. Layouts are specified in `sim-bridge/PROTOCOL.md`.
 //!
 //! Every decoder takes arbitrary bytes and either returns a validated [`Pose`] (plus whatever
@@ -41,7 +41,8 @@ impl Decoded {
 }
 
 /// Recognises a datagram's protocol from its first bytes (and, for FGNetFDM, its size):
-/// `AERP` → aerie; `RPOS` → X-Plane; packet ID 1 with size 24 (a CIGI 3 IG Control) → CIGI;
+/// `AERP` → aerie; `RPOS` → X-Plane; packet ID 1 with size 24 (a CIGI 3.2/3.3 IG Control) or
+/// 16 (3.0/3.1) → CIGI;
 /// big-endian u32 24 at offset 0, or exactly 408 bytes → FlightGear.
 pub fn detect(bytes: &[u8]) -> Option<Protocol> {
     if bytes.starts_with(&native::MAGIC) {
@@ -50,7 +51,7 @@ pub fn detect(bytes: &[u8]) -> Option<Protocol> {
         Some(Protocol::XPlane)
     } else if bytes.len() >= 2
         && bytes[0] == cigi::IG_CONTROL_ID
-        && bytes[1] == cigi::IG_CONTROL_SIZE
+        && (bytes[1] == cigi::IG_CONTROL_SIZE || bytes[1] == cigi::IG_CONTROL_SIZE_V3_0)
     {
         Some(Protocol::Cigi)
     } else if bytes.starts_with(&fgfs::VERSION.to_be_bytes()) || bytes.len() == fgfs::SIZE {
@@ -122,8 +123,11 @@ mod tests {
         assert_eq!(detect(&x), Some(Protocol::XPlane));
         let f = fgfs::encode(&fgfs::FdmPose::default());
         assert_eq!(detect(&f), Some(Protocol::Fgfs));
-        let c = cigi::IgControl::default().encode(ByteOrder::Big);
-        assert_eq!(detect(&c), Some(Protocol::Cigi));
+        for v in cigi::CigiVersion::ALL {
+            let c = cigi::IgControl::default().encode_as(v, ByteOrder::Big);
+            assert_eq!(detect(&c), Some(Protocol::Cigi), "{v}");
+        }
+        assert_eq!(detect(&[1, 20, 3, 0]), None, "IG Control of neither size");
         assert_eq!(detect(b"hello"), None);
         assert_eq!(detect(&[]), None);
         assert_eq!(
