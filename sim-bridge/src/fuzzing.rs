@@ -78,12 +78,24 @@ pub fn decode_xplane(b: &[u8]) -> bool {
     true
 }
 
-/// FlightGear FGNetFDM: a decoded pose is valid.
+/// FlightGear FGNetFDM (v24 or v25): a decoded pose is valid, the datagram has its version's
+/// size, and the head re-encodes (in that version) to the same bytes.
 pub fn decode_fgfs(b: &[u8]) -> bool {
     let Ok(p) = fgfs::decode(b) else {
         return false;
     };
     assert_eq!(p.validate(), Ok(()));
+    let version = u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+    assert_eq!(fgfs::size_of_version(version), Some(b.len()));
+    let head = fgfs::decode_fields(b).expect("decoded once");
+    let again = if version == fgfs::VERSION_25 {
+        fgfs::encode_v25(&head).to_vec()
+    } else {
+        fgfs::encode(&head).to_vec()
+    };
+    // Bytes 4..8 are FlightGear's padding word, not read; 88.. is the skipped tail.
+    assert_eq!(&again[..4], &b[..4]);
+    assert_eq!(&again[8..88], &b[8..88]);
     true
 }
 
@@ -326,11 +338,15 @@ mod tests {
         seeds.push(("fgfs", "fdm", f.clone()));
         seeds.push(("fgfs", "version23", f_ver));
         seeds.push(("fgfs", "short", f[..100].to_vec()));
+        let f25 = fgfs::encode_v25(&fgfs::FdmPose::from_pose(&pose(false))).to_vec();
+        seeds.push(("fgfs", "fdm_v25", f25.clone()));
+        seeds.push(("fgfs", "v25_as_v24_size", f25[..fgfs::SIZE].to_vec()));
         for (name, b) in [
             ("native", n_geo.clone()),
             ("cigi", cigi_message(ByteOrder::Little, &[])),
             ("xplane", x.clone()),
             ("fgfs", f.clone()),
+            ("fgfs_v25", f25.clone()),
             ("text", b"hello".to_vec()),
         ] {
             seeds.push(("auto", name, b));

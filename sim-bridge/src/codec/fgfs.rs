@@ -1,13 +1,22 @@
-//! FlightGear `--native-fdm=socket,out,<hz>,<host>,<port>,udp`: the `FGNetFDM` struct, version 24
-//! (FlightGear's `src/Network/net_fdm.hxx`), 408 bytes, every field in network byte order
-//! (big-endian; doubles byte-swapped as 8-byte units), angles in radians.
+//! FlightGear `--native-fdm=socket,out,<hz>,<host>,<port>,udp`: the `FGNetFDM` struct of
+//! FlightGear's `src/Network/net_fdm.hxx`, every field in network byte order (big-endian;
+//! doubles byte-swapped as 8-byte units), angles in radians. Two versions are read:
 //!
-//! aerie reads the head of the struct; the rest (engines, fuel, gear, environment, control
-//! surfaces) is skipped:
+//! - **24** (release 2020.3 and earlier since 2013), 408 bytes;
+//! - **25** (the `next` branch since October 2020, commit 4049acd8 "Bump the protocol
+//!   version"), 552 bytes: after `fuel_quantity[4]` (offset 288) it adds `uint32_t
+//!   tank_selected[4]` (304) and four `double[4]` (`capacity_m3` 320, `unusable_m3`,
+//!   `density_kgpm3`, `level_m3`), moving the gear, environment and control surfaces from
+//!   offset 304 to 448; it renames `v_wind_body_*` to `v_body_u/v/w`. Neither version has
+//!   padding beyond the explicit `padding` word. (FlightGear's writer discards the `htonl` of
+//!   `tank_selected`, so those four words go out in the sender's byte order; aerie skips them.)
+//!
+//! Both start with the same head, which is what aerie reads (the rest — engines, fuel, gear,
+//! environment, control surfaces — is skipped; only its size is checked):
 //!
 //! | off | type | field |
 //! |----:|------|-------|
-//! | 0 | u32 | version = 24 |
+//! | 0 | u32 | version = 24 or 25 |
 //! | 4 | u32 | padding |
 //! | 8 | f64 | longitude, rad |
 //! | 16 | f64 | latitude, rad |
@@ -27,16 +36,26 @@
 //! | 80 | f32 | v_east, ft/s |
 //! | 84 | f32 | v_down, ft/s |
 //! | 88.. | | body velocities, accelerations, stall, engines ×4, tanks ×4, wheels ×3, time, surfaces |
-//! | 404 | 4 | trailing padding (struct aligned to 8) |
+//!
+//! The whole field list of both versions, with the offsets a C compiler gives them, is in the
+//! tests (`fgfs_tests.rs`), which build golden packets field by field from it.
 
 use super::protocol::{validated, DecodeError, Protocol};
 use super::wire::{ByteOrder, Rd, Wr};
 use crate::pose::{Pose, PosePosition};
 
-/// `FG_NET_FDM_VERSION` read here.
+/// `FG_NET_FDM_VERSION` of release 2020.3 (and [`encode`]'s).
 pub const VERSION: u32 = 24;
 /// `sizeof(FGNetFDM)` for version 24.
 pub const SIZE: usize = 408;
+/// `FG_NET_FDM_VERSION` of the `next` branch (and [`encode_v25`]'s).
+pub const VERSION_25: u32 = 25;
+/// `sizeof(FGNetFDM)` for version 25.
+pub const SIZE_25: usize = 552;
+/// The versions read, with their struct sizes.
+pub const VERSIONS: [(u32, usize); 2] = [(VERSION, SIZE), (VERSION_25, SIZE_25)];
+/// Size of the head shared by every version (what aerie reads).
+const HEAD_SIZE: usize = 88;
 /// Feet → metres.
 pub const FOOT_M: f64 = 0.3048;
 
@@ -142,10 +161,41 @@ impl FdmPose {
     }
 }
 
+/// `sizeof(FGNetFDM)` for `version`, if it is one read here.
+pub fn size_of_version(version: u32) -> Option<usize> {
+    VERSIONS
+        .iter()
+        .find(|(v, _)| *v == version)
+        .map(|(_, size)| *size)
+}
+
+/// Whether a datagram looks like an `FGNetFDM` (for detection): a known version in its first
+/// four bytes, or exactly a known version's size (whatever its version says, so that a wrong
+/// version is reported as such rather than as an unknown protocol).
+pub fn looks_like(bytes: &[u8]) -> bool {
+    VERSIONS
+        .iter()
+        .any(|&(v, size)| bytes.starts_with(&v.to_be_bytes()) || bytes.len() == size)
+}
+
 /// Encodes a version-24 `FGNetFDM` with the given head; everything after offset 88 is zero.
 pub fn encode(f: &FdmPose) -> [u8; SIZE] {
-    let mut w = Wr::new(ByteOrder::Big, SIZE);
-    w.u32(VERSION)
+    let mut out = [0u8; SIZE];
+    out[..HEAD_SIZE].copy_from_slice(&head(VERSION, f));
+    out
+}
+
+/// Encodes a version-25 `FGNetFDM` with the given head; everything after offset 88 is zero.
+pub fn encode_v25(f: &FdmPose) -> [u8; SIZE_25] {
+    let mut out = [0u8; SIZE_25];
+    out[..HEAD_SIZE].copy_from_slice(&head(VERSION_25, f));
+    out
+}
+
+/// The 88-byte head both versions share.
+fn head(version: u32, f: &FdmPose) -> [u8; HEAD_SIZE] {
+    let mut w = Wr::new(ByteOrder::Big, HEAD_SIZE);
+    w.u32(version)
         .u32(0)
         .f64(f.longitude)
         .f64(f.latitude)
@@ -168,7 +218,6 @@ pub fn encode(f: &FdmPose) -> [u8; SIZE] {
     ] {
         w.f32(v);
     }
-    w.buf.resize(SIZE, 0);
     w.finish()
 }
 
@@ -182,18 +231,23 @@ pub fn decode_fields(b: &[u8]) -> Result<FdmPose, DecodeError> {
             expected: SIZE,
         });
     };
-    if version != VERSION {
+    let Some(size) = size_of_version(version) else {
+        // The error carries one expected version: the nearest one read here.
         return Err(DecodeError::BadVersion {
             protocol: P,
             found: version,
-            expected: VERSION,
+            expected: if version < VERSION {
+                VERSION
+            } else {
+                VERSION_25
+            },
         });
-    }
-    if b.len() != SIZE {
+    };
+    if b.len() != size {
         return Err(DecodeError::BadSize {
             protocol: P,
             len: b.len(),
-            expected: SIZE,
+            expected: size,
         });
     }
     let f = || -> Option<FdmPose> {
@@ -226,125 +280,5 @@ pub fn decode(b: &[u8]) -> Result<Pose, DecodeError> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::stats::DropReason;
-
-    /// The first 88 bytes of a golden FGNetFDM v24, written by hand from net_fdm.hxx, all
-    /// big-endian: version 24, padding 0, longitude 0.25 rad (0x3FD0000000000000), latitude
-    /// 0.75 rad (0x3FE8000000000000), altitude 1000.0 m (0x408F400000000000), agl 300.0
-    /// (0x43960000), phi 0.125 (0x3E000000), theta −0.0625 (0xBD800000), psi 1.5 (0x3FC00000),
-    /// alpha 0, beta 0, phidot 0.5 (0x3F000000), thetadot 0, psidot −0.25 (0xBE800000), vcas
-    /// 250.0 (0x437A0000), climb 10.0 (0x41200000), v_north 100.0 (0x42C80000), v_east −50.0
-    /// (0xC2480000), v_down −10.0 (0xC1200000).
-    const HEAD: [u8; 88] = [
-        0x00, 0x00, 0x00, 0x18, // 0: version 24
-        0x00, 0x00, 0x00, 0x00, // 4: padding
-        0x3F, 0xD0, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, // 8: longitude
-        0x3F, 0xE8, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, // 16: latitude
-        0x40, 0x8F, 0x40, 0x00, 0x00, 0x00, 0x00, 0x00, // 24: altitude
-        0x43, 0x96, 0x00, 0x00, // 32: agl
-        0x3E, 0x00, 0x00, 0x00, // 36: phi
-        0xBD, 0x80, 0x00, 0x00, // 40: theta
-        0x3F, 0xC0, 0x00, 0x00, // 44: psi
-        0x00, 0x00, 0x00, 0x00, // 48: alpha
-        0x00, 0x00, 0x00, 0x00, // 52: beta
-        0x3F, 0x00, 0x00, 0x00, // 56: phidot
-        0x00, 0x00, 0x00, 0x00, // 60: thetadot
-        0xBE, 0x80, 0x00, 0x00, // 64: psidot
-        0x43, 0x7A, 0x00, 0x00, // 68: vcas
-        0x41, 0x20, 0x00, 0x00, // 72: climb rate
-        0x42, 0xC8, 0x00, 0x00, // 76: v_north
-        0xC2, 0x48, 0x00, 0x00, // 80: v_east
-        0xC1, 0x20, 0x00, 0x00, // 84: v_down
-    ];
-
-    fn golden() -> Vec<u8> {
-        let mut b = HEAD.to_vec();
-        b.resize(SIZE, 0);
-        b
-    }
-
-    #[test]
-    fn struct_size_is_408() {
-        // 8 (version, padding) + 3·8 + 6·4 (positions) + 10·4 (velocities) + 3·4 (accels)
-        // + 2·4 (stall, slip) + 4 + 10·4·4 (engines) + 4 + 4·4 (tanks) + 4 + 4·3·4 (gear)
-        // + 3·4 (time, warp, visibility) + 10·4 (surfaces) = 404, padded to 8 → 408.
-        let fields: usize = 8 + 24 + 24 + 40 + 12 + 8 + 4 + 160 + 4 + 16 + 4 + 48 + 12 + 40;
-        assert_eq!(fields, 404);
-        assert_eq!(fields.div_ceil(8) * 8, SIZE);
-    }
-
-    #[test]
-    fn golden_bytes() {
-        let f = FdmPose {
-            longitude: 0.25,
-            latitude: 0.75,
-            altitude: 1000.0,
-            agl: 300.0,
-            phi: 0.125,
-            theta: -0.0625,
-            psi: 1.5,
-            phidot: 0.5,
-            psidot: -0.25,
-            vcas: 250.0,
-            climb_rate: 10.0,
-            v_north: 100.0,
-            v_east: -50.0,
-            v_down: -10.0,
-            ..FdmPose::default()
-        };
-        assert_eq!(encode(&f).to_vec(), golden());
-        assert_eq!(decode_fields(&golden()).unwrap(), f);
-        let p = decode(&golden()).unwrap();
-        let PosePosition::Geodetic {
-            lat_deg,
-            lon_deg,
-            alt_m,
-        } = p.position
-        else {
-            panic!("geodetic expected")
-        };
-        assert!((lat_deg - 42.971_834_634_8).abs() < 1e-9, "{lat_deg}");
-        assert!((lon_deg - 14.323_944_878_3).abs() < 1e-9, "{lon_deg}");
-        assert_eq!(alt_m, 1000.0);
-        let want_att = [85.943_669_269_9, -3.580_986_219_6, 7.161_972_439_1];
-        for (got, want) in p.attitude_deg.iter().zip(want_att) {
-            assert!((got - want).abs() < 1e-9, "{:?}", p.attitude_deg);
-        }
-        // Heading, pitch, roll rates from psidot, thetadot, phidot.
-        let rates = p.angular_rates_deg_s.unwrap();
-        assert!((rates[0] + 14.323_944_878_3).abs() < 1e-9);
-        assert_eq!(rates[1], 0.0);
-        assert!((rates[2] - 28.647_889_756_5).abs() < 1e-9);
-        // ft/s → m/s, down → up.
-        assert_eq!(p.velocity_enu, Some([-15.24, 30.48, 3.048]));
-    }
-
-    #[test]
-    fn bad_datagrams() {
-        let r = |b: &[u8]| decode(b).unwrap_err().reason();
-        assert_eq!(r(&golden()[..404]), DropReason::BadSize);
-        assert_eq!(r(&golden()[..2]), DropReason::BadSize);
-        let mut v25 = golden();
-        v25[3] = 25;
-        assert_eq!(r(&v25), DropReason::BadVersion);
-        let mut b = golden();
-        b[24..32].copy_from_slice(&(-50_000.0f64).to_be_bytes());
-        assert_eq!(r(&b), DropReason::Implausible);
-        let mut b = golden();
-        b[44..48].copy_from_slice(&f32::NAN.to_be_bytes());
-        assert_eq!(r(&b), DropReason::Invalid);
-    }
-
-    #[test]
-    fn pose_round_trip_within_f32() {
-        let p = decode(&golden()).unwrap();
-        let q = decode(&encode(&FdmPose::from_pose(&p))).unwrap();
-        assert_eq!(q.position, p.position);
-        for i in 0..3 {
-            assert!((q.attitude_deg[i] - p.attitude_deg[i]).abs() < 1e-4);
-            assert!((q.velocity_enu.unwrap()[i] - p.velocity_enu.unwrap()[i]).abs() < 1e-4);
-        }
-    }
-}
+#[path = "fgfs_tests.rs"]
+mod tests;

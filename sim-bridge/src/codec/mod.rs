@@ -1,5 +1,6 @@
-//! Packet codecs: aerie native v1, CIGI 3.0–3.3 (the IG side), X-Plane `RPOS`, FlightGear
-//! FGNetFDM v24. Layouts are specified in `sim-bridge/PROTOCOL.md`.
+//! Packet codecs: aerie native v1 (poses, and the terrain queries and answers), CIGI 3.0–3.3
+//! (the IG side), X-Plane `RPOS`, FlightGear FGNetFDM v24 and v25. Layouts are specified in
+//! `sim-bridge/PROTOCOL.md`.
 //!
 //! Every decoder takes arbitrary bytes and either returns a validated [`Pose`] (plus whatever
 //! else the packet carried) or a [`DecodeError`] that names the reason; none panics.
@@ -7,6 +8,7 @@
 pub mod cigi;
 pub mod fgfs;
 pub mod native;
+mod native_query;
 pub(crate) mod protocol;
 pub(crate) mod wire;
 pub mod xplane;
@@ -42,8 +44,9 @@ impl Decoded {
 
 /// Recognises a datagram's protocol from its first bytes (and, for FGNetFDM, its size):
 /// `AERP` → aerie; `RPOS` → X-Plane; packet ID 1 with size 24 (a CIGI 3.2/3.3 IG Control) or
-/// 16 (3.0/3.1) → CIGI;
-/// big-endian u32 24 at offset 0, or exactly 408 bytes → FlightGear.
+/// 16 (3.0/3.1) → CIGI; big-endian u32 24 or 25 at offset 0, or exactly 408 or 552 bytes →
+/// FlightGear. A native terrain query (`AERQ`) is not a pose and is not detected: check
+/// [`native::is_query`] first.
 pub fn detect(bytes: &[u8]) -> Option<Protocol> {
     if bytes.starts_with(&native::MAGIC) {
         Some(Protocol::Aerie)
@@ -54,7 +57,7 @@ pub fn detect(bytes: &[u8]) -> Option<Protocol> {
         && (bytes[1] == cigi::IG_CONTROL_SIZE || bytes[1] == cigi::IG_CONTROL_SIZE_V3_0)
     {
         Some(Protocol::Cigi)
-    } else if bytes.starts_with(&fgfs::VERSION.to_be_bytes()) || bytes.len() == fgfs::SIZE {
+    } else if fgfs::looks_like(bytes) {
         Some(Protocol::Fgfs)
     } else {
         None
@@ -128,6 +131,26 @@ mod tests {
             assert_eq!(detect(&c), Some(Protocol::Cigi), "{v}");
         }
         assert_eq!(detect(&[1, 20, 3, 0]), None, "IG Control of neither size");
+        let f25 = fgfs::encode_v25(&fgfs::FdmPose::default());
+        assert_eq!(detect(&f25), Some(Protocol::Fgfs));
+        assert_eq!(detect(&f25[..100]), Some(Protocol::Fgfs), "by its version");
+        assert!(decode(ProtocolChoice::Auto, &f25).is_ok());
+        // A native terrain query is not a pose: detection leaves it to `native::is_query`.
+        let q = native::encode_query(
+            9,
+            &crate::query::TerrainRequest::HeightOfTerrain {
+                at: pose().position,
+            },
+        );
+        assert!(native::is_query(&q) && !native::is_query(&n));
+        assert_eq!(detect(&q), None);
+        let e = decode(ProtocolChoice::Auto, &q).unwrap_err();
+        assert_eq!(e.reason(), DropReason::Unknown, "{e}");
+        let a = native::encode_reply(
+            9,
+            &crate::query::TerrainReply::HeightOfTerrain(crate::query::Answer::NoTerrain),
+        );
+        assert_eq!(detect(&a), None);
         assert_eq!(detect(b"hello"), None);
         assert_eq!(detect(&[]), None);
         assert_eq!(
@@ -161,6 +184,8 @@ mod tests {
             for p in Protocol::ALL {
                 let _ = decode_as(p, &bytes);
             }
+            let _ = native::decode_query(&bytes);
+            let _ = native::decode_reply(&bytes);
         }
 
         /// Random bodies behind each protocol's real header never panic either (reaching past
@@ -168,14 +193,17 @@ mod tests {
         #[test]
         fn random_bodies_never_panic(
             body in prop::collection::vec(any::<u8>(), 0..600),
-            which in 0usize..4,
-            len_hint in prop::sample::select(vec![69usize, 132, 408, 24, 72, 104, 0]),
+            which in 0usize..7,
+            len_hint in prop::sample::select(vec![69usize, 132, 408, 552, 24, 72, 76, 84, 104, 0]),
         ) {
             let mut bytes = match which {
                 0 => native::MAGIC.to_vec(),
                 1 => vec![1, 24, 3, 0, 0, 0, 0x80, 0x00],
                 2 => b"RPOS4".to_vec(),
-                _ => fgfs::VERSION.to_be_bytes().to_vec(),
+                3 => fgfs::VERSION.to_be_bytes().to_vec(),
+                4 => fgfs::VERSION_25.to_be_bytes().to_vec(),
+                5 => native::QUERY_MAGIC.to_vec(),
+                _ => native::REPLY_MAGIC.to_vec(),
             };
             bytes.extend_from_slice(&body);
             if len_hint > 0 {
@@ -183,6 +211,8 @@ mod tests {
             }
             let _ = decode(ProtocolChoice::Auto, &bytes);
             let _ = cigi::decode(&bytes);
+            let _ = native::decode_query(&bytes);
+            let _ = native::decode_reply(&bytes);
         }
     }
 }

@@ -17,6 +17,11 @@
 //! | 104 | 24 | rates f64×3: heading, pitch, roll rates, deg/s |
 //! | 128 | 4 | CRC-32 (IEEE, as zlib's `crc32`) of bytes 0..128 |
 
+pub use super::native_query::{
+    decode_query, decode_reply, encode_query, encode_reply, is_query, QUERY_MAGIC, QUERY_SIZE,
+    QUERY_VERSION, REPLY_MAGIC, REPLY_SIZE,
+};
+
 use super::protocol::{validated, DecodeError, Protocol};
 use super::wire::{ByteOrder, Rd, Wr};
 use crate::pose::{Pose, PosePosition};

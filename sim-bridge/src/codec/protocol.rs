@@ -12,7 +12,7 @@ pub enum Protocol {
     Cigi,
     /// X-Plane `RPOS` position output.
     XPlane,
-    /// FlightGear `--native-fdm` (FGNetFDM v24).
+    /// FlightGear `--native-fdm` (FGNetFDM v24 and v25).
     Fgfs,
 }
 
