@@ -12,6 +12,14 @@
 //! - [`entities`]: the entity table and entity-relative points.
 //! - [`environment`]: celestial (sun direction) and atmosphere (visibility).
 
+mod cigi_map;
 pub mod entities;
 pub mod environment;
 pub mod requests;
+pub mod session;
+pub mod stats;
+
+pub use session::{
+    CigiReply, DatabaseStatus, Datagram, FrameAnswers, IgConfig, IgFrame, IgSession, IgState,
+};
+pub use stats::IgStats;

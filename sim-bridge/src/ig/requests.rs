@@ -506,6 +506,12 @@ impl RequestTable {
         added
     }
 
+    /// Answers `req` invalid next frame without keeping it (a request packet whose values
+    /// failed their checks).
+    pub fn refuse(&mut self, req: HostRequest) {
+        self.refused.push(req);
+    }
+
     /// Drops every request (a host's Reset). Returns how many were live.
     pub fn clear(&mut self) -> usize {
         let n = self.hot.len() + self.los.len() + self.refused.len();
