@@ -13,6 +13,10 @@ use crate::geodesy::{Geodetic, LocalTangentPlane};
 use crate::pose::{Pose, PosePosition};
 use crate::script::ScriptSample;
 
+/// `aerie-send`'s terrain queries (`--hot`, `--los`, `--los-vector`).
+#[path = "send_query.rs"]
+pub mod query;
+
 /// Where `aerie-send` puts the poses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SendProtocol {

@@ -40,7 +40,8 @@ pub enum Command {
     Replay(replay::ReplayArgs),
     /// The image generator, driven by a simulator or flying the built-in pass: one window or
     /// fullscreen display per channel of a config (or only --channel NAME), or headless.
-    Run(run_cmd::RunArgs),
+    // Boxed: the run command's flags are by far the largest variant.
+    Run(Box<run_cmd::RunArgs>),
 }
 
 pub fn run(cli: Cli) -> Result<(), Failure> {
@@ -52,6 +53,6 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Bench(a) => bench::run(a),
         Command::Listen(a) => listen::run(a),
         Command::Replay(a) => replay::run(a),
-        Command::Run(a) => run_cmd::run(a),
+        Command::Run(a) => run_cmd::run(*a),
     }
 }

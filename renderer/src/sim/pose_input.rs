@@ -18,7 +18,7 @@ use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use aerie_sim_bridge::codec::ProtocolChoice;
 use aerie_sim_bridge::shm::{shm_path, ShmConfig, ShmSource};
 use aerie_sim_bridge::timing::{extrapolate, monotonic_s, ExtrapolationParams, Stamped};
-use aerie_sim_bridge::udp::{UdpConfig, UdpReceiver};
+use aerie_sim_bridge::udp::{RposRequest, UdpConfig, UdpReceiver};
 use aerie_sim_bridge::{Pose, PoseLimits, PosePosition, PoseReader, StatsSnapshot, StreamState};
 use glam::DVec3;
 
@@ -295,6 +295,8 @@ pub struct InputSpec {
     pub sync_frames: Option<u32>,
     /// Local poses beyond ±this (any axis), metres, are dropped as implausible.
     pub world_bound_m: f64,
+    /// Ask an X-Plane to stream RPOS to the port (`--xplane`).
+    pub xplane_rpos: Option<RposRequest>,
 }
 
 /// How long without a pose before the stream is reported lost when the extrapolation cap is
@@ -407,6 +409,7 @@ impl SimInput {
                     allow: spec.allow.clone(),
                     extrapolation: monitor,
                     limits,
+                    xplane_rpos: spec.xplane_rpos,
                     ..UdpConfig::default()
                 })
                 .map_err(|e| e.to_string())?;

@@ -10,6 +10,10 @@ use std::time::{Duration, Instant};
 use aerie_sim_bridge::codec::cigi::StartOfFrame;
 use aerie_sim_bridge::geodesy::{Geodetic, LocalTangentPlane};
 use aerie_sim_bridge::script::{Script, ScriptSample, Straight, Waypoints};
+use aerie_sim_bridge::send::query::{
+    answer_json, answer_line, ask, exit_status, parse_hot, parse_los, parse_los_vector, QueryPlan,
+    DEFAULT_TIMEOUT, RESEND_EVERY,
+};
 use aerie_sim_bridge::send::{
     datagram, packet_count, parse_view_control, parse_view_definition, pose_for, SendProtocol,
     CIGI_ORDER,
@@ -28,6 +32,9 @@ usage: aerie-send (--path <waypoints.csv> | --straight x,y,z,heading,pitch,roll,
                   [--realtime | --as-fast-as-possible] [--multicast-if <ipv4>]
                   [--json <file>] [--log <file.csv>] [--quiet]
                   [--view id,heading,pitch,roll[,x,y,z]]... [--view-frustum id,l,r,b,t[,near,far]]...
+       aerie-send (--hot lat,lon[,alt] | --hot-local x,y[,z] | --los lat,lon,alt,lat,lon,alt
+                   | --los-vector lat,lon,alt,azimuth,elevation,min_m,max_m) [--local]
+                  [--to <addr:port>] [--timeout-ms <ms>] [--json <file> | --json -]
 
   --path         timed waypoints `t_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg` (aerie fly's)
   --straight     level pass along the heading at speed_mps from x,y,z (local ENU metres)
@@ -54,7 +61,19 @@ usage: aerie-send (--path <waypoints.csv> | --straight x,y,z,heading,pitch,roll,
   --view-frustum cigi: a View Definition in every message: view id's left, right, bottom, top
                  half-angles, degrees (and near, far clip, metres); repeatable
 
-exit status: 0 sent, 1 nothing could be sent, 2 bad arguments or input";
+terrain queries (aerie native AERQ → AERA, answered by `aerie run` from the full-resolution
+terrain; one query per call, sent to --to, resent with the same id every 250 ms until answered):
+  --hot          height of terrain at lat,lon (degrees); with alt (metres), HAT as well
+  --hot-local    the same at local ENU x,y metres (z for HAT)
+  --los          first terrain intersection along the segment between two points
+  --los-vector   ... along the vector from a point: azimuth (clockwise from north) and elevation
+                 (up from the horizontal), degrees, between min_m and max_m metres
+  --local        --los / --los-vector points are local ENU x,y,z metres instead of lat,lon,alt
+  --timeout-ms   how long to wait for the answer (default 1000)
+  --json         write the answer as a JSON object to this file; `-`: print it instead of the line
+
+exit status: 0 sent (a query: answered), 1 nothing could be sent (a query: no answer in time, no
+terrain there, or terrain not resident in time), 2 bad arguments or input";
 
 struct Args {
     script: Script,
@@ -105,6 +124,143 @@ fn resolve(v: &str) -> Result<SocketAddr, String> {
         .map_err(|e| format!("--to {v:?}: bad address ({e})"))?
         .next()
         .ok_or_else(|| format!("--to {v:?}: bad address (resolves to nothing)"))
+}
+
+/// A terrain query from the command line.
+struct QueryArgs {
+    plan: QueryPlan,
+    to: SocketAddr,
+    timeout: Duration,
+    json: Option<PathBuf>,
+}
+
+const QUERY_FLAGS: [&str; 4] = ["--hot", "--hot-local", "--los", "--los-vector"];
+
+/// The query, when the command line asks one (any of [`QUERY_FLAGS`]); `None` for a flight.
+fn parse_query_args(argv: &[String]) -> Option<Result<QueryArgs, String>> {
+    if !argv.iter().any(|a| QUERY_FLAGS.contains(&a.as_str())) {
+        return None;
+    }
+    Some(parse_query(argv))
+}
+
+fn parse_query(argv: &[String]) -> Result<QueryArgs, String> {
+    let mut query: Option<(String, String)> = None;
+    let mut local = false;
+    let mut to = format!("127.0.0.1:{DEFAULT_PORT}");
+    let mut timeout = DEFAULT_TIMEOUT;
+    let mut json = None;
+    let mut it = argv.iter();
+    while let Some(flag) = it.next() {
+        let mut value = || {
+            it.next()
+                .cloned()
+                .ok_or_else(|| format!("{flag}: missing value"))
+        };
+        match flag.as_str() {
+            f if QUERY_FLAGS.contains(&f) => {
+                let v = value()?;
+                if let Some((first, _)) = &query {
+                    return Err(format!("{first} and {f}: one query per call"));
+                }
+                query = Some((f.to_string(), v));
+            }
+            "--local" => local = true,
+            "--to" => to = value()?,
+            "--timeout-ms" => {
+                let ms: u64 = number(flag, &value()?)?;
+                if ms == 0 {
+                    return Err("--timeout-ms 0: must be at least 1".into());
+                }
+                timeout = Duration::from_millis(ms);
+            }
+            "--json" => json = Some(PathBuf::from(value()?)),
+            "--protocol" => {
+                let p: SendProtocol = value()?.parse().map_err(|e| format!("--protocol: {e}"))?;
+                if p != SendProtocol::Udp(Protocol::Aerie) {
+                    return Err(format!(
+                        "--protocol {} with a terrain query: queries are native (aerie) packets",
+                        p.name()
+                    ));
+                }
+            }
+            other => {
+                return Err(format!(
+                    "{other} with a terrain query: a query takes only --local, --to, \
+                     --timeout-ms, --json (see --help)"
+                ))
+            }
+        }
+    }
+    let Some((flag, v)) = query else {
+        unreachable!("parse_query is called only when a query flag is present")
+    };
+    let plan = match flag.as_str() {
+        "--hot" => parse_hot(&flag, &v, local)?,
+        "--hot-local" => parse_hot(&flag, &v, true)?,
+        "--los" => parse_los(&flag, &v, local)?,
+        _ => parse_los_vector(&flag, &v, local)?,
+    };
+    Ok(QueryArgs {
+        plan,
+        to: resolve(&to)?,
+        timeout,
+        json,
+    })
+}
+
+/// Sends the query, waits, prints; the process's exit status.
+fn run_query(q: &QueryArgs) -> i32 {
+    let any: SocketAddr = if q.to.is_ipv4() {
+        (Ipv4Addr::UNSPECIFIED, 0).into()
+    } else {
+        (std::net::Ipv6Addr::UNSPECIFIED, 0).into()
+    };
+    let socket = match UdpSocket::bind(any) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("aerie-send: bind {any}: {e}");
+            return 1;
+        }
+    };
+    // Request ids only need to differ between concurrent askers on one IG.
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos());
+    let id = std::process::id().rotate_left(16) ^ nanos;
+    let asked = match ask(&socket, q.to, id, &q.plan.request, q.timeout, RESEND_EVERY) {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("aerie-send: query to {}: {e}", q.to);
+            return 1;
+        }
+    };
+    let line = match &asked.reply {
+        Some(r) => answer_line(&q.plan, r),
+        None => format!(
+            "no answer from {} within {} ms ({} sends): is `aerie run` listening there?",
+            q.to,
+            q.timeout.as_millis(),
+            asked.sends
+        ),
+    };
+    let json = answer_json(&q.plan, id, q.to, &asked);
+    match q.json.as_deref() {
+        Some(p) if p == std::path::Path::new("-") => println!("{json}"),
+        Some(p) => {
+            println!("{line}");
+            if let Err(e) = aerie_io::write_atomic(p, format!("{json}\n").as_bytes()) {
+                eprintln!("aerie-send: --json {e}");
+                return 1;
+            }
+        }
+        None => println!("{line}"),
+    }
+    let status = exit_status(asked.reply.as_ref());
+    if status != 0 {
+        eprintln!("aerie-send: {line}");
+    }
+    status
 }
 
 fn parse_args(argv: &[String]) -> Result<Option<Args>, String> {
@@ -299,6 +455,18 @@ fn json_string(s: &str) -> String {
 
 fn main() {
     let argv: Vec<String> = std::env::args().skip(1).collect();
+    if argv.iter().any(|a| a == "-h" || a == "--help") {
+        println!("{HELP}");
+        return;
+    }
+    match parse_query_args(&argv) {
+        Some(Ok(q)) => std::process::exit(run_query(&q)),
+        Some(Err(e)) => {
+            eprintln!("aerie-send: {e}");
+            std::process::exit(2);
+        }
+        None => {}
+    }
     let a = match parse_args(&argv) {
         Ok(Some(a)) => a,
         Ok(None) => {

@@ -1,11 +1,14 @@
 //! The pose-input flags, one clap struct flattened into `aerie listen` and `aerie run` so both
 //! commands (and `aerie-send`, which mirrors them) speak one vocabulary: `--listen`,
 //! `--protocol auto|native|cigi|xplane|fgfs|shm`, `--shm-name`, `--multicast`,
-//! `--multicast-if`, `--allow`, `--max-extrapolation-ms`. The spellings `listen` used before
+//! `--multicast-if`, `--allow`, `--max-extrapolation-ms`, `--world-bound-m`, `--xplane`,
+//! `--xplane-rate`. The spellings `listen` used before
 //! (`--bind`, `--shm`, `--cap-ms`, `--protocol aerie`) still parse, hidden from `--help`.
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr, SocketAddrV4};
 
+use aerie_sim_bridge::codec::{Protocol, ProtocolChoice};
+use aerie_sim_bridge::udp::RposRequest;
 use aerie_sim_bridge::DEFAULT_PORT;
 use clap::Args;
 
@@ -58,7 +61,17 @@ pub struct InputArgs {
         allow_hyphen_values = true
     )]
     pub world_bound_m: Option<f64>,
+    /// Ask the X-Plane at this address (its UDP port, usually 49000) to stream RPOS to the
+    /// --listen port: at start, and again after 2 s without RPOS (X-Plane restarted).
+    #[arg(long, value_name = "IP:PORT")]
+    pub xplane: Option<SocketAddr>,
+    /// With --xplane: the RPOS rate to ask for, positions per second (default 60).
+    #[arg(long, value_name = "HZ")]
+    pub xplane_rate: Option<u32>,
 }
+
+/// `--xplane-rate` default, positions per second.
+pub const DEFAULT_XPLANE_RATE: u32 = 60;
 
 /// `--world-bound-m`: metres in (0, 1e9].
 pub fn parse_world_bound(s: &str) -> Result<f64, String> {
@@ -80,9 +93,21 @@ impl InputArgs {
         self.wants_udp() || self.protocol.is_some() || self.shm_name.is_some()
     }
 
-    /// True when a flag only UDP has is given (`--listen`, `--multicast`, `--allow`).
+    /// True when a flag only UDP has is given (`--listen`, `--multicast`, `--allow`,
+    /// `--xplane`).
     pub fn wants_udp(&self) -> bool {
-        self.listen.is_some() || self.multicast.is_some() || !self.allow.is_empty()
+        self.listen.is_some()
+            || self.multicast.is_some()
+            || !self.allow.is_empty()
+            || self.xplane.is_some()
+    }
+
+    /// The RPOS request `--xplane` (and `--xplane-rate`) ask for.
+    pub fn rpos_request(&self) -> Option<RposRequest> {
+        self.xplane.map(|xplane| RposRequest {
+            xplane,
+            rate_hz: self.xplane_rate.unwrap_or(DEFAULT_XPLANE_RATE),
+        })
     }
 
     /// The protocol the flags pick: `--protocol`, else shared memory for `--shm-name`.
@@ -98,14 +123,16 @@ impl InputArgs {
 
     /// Refuses flags that contradict each other: shared memory with a UDP flag (`udp_only`
     /// adds a command's own UDP-only flags, e.g. `listen --record`), `--shm-name` with a UDP
-    /// protocol. Whether `--multicast-if` has a group is the command's check (`run` also
-    /// accepts the config's group).
+    /// protocol, `--xplane` with a protocol other than auto or xplane, `--xplane-rate` without
+    /// `--xplane` or 0 (which asks X-Plane to stop). Whether `--multicast-if` has a group is
+    /// the command's check (`run` also accepts the config's group).
     pub fn check(&self, udp_only: &[(&str, bool)]) -> Result<(), Failure> {
         let shm = self.wants_shm();
         let mut flags = vec![
             ("--listen", self.listen.is_some()),
             ("--multicast", self.multicast.is_some()),
             ("--allow", !self.allow.is_empty()),
+            ("--xplane", self.xplane.is_some()),
         ];
         flags.extend_from_slice(udp_only);
         if shm && flags.iter().any(|&(_, given)| given) {
@@ -121,6 +148,24 @@ impl InputArgs {
         }
         if !shm && self.shm_name.is_some() {
             return Err(bad_input("--shm-name: only with --protocol shm"));
+        }
+        if let (Some(_), Some(InputProtocol::Udp(ProtocolChoice::Only(p)))) =
+            (self.xplane, self.protocol)
+        {
+            if p != Protocol::XPlane {
+                return Err(bad_input(format!(
+                    "--xplane with --protocol {p}: the RPOS stream asked for would be dropped (use --protocol xplane or auto)"
+                )));
+            }
+        }
+        match (self.xplane, self.xplane_rate) {
+            (None, Some(_)) => return Err(bad_input("--xplane-rate: only with --xplane")),
+            (Some(_), Some(0)) => {
+                return Err(bad_input(
+                    "--xplane-rate 0: a rate of 0 asks X-Plane to stop sending; give 1 or more",
+                ))
+            }
+            _ => {}
         }
         Ok(())
     }

@@ -1,13 +1,18 @@
 //! The pose-input flags: one spelling per setting, the old spellings as hidden aliases, and the
 //! checks both commands share.
 
-use std::net::{Ipv4Addr, SocketAddr};
+use std::net::{Ipv4Addr, SocketAddr, UdpSocket};
+use std::time::Duration;
 
-use aerie_sim_bridge::codec::{Protocol, ProtocolChoice};
+use aerie_config::RenderConfig;
+use aerie_sim_bridge::codec::{xplane, Protocol, ProtocolChoice};
+use aerie_sim_bridge::udp::RposRequest;
 use clap::{CommandFactory, Parser};
 
-use crate::app::commands::input_args::InputArgs;
-use crate::sim::pose_input::InputProtocol;
+use crate::app::commands::input_args::{InputArgs, DEFAULT_XPLANE_RATE};
+use crate::app::commands::run::args::RunArgs;
+use crate::app::commands::run::settings::resolve_settings;
+use crate::sim::pose_input::{InputProtocol, SimInput};
 
 #[derive(Parser)]
 struct Cli {
@@ -118,7 +123,7 @@ fn transport_flags_that_contradict_each_other_are_refused() {
         refused(&["--protocol", "shm", "--listen", "127.0.0.1:9"], &[]),
         Some((
             2,
-            "--protocol shm reads shared memory: --listen, --multicast and --allow apply to UDP only"
+            "--protocol shm reads shared memory: --listen, --multicast, --allow and --xplane apply to UDP only"
                 .into()
         ))
     );
@@ -127,7 +132,7 @@ fn transport_flags_that_contradict_each_other_are_refused() {
         refused(&["--shm-name", "sim"], &[("--record", true)]),
         Some((
             2,
-            "--protocol shm reads shared memory: --listen, --multicast, --allow and --record apply to UDP only"
+            "--protocol shm reads shared memory: --listen, --multicast, --allow, --xplane and --record apply to UDP only"
                 .into()
         ))
     );
@@ -150,9 +155,11 @@ fn what_turns_the_input_on_and_which_transport() {
         &["--shm-name", "x"],
         &["--multicast", "239.1.2.3"],
         &["--allow", "127.0.0.2,127.0.0.3"],
+        &["--xplane", "127.0.0.1:49000"],
     ] {
         assert!(parse(args).any(), "{args:?}");
     }
+    assert!(parse(&["--xplane", "127.0.0.1:49000"]).wants_udp());
     assert!(parse(&["--shm-name", "x"]).wants_shm());
     assert!(parse(&["--protocol", "shm"]).wants_shm());
     assert!(!parse(&["--protocol", "native", "--shm-name", "x"]).wants_shm());
@@ -172,4 +179,101 @@ fn the_default_address_is_loopback_or_every_interface_for_multicast() {
     );
     let given: SocketAddr = "127.0.0.1:9".parse().unwrap();
     assert_eq!(InputArgs::listen_or_default(Some(given), true), given);
+}
+
+#[test]
+fn xplane_flags_ask_for_rpos_and_refuse_what_contradicts_them() {
+    let xp: SocketAddr = "127.0.0.1:49000".parse().unwrap();
+    assert_eq!(parse(&[]).rpos_request(), None);
+    assert_eq!(
+        parse(&["--xplane", "127.0.0.1:49000"]).rpos_request(),
+        Some(RposRequest {
+            xplane: xp,
+            rate_hz: DEFAULT_XPLANE_RATE
+        })
+    );
+    let a = parse(&["--xplane", "127.0.0.1:49000", "--xplane-rate", "20"]);
+    assert_eq!(a.rpos_request().map(|r| r.rate_hz), Some(20));
+    a.check(&[]).unwrap();
+    parse(&["--xplane", "127.0.0.1:49000", "--protocol", "xplane"])
+        .check(&[])
+        .unwrap();
+    parse(&["--xplane", "127.0.0.1:49000", "--protocol", "auto"])
+        .check(&[])
+        .unwrap();
+    for (args, says) in [
+        (
+            &["--protocol", "shm", "--xplane", "127.0.0.1:49000"][..],
+            "--protocol shm reads shared memory: --listen, --multicast, --allow and --xplane apply to UDP only",
+        ),
+        (
+            &["--shm-name", "sim", "--xplane", "127.0.0.1:49000"],
+            "--xplane apply to UDP only",
+        ),
+        (
+            &["--protocol", "cigi", "--xplane", "127.0.0.1:49000"],
+            "--xplane with --protocol cigi",
+        ),
+        (&["--xplane-rate", "30"], "--xplane-rate: only with --xplane"),
+        (
+            &["--xplane", "127.0.0.1:49000", "--xplane-rate", "0"],
+            "--xplane-rate 0",
+        ),
+    ] {
+        let f = parse(args).check(&[]).expect_err("refused");
+        assert_eq!(f.code, 2, "{args:?}");
+        assert!(f.message.contains(says), "{args:?}: {}", f.message);
+    }
+    let help = Cli::command().render_long_help().to_string();
+    assert!(
+        help.contains("--xplane <IP:PORT>") && help.contains("--xplane-rate"),
+        "{help}"
+    );
+}
+
+#[derive(Parser)]
+struct RunCli {
+    #[command(flatten)]
+    args: RunArgs,
+}
+
+/// `aerie run --xplane`: the run command's input path (flags → settings → `SimInput`) sends a
+/// fake X-Plane the RPOS request from the pose port, and sends it again when no RPOS arrives
+/// (the receive loop renews it after 2 s without one).
+#[test]
+fn run_asks_xplane_for_rpos_and_renews_the_request() {
+    let xplane = UdpSocket::bind("127.0.0.1:0").unwrap();
+    xplane
+        .set_read_timeout(Some(Duration::from_secs(10)))
+        .unwrap();
+    let xp = xplane.local_addr().unwrap().to_string();
+    let argv = [
+        "run",
+        "--dem",
+        "x",
+        "--listen",
+        "127.0.0.1:0",
+        "--xplane",
+        &xp,
+        "--xplane-rate",
+        "30",
+    ];
+    let args = RunCli::try_parse_from(argv).unwrap().args;
+    let spec = resolve_settings(&args, &RenderConfig::default())
+        .unwrap()
+        .input
+        .expect("--xplane turns the input on");
+    assert_eq!(spec.protocol, InputProtocol::Udp(ProtocolChoice::Auto));
+    let input = SimInput::open(&spec, Err("no geo-reference".into())).unwrap();
+    let port = input.local_addr().unwrap();
+    let mut buf = [0u8; 64];
+    let mut requests = 0;
+    while requests < 2 {
+        let (n, from) = xplane.recv_from(&mut buf).expect("an RPOS request arrives");
+        assert_eq!(&buf[..n], &xplane::rpos_request(30)[..]);
+        // From the pose port, so that X-Plane streams to it.
+        assert_eq!(from, port);
+        requests += 1;
+    }
+    drop(input);
 }

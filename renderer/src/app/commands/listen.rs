@@ -5,14 +5,14 @@
 
 use std::collections::BTreeMap;
 use std::io::IsTerminal;
-use std::net::{Ipv4Addr, SocketAddr};
+use std::net::Ipv4Addr;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use aerie_sim_bridge::codec::ProtocolChoice;
 use aerie_sim_bridge::shm::{shm_path, ShmConfig, ShmSource, DEFAULT_SHM_NAME};
 use aerie_sim_bridge::timing::{monotonic_s, ExtrapolationParams, StreamState};
-use aerie_sim_bridge::udp::{CigiReply, RposRequest, UdpConfig, UdpReceiver};
+use aerie_sim_bridge::udp::{CigiReply, UdpConfig, UdpReceiver};
 use aerie_sim_bridge::{DropReason, PoseLimits, PosePosition, PoseReader, StatsSnapshot};
 use clap::Args;
 
@@ -39,12 +39,6 @@ pub struct ListenArgs {
     /// Do not answer CIGI hosts with Start of Frame.
     #[arg(long)]
     pub no_cigi_reply: bool,
-    /// Ask the X-Plane at this address (its UDP port, usually 49000) to stream RPOS here.
-    #[arg(long)]
-    pub xplane: Option<SocketAddr>,
-    /// RPOS rate to ask X-Plane for, positions per second.
-    #[arg(long, default_value_t = 60)]
-    pub xplane_rate: u32,
     // Last: the flattened input section's heading applies to the fields after it.
     #[command(flatten)]
     pub input: InputArgs,
@@ -129,10 +123,7 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
         prepare_out_file("--record", r)?;
     }
     let input = &a.input;
-    input.check(&[
-        ("--record", a.record.is_some()),
-        ("--xplane", a.xplane.is_some()),
-    ])?;
+    input.check(&[("--record", a.record.is_some())])?;
     if input.multicast_if.is_some() && input.multicast.is_none() {
         return Err(bad_input("--multicast-if: only with --multicast"));
     }
@@ -184,10 +175,7 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
                     CigiReply::ToSender
                 },
                 record: a.record.clone(),
-                xplane_rpos: a.xplane.map(|xplane| RposRequest {
-                    xplane,
-                    rate_hz: a.xplane_rate,
-                }),
+                xplane_rpos: input.rpos_request(),
                 extrapolation,
                 limits,
                 ..UdpConfig::default()
@@ -402,7 +390,7 @@ mod tests {
         for (extra, says) in [
             (
                 &["--shm-name", "x", "--record", "r.rec"][..],
-                "--protocol shm reads shared memory: --listen, --multicast, --allow, --record and --xplane apply to UDP only",
+                "--protocol shm reads shared memory: --listen, --multicast, --allow, --xplane and --record apply to UDP only",
             ),
             (
                 &["--protocol", "shm", "--listen", "127.0.0.1:9"],

@@ -124,6 +124,7 @@ pub fn resolve_settings(a: &RunArgs, config: &RenderConfig) -> Result<RunSetting
             cap_s: max_extrapolation_ms / 1e3,
             sync_frames,
             world_bound_m,
+            xplane_rpos: a.input.rpos_request(),
         }),
         max_extrapolation_ms,
         wait_pose_s,

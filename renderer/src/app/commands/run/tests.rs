@@ -329,6 +329,7 @@ fn stream_source_waits_then_follows_then_fails_on_unplaceable_poses() {
         cap_s: 0.0,
         sync_frames: None,
         world_bound_m: 1.0e7,
+        xplane_rpos: None,
     };
     let input = SimInput::open(&spec, GeoMapping::of_dataset(&ds)).unwrap();
     let to = input.local_addr().unwrap();
