@@ -114,10 +114,10 @@ pub fn julian_day_0h(year: i32, month: u32, day: u32) -> Option<f64> {
 /// solar calculator (after Meeus): `(declination_deg, equation_of_time_minutes)`. Good to about
 /// 0.01° for dates within a few centuries of 2000.
 pub fn solar_declination_eot(jd: f64) -> (f64, f64) {
-    let t = (jd - 2_451_545.0) / 36_525.0;
-    let l0 = (280.46646 + t * (36_000.76983 + t * 0.000_303_2)).rem_euclid(360.0);
-    let m = 357.52911 + t * (35_999.05029 - 0.000_153_7 * t);
-    let e = 0.016_708_634 - t * (0.000_042_037 + 0.000_000_126_7 * t);
+    let t = (jd - 2451545.0) / 36525.0;
+    let l0 = (280.46646 + t * (36000.76983 + t * 0.0003032)).rem_euclid(360.0);
+    let m = 357.52911 + t * (35999.05029 - 0.0001537 * t);
+    let e = 0.016708634 - t * (0.000042037 + 0.0000001267 * t);
     let mr = m.to_radians();
     let center = mr.sin() * (1.914602 - t * (0.004817 + 0.000014 * t))
         + (2.0 * mr).sin() * (0.019993 - 0.000101 * t)

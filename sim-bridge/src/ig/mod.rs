@@ -11,14 +11,17 @@
 //! - [`requests`]: HAT/HOT and line-of-sight requests between arrival and answer.
 //! - [`entities`]: the entity table and entity-relative points.
 //! - [`environment`]: celestial (sun direction) and atmosphere (visibility).
+//! - [`link`]: [`IgLink`], the session shared by the receiver thread and the frame loop.
 
 mod cigi_map;
 pub mod entities;
 pub mod environment;
+pub mod link;
 pub mod requests;
 pub mod session;
 pub mod stats;
 
+pub use link::IgLink;
 pub use session::{
     CigiReply, DatabaseStatus, Datagram, FrameAnswers, IgConfig, IgFrame, IgSession, IgState,
 };

@@ -545,6 +545,11 @@ impl IgSession {
     pub fn record_cpu_us(&mut self, us: f64) {
         self.stats.note_cpu_us(us);
     }
+
+    /// Counts datagrams the transport failed to send.
+    pub fn record_send_errors(&mut self, n: u64) {
+        self.stats.send_errors += n;
+    }
 }
 
 fn response_valid(r: &Response) -> bool {
