@@ -54,20 +54,8 @@ impl Any {
     ) -> Result<Any, DecodeError> {
         Ok(match self {
             Any::Ig(_) => Any::Ig(IgControl::decode(b, v, o)?),
-            Any::Sof(_) => {
-                let (s, version, order) = StartOfFrame::decode_with_version(b)?;
-                assert_eq!(order, o);
-                // 3.1 encodes as 3.0 and reads back as 3.0.
-                assert_eq!(
-                    version,
-                    if v == CigiVersion::V3_1 {
-                        CigiVersion::V3_0
-                    } else {
-                        v
-                    }
-                );
-                Any::Sof(s)
-            }
+            // The Start of Frame carries its own version and byte order (checked apart).
+            Any::Sof(_) => Any::Sof(StartOfFrame::decode_with_version(b)?.0),
             Any::Entity(_) => Any::Entity(EntityControl::decode(b, v, o)?),
             Any::Clamp(_) => Any::Clamp(ConformalClampedEntityControl::decode(b, o)?),
             Any::Rate(_) => Any::Rate(RateControl::decode(b, v, o)?),

@@ -401,3 +401,5 @@ fn disabled_view_fields_keep_their_values() {
 mod any;
 mod ccl;
 mod ccl_bytes;
+mod checks;
+mod roundtrip;
