@@ -397,13 +397,13 @@ impl CigiResponse {
         version: CigiVersion,
         order: ByteOrder,
     ) -> Option<Result<Self, DecodeError>> {
-        Some(match b.first()? {
-            &HAT_HOT_RESPONSE_ID => HatHotResponse::decode(b, version, order).map(Self::HatHot),
-            &HAT_HOT_EXTENDED_RESPONSE_ID => {
+        Some(match *b.first()? {
+            HAT_HOT_RESPONSE_ID => HatHotResponse::decode(b, version, order).map(Self::HatHot),
+            HAT_HOT_EXTENDED_RESPONSE_ID => {
                 HatHotExtendedResponse::decode(b, version, order).map(Self::HatHotExtended)
             }
-            &LOS_RESPONSE_ID => LosResponse::decode(b, version, order).map(Self::Los),
-            &LOS_EXTENDED_RESPONSE_ID => {
+            LOS_RESPONSE_ID => LosResponse::decode(b, version, order).map(Self::Los),
+            LOS_EXTENDED_RESPONSE_ID => {
                 LosExtendedResponse::decode(b, version, order).map(Self::LosExtended)
             }
             _ => return None,
