@@ -51,18 +51,59 @@ fn check_native(b: &[u8]) -> bool {
     true
 }
 
-/// CIGI host message: the ownship pose (if any) is valid, and the Start of Frame answer
-/// decodes in the host's byte order naming the host's frame.
+/// CIGI host message (any 3.x version): the ownship pose (if any) is valid; every request,
+/// entity and environment packet kept passed its checks and survives re-encoding in the
+/// host's version; rejected packets lie inside the message; every packet is counted; the
+/// Start of Frame answer decodes in the host's version and byte order naming the host's
+/// frame. The same bytes read as an IG → host message never panic either.
 pub fn decode_cigi(b: &[u8]) -> bool {
+    let _ = cigi::decode_ig_message(b);
     let Ok(m) = cigi::decode(b) else {
         return false;
     };
+    let (v, o) = (m.version, m.byte_order);
     if let Some(p) = m.ownship_pose() {
         assert_eq!(p.validate(), Ok(()));
     }
-    let (sof, order) = cigi::StartOfFrame::decode(&m.answer(7, 9)).expect("answer decodes");
-    assert_eq!(order, m.byte_order);
-    assert_eq!(sof.last_host_frame, m.ig_control.host_frame);
+    for r in &m.requests {
+        let again =
+            cigi::decode(&[cigi::IgControl::default().encode_as(v, o), r.encode(v, o)].concat())
+                .expect("a kept request re-encodes");
+        assert_eq!(again.requests, [*r]);
+    }
+    for e in m.entities.iter().filter(|e| e.entity_id != cigi::OWNSHIP) {
+        assert_eq!(e.check(), Ok(()));
+        assert_eq!(
+            cigi::EntityControl::decode(&e.encode(o), v, o).as_ref(),
+            Ok(e)
+        );
+    }
+    for c in &m.conformal_clamped {
+        assert_eq!(c.check(), Ok(()));
+    }
+    for r in &m.rate_controls {
+        assert_eq!(r.check(), Ok(()));
+    }
+    if let Some(c) = m.celestial {
+        assert_eq!(c.check(), Ok(()));
+    }
+    if let Some(a) = m.atmosphere {
+        assert_eq!(a.check(), Ok(()));
+    }
+    let start = usize::from(v.ig_control_size());
+    for r in &m.rejected {
+        assert!(r.offset >= start && r.offset < b.len());
+    }
+    assert!(m.packet_counts.get(cigi::IG_CONTROL_ID) >= 1);
+    assert!(m.packet_counts.total() >= 1 + m.requests.len() as u64 + m.rejected.len() as u64);
+    let answer = m.answer(7, 9);
+    assert_eq!(answer.len(), usize::from(v.start_of_frame_size()));
+    let (sof, sof_v, order) =
+        cigi::StartOfFrame::decode_with_version(&answer).expect("answer decodes");
+    assert_eq!((sof_v, order), (v, o));
+    if v.is_3_2_or_later() {
+        assert_eq!(sof.last_host_frame, m.ig_control.host_frame);
+    }
     let mut views = cigi::ViewTable::default();
     views.apply(&m);
     assert!(views.views().len() <= cigi::MAX_VIEWS);
@@ -299,6 +340,57 @@ mod tests {
         b
     }
 
+    /// One of each request and environment packet, valid, in `v` and `order`.
+    fn cigi_requests(v: cigi::CigiVersion, order: ByteOrder) -> Vec<u8> {
+        let mut b = cigi::HatHotRequest {
+            request_id: 1,
+            request_type: cigi::HatHotRequestType::Extended,
+            update_period: 2,
+            point: [47.26, 11.35, 3000.0],
+            ..cigi::HatHotRequest::default()
+        }
+        .encode(v, order)
+        .to_vec();
+        b.extend(
+            cigi::LosSegmentRequest {
+                request_id: 2,
+                source: [47.26, 11.35, 3000.0],
+                destination: [47.3, 11.4, 1000.0],
+                ..cigi::LosSegmentRequest::default()
+            }
+            .encode(v, order),
+        );
+        b.extend(
+            cigi::LosVectorRequest {
+                request_id: 3,
+                elevation_deg: -10.0,
+                max_range_m: 10_000.0,
+                source: [47.26, 11.35, 3000.0],
+                ..cigi::LosVectorRequest::default()
+            }
+            .encode(v, order),
+        );
+        b.extend(
+            cigi::CelestialSphereControl {
+                hour: 12,
+                date_valid: true,
+                month: 6,
+                day: 21,
+                year: 2026,
+                ..cigi::CelestialSphereControl::default()
+            }
+            .encode(order),
+        );
+        b.extend(
+            cigi::AtmosphereControl {
+                visibility_m: 20_000.0,
+                ..cigi::AtmosphereControl::default()
+            }
+            .encode(order),
+        );
+        b
+    }
+
     /// Writes the seed corpus (`cargo test -p aerie-sim-bridge -- --ignored write_seed_corpus`);
     /// the files are checked in.
     #[test]
@@ -328,6 +420,29 @@ mod tests {
         ));
         let c = cigi_message(ByteOrder::Big, &[]);
         seeds.push(("cigi", "cut", c[..50].to_vec()));
+        let requests = cigi_requests(cigi::CigiVersion::V3_3, ByteOrder::Little);
+        seeds.push((
+            "cigi",
+            "requests_and_environment",
+            cigi_message(ByteOrder::Little, &requests),
+        ));
+        let mut v30 = cigi::IgControl {
+            ig_mode: 1,
+            host_frame: 9,
+            ..cigi::IgControl::default()
+        }
+        .encode_as(cigi::CigiVersion::V3_0, ByteOrder::Big);
+        v30.extend(cigi_requests(cigi::CigiVersion::V3_0, ByteOrder::Big));
+        seeds.push(("cigi", "v3_0_requests", v30));
+        let mut answer =
+            cigi::StartOfFrame::default().encode(cigi::CigiVersion::V3_2, ByteOrder::Big);
+        cigi::CigiResponse::Los(cigi::LosResponse {
+            request_id: 4,
+            valid: true,
+            ..cigi::LosResponse::default()
+        })
+        .encode_into(cigi::CigiVersion::V3_2, ByteOrder::Big, &mut answer);
+        seeds.push(("cigi", "ig_answer", answer));
         let x = xplane::encode(&xplane::Rpos::from_pose(&pose(false), 12.0)).to_vec();
         seeds.push(("xplane", "rpos", x.clone()));
         seeds.push(("xplane", "short", x[..40].to_vec()));

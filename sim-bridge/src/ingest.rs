@@ -6,7 +6,7 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use crate::codec::cigi::{CigiMessage, ViewTable};
+use crate::codec::cigi::{CigiMessage, IgMode, ViewTable};
 use crate::codec::{decode, DecodeError, Decoded, Protocol, ProtocolChoice};
 use crate::handoff::{latest, Publisher, Subscriber};
 use crate::pose::{Pose, PoseLimits};
@@ -163,6 +163,9 @@ impl Ingest {
                 }
             }
             Ok(d) => {
+                if let Some(m) = &d.cigi {
+                    self.counters.cigi_packets(&m.packet_counts);
+                }
                 let mut seq_verdict = None;
                 if let Some(seq) = d.sequence {
                     let k = Protocol::ALL
@@ -200,7 +203,7 @@ impl Ingest {
                     seq_verdict = Some(v);
                 }
                 if let Some(m) = &d.cigi {
-                    if self.views.apply(m) {
+                    if self.host_views(m) {
                         self.views_out.publish(self.views.clone());
                     }
                 }
@@ -220,6 +223,26 @@ impl Ingest {
                 }
             }
         }
+    }
+
+    /// Applies a message's views; a message in Reset/Standby puts the views back to the
+    /// configuration (an empty table) and applies none (the IG session ignores every packet
+    /// but IG Control while the host holds it in Reset). Returns whether the table changed.
+    fn host_views(&mut self, m: &CigiMessage) -> bool {
+        if m.ig_control.mode() == IgMode::ResetOrStandby {
+            let had = !self.views.views().is_empty();
+            self.views = ViewTable::default();
+            had
+        } else {
+            self.views.apply(m)
+        }
+    }
+
+    /// Counts a datagram that was a valid native terrain query (no pose; the IG session
+    /// answers it).
+    pub fn native_query(&mut self) {
+        self.counters.received();
+        self.counters.no_pose();
     }
 
     /// Publishes a pose read from shared memory (validated here) that was new at `arrival_s`.
@@ -457,6 +480,7 @@ mod tests {
         let (mut ing, mut rd) = input_channel(InputParams::default());
         let msg = |frame: u32, with_entity: bool| {
             let mut b = IgControl {
+                ig_mode: 1,
                 host_frame: frame,
                 ..IgControl::default()
             }
@@ -502,5 +526,46 @@ mod tests {
         assert_eq!(rd.views().get(3).unwrap().roll_pitch_yaw_deg[2], Some(1.0));
         let s = rd.stats();
         assert_eq!((s.received, s.accepted, s.no_pose, s.resyncs), (4, 3, 1, 1));
+    }
+
+    #[test]
+    fn a_reset_puts_views_back_and_packets_are_tallied() {
+        let (mut ing, mut rd) = input_channel(InputParams::default());
+        let msg = |frame: u32, mode: u8| {
+            let mut b = IgControl {
+                ig_mode: mode,
+                host_frame: frame,
+                ..IgControl::default()
+            }
+            .encode(ByteOrder::Big)
+            .to_vec();
+            b.extend(
+                ViewControl {
+                    view_id: 2,
+                    enable: 0x20,
+                    roll_pitch_yaw_deg: [0.0, 0.0, 45.0],
+                    ..ViewControl::default()
+                }
+                .encode(ByteOrder::Big),
+            );
+            b
+        };
+        ing.datagram(&msg(1, 1), 0.0);
+        assert!(rd.views().get(2).is_some());
+        // Reset: the table empties (channels fall back to their configured views) and the
+        // message's own View Control is not applied.
+        assert_eq!(ing.datagram(&msg(2, 0), 0.01).verdict, Verdict::NoPose);
+        assert!(rd.views().views().is_empty());
+        ing.datagram(&msg(3, 0), 0.02);
+        assert!(rd.views().views().is_empty());
+        ing.datagram(&msg(4, 1), 0.03);
+        assert_eq!(rd.views().get(2).unwrap().roll_pitch_yaw_deg[2], Some(45.0));
+        let t = rd.stats().cigi_packets;
+        assert_eq!((t.get(1), t.get(16)), (4, 4));
+        // A native query is counted as a valid packet without a pose.
+        ing.native_query();
+        let s = rd.stats();
+        assert_eq!(s.received, s.accepted + s.no_pose + s.dropped_total());
+        assert_eq!(s.no_pose, 5);
     }
 }

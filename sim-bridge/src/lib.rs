@@ -21,6 +21,7 @@ pub mod codec;
 pub mod fuzzing;
 pub mod geodesy;
 pub mod handoff;
+pub mod ig;
 pub mod ingest;
 pub mod pose;
 pub mod query;

@@ -1,6 +1,8 @@
 //! Input counters: shared between the receiving thread (writes, relaxed atomics) and whoever
 //! reports them (reads a [`StatsSnapshot`]). No locks.
 
+use crate::codec::cigi::{packet_name, PacketCounts};
+
 use std::sync::atomic::{
     AtomicU64,
     Ordering::{Acquire, Relaxed, Release},
@@ -79,7 +81,7 @@ impl std::fmt::Display for DropReason {
 }
 
 /// Live counters of one input (one UDP port or one shared-memory file).
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct Counters {
     received: AtomicU64,
     accepted: AtomicU64,
@@ -96,6 +98,29 @@ pub struct Counters {
     first_accept_bits: AtomicU64,
     /// f64 bits of the latest accepted pose's arrival.
     last_accept_bits: AtomicU64,
+    /// CIGI packets of every decoded host message, by packet ID.
+    cigi_packets: [AtomicU64; 256],
+}
+
+impl Default for Counters {
+    fn default() -> Self {
+        Self {
+            received: AtomicU64::new(0),
+            accepted: AtomicU64::new(0),
+            no_pose: AtomicU64::new(0),
+            dropped: Default::default(),
+            gaps: AtomicU64::new(0),
+            missed: AtomicU64::new(0),
+            resyncs: AtomicU64::new(0),
+            replies: AtomicU64::new(0),
+            retries: AtomicU64::new(0),
+            busy: AtomicU64::new(0),
+            shm_shrinks: AtomicU64::new(0),
+            first_accept_bits: AtomicU64::new(0),
+            last_accept_bits: AtomicU64::new(0),
+            cigi_packets: std::array::from_fn(|_| AtomicU64::new(0)),
+        }
+    }
 }
 
 impl Counters {
@@ -137,6 +162,12 @@ impl Counters {
     pub(crate) fn shm_shrink(&self) {
         self.shm_shrinks.fetch_add(1, Relaxed);
     }
+    /// Adds a decoded CIGI message's per-ID packet counts.
+    pub(crate) fn cigi_packets(&self, counts: &PacketCounts) {
+        for &(id, n) in counts.as_slice() {
+            self.cigi_packets[usize::from(id)].fetch_add(n.into(), Relaxed);
+        }
+    }
 
     /// A consistent-enough copy for reporting (each counter read once; `accepted` with
     /// acquire, see [`accepted`](Self::accepted)).
@@ -159,6 +190,62 @@ impl Counters {
             shm_shrinks: self.shm_shrinks.load(Relaxed),
             first_accept_s: f64::from_bits(self.first_accept_bits.load(Relaxed)),
             last_accept_s: f64::from_bits(self.last_accept_bits.load(Relaxed)),
+            cigi_packets: CigiPacketTally(std::array::from_fn(|i| {
+                self.cigi_packets[i].load(Relaxed)
+            })),
+        }
+    }
+}
+
+/// CIGI packets received, by packet ID (every decoded host message's, IG Control included).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct CigiPacketTally([u64; 256]);
+
+impl Default for CigiPacketTally {
+    fn default() -> Self {
+        CigiPacketTally([0; 256])
+    }
+}
+
+impl std::fmt::Debug for CigiPacketTally {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_map().entries(self.nonzero()).finish()
+    }
+}
+
+impl CigiPacketTally {
+    /// Packets of ID `id`.
+    pub fn get(&self, id: u8) -> u64 {
+        self.0[usize::from(id)]
+    }
+
+    /// `(id, count)` for every ID seen, ascending.
+    pub fn nonzero(&self) -> Vec<(u8, u64)> {
+        (0..=255u8)
+            .map(|id| (id, self.get(id)))
+            .filter(|&(_, n)| n > 0)
+            .collect()
+    }
+
+    /// Every packet counted.
+    pub fn total(&self) -> u64 {
+        self.0.iter().sum()
+    }
+
+    /// `id name ×count` pairs (`1 IG Control ×60, 2 Entity Control ×60`), or `none`.
+    pub fn summary(&self) -> String {
+        let parts: Vec<String> = self
+            .nonzero()
+            .into_iter()
+            .map(|(id, n)| match packet_name(id) {
+                Some(name) => format!("{id} {name} ×{n}"),
+                None => format!("{id} ×{n}"),
+            })
+            .collect();
+        if parts.is_empty() {
+            "none".into()
+        } else {
+            parts.join(", ")
         }
     }
 }
@@ -194,6 +281,8 @@ pub struct StatsSnapshot {
     pub first_accept_s: f64,
     /// Arrival of the latest accepted pose (0 if none).
     pub last_accept_s: f64,
+    /// CIGI packets received by packet ID.
+    pub cigi_packets: CigiPacketTally,
 }
 
 impl StatsSnapshot {
@@ -248,5 +337,25 @@ mod tests {
         c.accepted(10.5);
         c.accepted(11.0);
         assert_eq!(c.snapshot().pose_rate_hz(), Some(2.0));
+    }
+
+    #[test]
+    fn cigi_packets_are_tallied_by_id() {
+        let c = Counters::default();
+        assert_eq!(c.snapshot().cigi_packets.summary(), "none");
+        let mut m = PacketCounts::default();
+        m.add(1);
+        m.add_n(2, 3);
+        m.add(60);
+        c.cigi_packets(&m);
+        c.cigi_packets(&m);
+        let t = c.snapshot().cigi_packets;
+        assert_eq!(t.get(2), 6);
+        assert_eq!(t.nonzero(), vec![(1, 2), (2, 6), (60, 2)]);
+        assert_eq!(t.total(), 10);
+        let s = t.summary();
+        assert!(s.starts_with("1 IG Control ×2, 2 Entity Control ×6"), "{s}");
+        // An ID CIGI does not define: the number alone.
+        assert!(s.ends_with(", 60 ×2"), "{s}");
     }
 }

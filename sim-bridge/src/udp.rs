@@ -1,7 +1,8 @@
 //! UDP transport: a receiver thread per port, handing the newest valid pose to the frame loop
-//! through a [`PoseReader`] (lock-free), answering CIGI hosts with Start of Frame, optionally
-//! joining a multicast group (the port shared with other processes on the host), filtering
-//! senders and recording every datagram.
+//! through a [`PoseReader`] (lock-free) and every CIGI message and native terrain query to the
+//! port's IG session ([`UdpReceiver::ig_link`]: the frame loop answers through it, once per IG
+//! frame, on this port's socket), optionally joining a multicast group (the port shared with
+//! other processes on the host), filtering senders and recording every datagram.
 
 use std::io;
 use std::net::{IpAddr, Ipv4Addr, SocketAddr, SocketAddrV4, UdpSocket};
@@ -11,7 +12,8 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use crate::codec::ProtocolChoice;
+use crate::codec::{native, ProtocolChoice};
+use crate::ig::{IgConfig, IgLink};
 use crate::ingest::{input_channel, Ingest, InputParams, PoseReader, Verdict};
 use crate::pose::PoseLimits;
 use crate::record::Recorder;
@@ -26,17 +28,7 @@ pub fn default_bind() -> SocketAddr {
     SocketAddr::V4(SocketAddrV4::new(Ipv4Addr::LOCALHOST, DEFAULT_PORT))
 }
 
-/// Where CIGI Start of Frame answers go.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub enum CigiReply {
-    /// Never answer.
-    Off,
-    /// To the address the host's message came from.
-    #[default]
-    ToSender,
-    /// To a fixed address (hosts that listen on another port than they send from).
-    To(SocketAddr),
-}
+pub use crate::ig::CigiReply;
 
 /// Ask an X-Plane instance to stream `RPOS` to this port.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -64,7 +56,7 @@ pub struct UdpConfig {
     pub multicast_interface: Ipv4Addr,
     /// When non-empty, datagrams from other source addresses are dropped and counted.
     pub allow: Vec<IpAddr>,
-    /// CIGI Start of Frame answers.
+    /// Where the IG session's CIGI messages (Start of Frame and answers) go.
     pub cigi_reply: CigiReply,
     /// Record every received datagram to this file.
     pub record: Option<PathBuf>,
@@ -190,6 +182,7 @@ pub struct UdpReceiver {
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<Result<(), String>>>,
     counters: Arc<Counters>,
+    link: IgLink,
 }
 
 /// How long a blocked `recv` waits before checking for a stop request.
@@ -246,13 +239,23 @@ impl UdpReceiver {
             limits: cfg.limits,
         });
         let counters = ingest.counters().clone();
+        let sender = socket
+            .try_clone()
+            .map_err(ctx(format!("clone the socket of {local}")))?;
+        let link = IgLink::new(
+            IgConfig {
+                reply: cfg.cigi_reply.clone(),
+            },
+            Some(sender),
+            Some(counters.clone()),
+        );
         let stop = Arc::new(AtomicBool::new(false));
         let thread = {
             let stop = stop.clone();
             let opts = LoopOptions {
                 allow: cfg.allow.iter().copied().map(canonical).collect(),
-                reply: cfg.cigi_reply.clone(),
                 rpos: cfg.xplane_rpos,
+                link: link.clone(),
             };
             std::thread::Builder::new()
                 .name(format!("aerie-udp-{}", local.port()))
@@ -264,9 +267,16 @@ impl UdpReceiver {
                 stop,
                 thread: Some(thread),
                 counters,
+                link,
             },
             reader,
         ))
+    }
+
+    /// The port's IG session: the frame loop calls [`IgLink::begin_frame`] at the start of
+    /// every frame (Start of Frame and the answers due go out on this port's socket).
+    pub fn ig_link(&self) -> IgLink {
+        self.link.clone()
     }
 
     /// The bound address.
@@ -304,8 +314,8 @@ impl Drop for UdpReceiver {
 
 struct LoopOptions {
     allow: Vec<IpAddr>,
-    reply: CigiReply,
     rpos: Option<RposRequest>,
+    link: IgLink,
 }
 
 fn receive_loop(
@@ -315,11 +325,9 @@ fn receive_loop(
     opts: LoopOptions,
     mut recorder: Option<Recorder>,
 ) -> Result<(), String> {
-    let LoopOptions { allow, reply, rpos } = opts;
+    let LoopOptions { allow, rpos, link } = opts;
     let mut buf = vec![0u8; 65_536];
-    let mut ig_frame: u32 = 0;
     let mut record_error = None;
-    let counters = ingest.counters().clone();
     let mut last_rpos: Option<std::time::Instant> = None;
     while !stop.load(Ordering::Relaxed) {
         if let Some(req) = rpos {
@@ -359,6 +367,17 @@ fn receive_loop(
             ingest.not_allowed(&from);
             continue;
         }
+        if native::is_query(bytes) {
+            // A terrain question, not a pose: the IG session answers it in the next frame.
+            match native::decode_query(bytes) {
+                Ok((id, request)) => {
+                    ingest.native_query();
+                    link.receive_native(id, request, from);
+                }
+                Err(e) => ingest.count_drop(e.reason(), &e),
+            }
+            continue;
+        }
         let out = ingest.datagram(bytes, arrival);
         if rpos.is_some()
             && matches!(out.verdict, Verdict::Accepted(_))
@@ -366,18 +385,9 @@ fn receive_loop(
         {
             last_rpos = Some(std::time::Instant::now());
         }
+        // Answered by the frame loop (one Start of Frame per IG frame), not here.
         if let (Verdict::Accepted(_) | Verdict::NoPose, Some(m)) = (out.verdict, &out.cigi) {
-            let to = match reply {
-                CigiReply::Off => continue,
-                CigiReply::ToSender => from,
-                CigiReply::To(a) => a,
-            };
-            ig_frame = ig_frame.wrapping_add(1);
-            let ticks = (monotonic_s() * 1e5) as u64 as u32;
-            match socket.send_to(&m.answer(ig_frame, ticks), to) {
-                Ok(_) => counters.reply(),
-                Err(e) => tracing::debug!("CIGI Start of Frame to {to}: {e}"),
-            }
+            link.receive(m, from);
         }
     }
     match record_error {

@@ -14,6 +14,8 @@ use aerie_sim_bridge::codec::cigi::{
     EntityControl, IgControl, StartOfFrame, ViewControl, ViewDefinition,
 };
 use aerie_sim_bridge::codec::{fgfs, native, xplane, ByteOrder, ProtocolChoice};
+use aerie_sim_bridge::ig::{DatabaseStatus, IgFrame};
+use aerie_sim_bridge::query::NoTerrain;
 use aerie_sim_bridge::record::{
     read_recording, replay as replay_packets, write_recording, RecordedPacket, ReplayTiming,
 };
@@ -203,13 +205,26 @@ fn cigi_host_gets_start_of_frame_and_views_reach_the_reader() {
             .encode(order),
         );
         host.send_to(&msg, rx.local_addr()).unwrap();
+        // The IG answers once per IG frame: begin one once the message is in.
+        let link = rx.ig_link();
+        wait_for("the message reaches the IG session", || {
+            link.state().last_host_frame == Some(frame)
+        });
+        let ig_frame = IgFrame {
+            ig_frame: frame - 499,
+            time_s: 1.0,
+            database: DatabaseStatus::Ready(3),
+        };
+        link.begin_frame(&ig_frame, &NoTerrain);
         let (n, from) = host.recv_from(&mut buf).expect("Start of Frame answer");
         assert_eq!(from, rx.local_addr());
         let (sof, got_order) = StartOfFrame::decode(&buf[..n]).unwrap();
         assert_eq!(got_order, order, "answered in the host's byte order");
         assert_eq!(sof.last_host_frame, frame);
+        assert_eq!(sof.ig_frame, frame - 499);
         assert_eq!(sof.ig_mode, 1);
         assert_eq!(sof.database, 3);
+        assert_eq!(rx.ig_link().state().database_request, Some(3));
     }
     let p = reader.latest().unwrap().latest.pose;
     assert_eq!(p.frame, 501);
@@ -229,6 +244,11 @@ fn cigi_host_gets_start_of_frame_and_views_reach_the_reader() {
     host.send_to(&cigi_message(1, ByteOrder::Big, 46.0), rx.local_addr())
         .unwrap();
     wait_received(&rx, 1);
+    let link = rx.ig_link();
+    wait_for("the message reaches the IG session", || {
+        link.state().last_host_frame == Some(1)
+    });
+    link.begin_frame(&IgFrame::default(), &NoTerrain);
     host.set_read_timeout(Some(Duration::from_millis(100)))
         .unwrap();
     assert!(host.recv_from(&mut buf).is_err(), "no answer expected");
@@ -639,6 +659,7 @@ fn listen_and_replay_commands() {
         seconds: Some(1.2),
         json: Some(json.clone()),
         no_cigi_reply: false,
+        ig_rate: listen::DEFAULT_IG_RATE_HZ,
     };
     let listener = std::thread::spawn(move || listen::run(args));
     std::thread::sleep(Duration::from_millis(300));

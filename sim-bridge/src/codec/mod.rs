@@ -1,5 +1,6 @@
-//! Packet codecs: aerie native v1 (poses, and the terrain queries and answers), CIGI 3.3
-//! (host → IG subset), X-Plane `RPOS`, FlightGear FGNetFDM v24 and v25. Layouts are specified in `sim-bridge/PROTOCOL.md`.
+//! Packet codecs: aerie native v1 (poses, and the terrain queries and answers), CIGI 3.0–3.3
+//! (the IG side), X-Plane `RPOS`, FlightGear FGNetFDM v24 and v25. Layouts are specified in
+//! `sim-bridge/PROTOCOL.md`.
 //!
 //! Every decoder takes arbitrary bytes and either returns a validated [`Pose`] (plus whatever
 //! else the packet carried) or a [`DecodeError`] that names the reason; none panics.
@@ -42,9 +43,10 @@ impl Decoded {
 }
 
 /// Recognises a datagram's protocol from its first bytes (and, for FGNetFDM, its size):
-/// `AERP` → aerie; `RPOS` → X-Plane; packet ID 1 with size 24 (a CIGI 3 IG Control) → CIGI;
-/// big-endian u32 24 or 25 at offset 0, or exactly 408 or 552 bytes → FlightGear. A native
-/// terrain query (`AERQ`) is not a pose and is not detected: check [`native::is_query`] first.
+/// `AERP` → aerie; `RPOS` → X-Plane; packet ID 1 with size 24 (a CIGI 3.2/3.3 IG Control) or
+/// 16 (3.0/3.1) → CIGI; big-endian u32 24 or 25 at offset 0, or exactly 408 or 552 bytes →
+/// FlightGear. A native terrain query (`AERQ`) is not a pose and is not detected: check
+/// [`native::is_query`] first.
 pub fn detect(bytes: &[u8]) -> Option<Protocol> {
     if bytes.starts_with(&native::MAGIC) {
         Some(Protocol::Aerie)
@@ -52,7 +54,7 @@ pub fn detect(bytes: &[u8]) -> Option<Protocol> {
         Some(Protocol::XPlane)
     } else if bytes.len() >= 2
         && bytes[0] == cigi::IG_CONTROL_ID
-        && bytes[1] == cigi::IG_CONTROL_SIZE
+        && (bytes[1] == cigi::IG_CONTROL_SIZE || bytes[1] == cigi::IG_CONTROL_SIZE_V3_0)
     {
         Some(Protocol::Cigi)
     } else if fgfs::looks_like(bytes) {
@@ -124,12 +126,15 @@ mod tests {
         assert_eq!(detect(&x), Some(Protocol::XPlane));
         let f = fgfs::encode(&fgfs::FdmPose::default());
         assert_eq!(detect(&f), Some(Protocol::Fgfs));
+        for v in cigi::CigiVersion::ALL {
+            let c = cigi::IgControl::default().encode_as(v, ByteOrder::Big);
+            assert_eq!(detect(&c), Some(Protocol::Cigi), "{v}");
+        }
+        assert_eq!(detect(&[1, 20, 3, 0]), None, "IG Control of neither size");
         let f25 = fgfs::encode_v25(&fgfs::FdmPose::default());
         assert_eq!(detect(&f25), Some(Protocol::Fgfs));
         assert_eq!(detect(&f25[..100]), Some(Protocol::Fgfs), "by its version");
         assert!(decode(ProtocolChoice::Auto, &f25).is_ok());
-        let c = cigi::IgControl::default().encode(ByteOrder::Big);
-        assert_eq!(detect(&c), Some(Protocol::Cigi));
         // A native terrain query is not a pose: detection leaves it to `native::is_query`.
         let q = native::encode_query(
             9,

@@ -10,6 +10,8 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use aerie_sim_bridge::codec::ProtocolChoice;
+use aerie_sim_bridge::ig::{DatabaseStatus, IgFrame, IgLink, IgStats};
+use aerie_sim_bridge::query::NoTerrain;
 use aerie_sim_bridge::shm::{shm_path, ShmConfig, ShmSource, DEFAULT_SHM_NAME};
 use aerie_sim_bridge::timing::{monotonic_s, ExtrapolationParams, StreamState};
 use aerie_sim_bridge::udp::{CigiReply, UdpConfig, UdpReceiver};
@@ -24,6 +26,42 @@ use crate::tools::output::write_text;
 
 /// Default `--max-extrapolation-ms`: the extrapolation cap and lost-stream threshold.
 pub const DEFAULT_CAP_MS: f64 = 100.0;
+/// Default `--ig-rate`, IG frames per second.
+pub const DEFAULT_IG_RATE_HZ: f64 = 60.0;
+/// The highest `--ig-rate` taken.
+pub const MAX_IG_RATE_HZ: f64 = 1000.0;
+
+/// Ticks the port's IG session at a fixed rate, as the renderer's frame loop would, without
+/// terrain.
+struct IgTicker {
+    link: IgLink,
+    period: Duration,
+    next: Instant,
+    frame: u32,
+}
+
+impl IgTicker {
+    /// Begins every frame that is due at `now` (late ticks are not made up: the next one is
+    /// a period after now).
+    fn tick(&mut self, now: Instant) {
+        if now < self.next {
+            return;
+        }
+        self.frame = self.frame.wrapping_add(1);
+        self.link.begin_frame(
+            &IgFrame {
+                ig_frame: self.frame,
+                time_s: monotonic_s(),
+                database: DatabaseStatus::Ready(0),
+            },
+            &NoTerrain,
+        );
+        self.next += self.period;
+        if self.next <= now {
+            self.next = now + self.period;
+        }
+    }
+}
 
 #[derive(Debug, Args)]
 pub struct ListenArgs {
@@ -39,6 +77,10 @@ pub struct ListenArgs {
     /// Do not answer CIGI hosts with Start of Frame.
     #[arg(long)]
     pub no_cigi_reply: bool,
+    /// IG frames per second: a CIGI host gets one Start of Frame per frame (HAT/HOT and
+    /// line-of-sight requests are answered "no terrain": listen loads none).
+    #[arg(long, default_value_t = DEFAULT_IG_RATE_HZ)]
+    pub ig_rate: f64,
     // Last: the flattened input section's heading applies to the fields after it.
     #[command(flatten)]
     pub input: InputArgs,
@@ -102,6 +144,46 @@ fn progress_line(elapsed: f64, s: &StatsSnapshot, reader: &mut PoseReader) -> St
     )
 }
 
+/// `{"1 IG Control": n, …}`: the CIGI packets received by ID.
+fn cigi_packets_json(s: &StatsSnapshot) -> serde_json::Value {
+    let mut m = serde_json::Map::new();
+    for (id, n) in s.cigi_packets.nonzero() {
+        let key = match aerie_sim_bridge::codec::cigi::packet_name(id) {
+            Some(name) => format!("{id} {name}"),
+            None => id.to_string(),
+        };
+        m.insert(key, n.into());
+    }
+    m.into()
+}
+
+fn ig_json(s: &IgStats, frames: u32) -> serde_json::Value {
+    serde_json::json!({
+        "frames": frames,
+        "start_of_frames": s.start_of_frames,
+        "host_messages": s.messages,
+        "requests_received": s.requests_received,
+        "answered": s.answered,
+        "answered_invalid": s.answered_invalid,
+        "timed_out": s.timed_out,
+        "latency_max_frames": s.latency_max_frames,
+        "latency_mean_frames": s.latency_mean_frames(),
+        "native_queries": s.native_received,
+        "native_answered": s.native_answered,
+        "entities": s.entities,
+        "ignored_in_standby": s.ignored_in_standby,
+        "answer_cpu_us_mean": s.cpu_us_mean(),
+        "answer_cpu_us_max": s.cpu_us_max,
+    })
+}
+
+fn requests_text(s: &IgStats) -> String {
+    format!(
+        "{} requests ({} answered, {} invalid), {} native queries",
+        s.requests_received, s.answered, s.answered_invalid, s.native_received
+    )
+}
+
 pub fn run(a: ListenArgs) -> Result<(), Failure> {
     if let Some(s) = a.seconds {
         if !(s.is_finite() && s > 0.0) {
@@ -109,6 +191,12 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
                 "--seconds: {s} must be a positive number"
             )));
         }
+    }
+    if !(a.ig_rate.is_finite() && a.ig_rate > 0.0 && a.ig_rate <= MAX_IG_RATE_HZ) {
+        return Err(bad_input(format!(
+            "--ig-rate: {} must be a number of frames per second in (0, {MAX_IG_RATE_HZ}]",
+            a.ig_rate
+        )));
     }
     let cap_ms = a.input.max_extrapolation_ms.unwrap_or(DEFAULT_CAP_MS);
     if !(cap_ms.is_finite() && cap_ms > 0.0) {
@@ -201,13 +289,37 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
     let start = Instant::now();
     let deadline = a.seconds.map(|s| start + Duration::from_secs_f64(s));
     let mut last_line = Instant::now();
+    let mut ig = match &source {
+        Source::Udp(rx) => Some(IgTicker {
+            link: rx.ig_link(),
+            period: Duration::from_secs_f64(1.0 / a.ig_rate),
+            next: start,
+            frame: 0,
+        }),
+        Source::Shm(_) => None,
+    };
+    let mut last_poll = start;
     loop {
         let now = Instant::now();
         if deadline.is_some_and(|d| now >= d) {
             break;
         }
+        if let Some(t) = ig.as_mut() {
+            t.tick(now);
+        }
         let step = Duration::from_millis(50);
-        std::thread::sleep(deadline.map_or(step, |d| step.min(d.saturating_duration_since(now))));
+        let mut wake = now + step;
+        if let Some(t) = &ig {
+            wake = wake.min(t.next);
+        }
+        if let Some(d) = deadline {
+            wake = wake.min(d);
+        }
+        std::thread::sleep(wake.saturating_duration_since(now));
+        if last_poll.elapsed() < step {
+            continue;
+        }
+        last_poll = Instant::now();
         // Drives the lost/regained detection (logged) exactly as a frame loop would.
         let _ = reader.pose_now();
         let every = if tty { 200 } else { 2000 };
@@ -227,6 +339,8 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
     let listened_s = start.elapsed().as_secs_f64();
     let final_frame = reader.pose_now();
     let stats = reader.stats();
+    let ig_frames = ig.as_ref().map_or(0, |t| t.frame);
+    let ig_stats = ig.as_ref().map(|t| t.link.stats());
     let record_error = match source {
         Source::Udp(rx) => rx.stop().err(),
         Source::Shm(src) => {
@@ -275,6 +389,8 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
         "missed": stats.missed,
         "resyncs": stats.resyncs,
         "cigi_replies": stats.replies,
+        "cigi_packets": cigi_packets_json(&stats),
+        "ig": ig_stats.as_ref().map(|s| ig_json(s, ig_frames)),
         "shm_torn_retries": stats.retries,
         "shm_busy": stats.busy,
         "shm_shrinks": stats.shm_shrinks,
@@ -311,6 +427,16 @@ pub fn run(a: ListenArgs) -> Result<(), Failure> {
         },
         state_name(reader.state()),
     );
+    if stats.cigi_packets.total() > 0 || ig_stats.as_ref().is_some_and(|s| s.native_received > 0) {
+        println!(
+            "CIGI packets: {}; {} IG frames at {} Hz, {} Start of Frames, {}",
+            stats.cigi_packets.summary(),
+            ig_frames,
+            a.ig_rate,
+            stats.replies,
+            ig_stats.as_ref().map_or(String::new(), requests_text),
+        );
+    }
     if let Some(j) = &a.json {
         write_text(j, &format!("{summary:#}\n")).map_err(runtime)?;
     }
@@ -409,10 +535,100 @@ mod tests {
                 "--max-extrapolation-ms: 0 must be a positive number",
             ),
             (&["--seconds", "0"], "--seconds: 0"),
+            (&["--ig-rate", "0"], "--ig-rate: 0"),
+            (&["--ig-rate", "5000"], "--ig-rate: 5000"),
         ] {
             let f = run(args(extra)).expect_err("refused");
             assert_eq!(f.code, 2, "{extra:?}: {}", f.message);
             assert!(f.message.contains(says), "{extra:?}: {}", f.message);
         }
+    }
+
+    /// A synchronous CIGI host against `aerie listen`: one Start of Frame per IG tick (the
+    /// summary's counts), never one per host message; the summary lists the packets by ID.
+    #[test]
+    fn listen_ticks_the_ig_and_paces_a_synchronous_host() {
+        use aerie_sim_bridge::codec::cigi::{decode_ig_message, IgControl};
+        use aerie_sim_bridge::codec::ByteOrder;
+        use std::net::UdpSocket;
+        use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+        use std::sync::Arc;
+        use std::time::Duration;
+
+        let port = UdpSocket::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .port();
+        let dir = tempfile::tempdir().unwrap();
+        let json = dir.path().join("listen.json");
+        let to = format!("127.0.0.1:{port}");
+        let a = args(&[
+            "--listen",
+            &to,
+            "--seconds",
+            "1",
+            "--ig-rate",
+            "50",
+            "--json",
+            json.to_str().unwrap(),
+        ]);
+        let listener = std::thread::spawn(move || run(a));
+        let stop = Arc::new(AtomicBool::new(false));
+        let (sent, sofs) = (Arc::new(AtomicU64::new(0)), Arc::new(AtomicU64::new(0)));
+        let host = {
+            let (stop, sent, sofs) = (stop.clone(), sent.clone(), sofs.clone());
+            std::thread::spawn(move || {
+                let s = UdpSocket::bind("127.0.0.1:0").unwrap();
+                s.set_read_timeout(Some(Duration::from_millis(50))).unwrap();
+                let msg = |f: u32| {
+                    IgControl {
+                        ig_mode: 1,
+                        host_frame: f,
+                        ..IgControl::default()
+                    }
+                    .encode(ByteOrder::Little)
+                };
+                let mut f = 1;
+                let mut buf = [0u8; 512];
+                while !stop.load(Ordering::Relaxed) {
+                    // Until the first Start of Frame, re-send (listen may not be bound yet).
+                    if sofs.load(Ordering::Relaxed) == 0 {
+                        s.send_to(&msg(f), &to).unwrap();
+                        sent.fetch_add(1, Ordering::Relaxed);
+                        f += 1;
+                    }
+                    if let Ok((n, _)) = s.recv_from(&mut buf) {
+                        decode_ig_message(&buf[..n]).unwrap();
+                        sofs.fetch_add(1, Ordering::Relaxed);
+                        s.send_to(&msg(f), &to).unwrap();
+                        sent.fetch_add(1, Ordering::Relaxed);
+                        f += 1;
+                    }
+                }
+            })
+        };
+        listener.join().unwrap().unwrap();
+        stop.store(true, Ordering::Relaxed);
+        host.join().unwrap();
+        let j: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let frames = j["ig"]["frames"].as_u64().unwrap();
+        let replies = j["cigi_replies"].as_u64().unwrap();
+        let sofs = sofs.load(Ordering::Relaxed);
+        assert!(sofs > 0, "{j:#}");
+        assert!(
+            replies <= frames,
+            "{replies} Start of Frames in {frames} IG frames"
+        );
+        assert!(sofs <= replies);
+        // A paced host: its messages number its Start of Frames (plus the retries before the
+        // first one), never hundreds per frame.
+        let received = j["cigi_packets"]["1 IG Control"].as_u64().unwrap();
+        assert!(received <= sent.load(Ordering::Relaxed));
+        assert!(
+            received <= frames + 60,
+            "{received} host messages, {frames} IG frames"
+        );
     }
 }

@@ -1,26 +1,67 @@
-//! One host → IG message: its byte order, then each packet in turn.
+//! One host → IG message: its version and byte order from IG Control, then each packet in
+//! turn — decoded, checked and counted.
 
 use crate::codec::protocol::DecodeError;
 use crate::codec::wire::{ByteOrder, Rd};
 use crate::pose::{Pose, PosePosition};
 
+use super::control::{IgControl, StartOfFrame};
+use super::counts::PacketCounts;
+use super::entities::{ConformalClampedEntityControl, EntityControl, RateControl};
+use super::environment::{AtmosphereControl, CelestialSphereControl};
 use super::format::*;
-use super::packets::*;
+use super::requests::{CigiRequest, HatHotRequest, LosSegmentRequest, LosVectorRequest};
+use super::version::CigiVersion;
+use super::view_packets::{ViewControl, ViewDefinition};
+
+/// A well-formed packet whose values failed their checks (or whose enumerated field holds a
+/// reserved value). It is left out of the message; the rest of the message stands.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RejectedPacket {
+    /// Its packet ID.
+    pub packet_id: u8,
+    /// Its byte offset in the message.
+    pub offset: usize,
+    /// The request ID (HAT/HOT ID, LOS ID) of a rejected request, so that it can still be
+    /// answered as invalid.
+    pub request_id: Option<u16>,
+    /// What is wrong, naming the field.
+    pub error: DecodeError,
+}
 
 /// One host → IG message, as far as aerie reads it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CigiMessage {
     /// The byte order the host wrote the message in.
     pub byte_order: ByteOrder,
+    /// The CIGI version the host speaks (from IG Control); answers go out in it.
+    pub version: CigiVersion,
     /// The IG Control packet that opens the message.
     pub ig_control: IgControl,
     /// The last Entity Control for the ownship (entity 0) in the message.
     pub ownship: Option<EntityControl>,
+    /// Every Entity Control that passed its checks (the ownship's included), in message order.
+    pub entities: Vec<EntityControl>,
+    /// Conformal Clamped Entity Control packets, in message order.
+    pub conformal_clamped: Vec<ConformalClampedEntityControl>,
+    /// Rate Control packets, in message order.
+    pub rate_controls: Vec<RateControl>,
+    /// The last Celestial Sphere Control of the message.
+    pub celestial: Option<CelestialSphereControl>,
+    /// The last Atmosphere Control of the message.
+    pub atmosphere: Option<AtmosphereControl>,
     /// View Control packets, in message order.
     pub view_controls: Vec<ViewControl>,
     /// View Definition packets, in message order.
     pub view_definitions: Vec<ViewDefinition>,
-    /// Packets skipped by their size byte (other entities, other packet types).
+    /// HAT/HOT and line-of-sight requests that passed their checks, in message order.
+    pub requests: Vec<CigiRequest>,
+    /// Every packet of the message by packet ID (IG Control, rejected and unknown ones
+    /// included).
+    pub packet_counts: PacketCounts,
+    /// Packets left out because a value failed its check.
+    pub rejected: Vec<RejectedPacket>,
+    /// Packets of IDs aerie does not read, skipped by their size byte.
     pub skipped: u32,
 }
 
@@ -46,24 +87,130 @@ impl CigiMessage {
         })
     }
 
-    /// The Start of Frame that answers this message, in the host's byte order.
-    pub fn answer(&self, ig_frame: u32, timestamp: u32) -> [u8; START_OF_FRAME_SIZE as usize] {
+    /// A Start of Frame in Operate that names this message's host frame and database.
+    pub fn start_of_frame(&self, ig_frame: u32, timestamp: u32) -> StartOfFrame {
         StartOfFrame {
             database: self.ig_control.database.max(0),
             ig_status: 0,
             ig_mode: IG_MODE_OPERATE,
             timestamp_valid: true,
             earth_reference_model: 0,
-            minor_version: MINOR_VERSION,
             ig_frame,
             timestamp,
             last_host_frame: self.ig_control.host_frame,
         }
-        .encode(self.byte_order)
+    }
+
+    /// [`start_of_frame`](Self::start_of_frame) encoded in the host's version and byte order.
+    pub fn answer(&self, ig_frame: u32, timestamp: u32) -> Vec<u8> {
+        self.start_of_frame(ig_frame, timestamp)
+            .encode(self.version, self.byte_order)
+    }
+
+    fn reject(&mut self, packet_id: u8, offset: usize, request_id: Option<u16>, e: DecodeError) {
+        self.rejected.push(RejectedPacket {
+            packet_id,
+            offset,
+            request_id,
+            error: e,
+        });
+    }
+
+    /// Decodes, checks and files one packet (the size already matched its ID's).
+    fn take(&mut self, id: u8, off: usize, p: &[u8]) -> Result<(), DecodeError> {
+        let (v, o) = (self.version, self.byte_order);
+        // A request's ID is read apart so that a request failing its check can be answered.
+        let request_id = Rd::new(p, o).u16(2);
+        macro_rules! checked {
+            ($decoded:expr, $request:expr, |$x:ident| $file:expr) => {
+                match $decoded.and_then(|$x| $x.check().map(|()| $x)) {
+                    Ok($x) => $file,
+                    Err(e) => self.reject(id, off, $request, e),
+                }
+            };
+        }
+        match id {
+            ENTITY_CONTROL_ID => {
+                expect_size(id, off, p, ENTITY_CONTROL_SIZE)?;
+                let e = EntityControl::decode(p, v, o)?;
+                if e.entity_id == OWNSHIP {
+                    // The ownship is validated as a pose, and a bad one drops the message.
+                    self.ownship = Some(e);
+                    self.entities.push(e);
+                } else {
+                    checked!(Ok(e), None, |e| self.entities.push(e));
+                }
+            }
+            CONFORMAL_CLAMPED_ENTITY_CONTROL_ID => {
+                expect_size(id, off, p, CONFORMAL_CLAMPED_ENTITY_CONTROL_SIZE)?;
+                checked!(ConformalClampedEntityControl::decode(p, o), None, |c| self
+                    .conformal_clamped
+                    .push(c));
+            }
+            RATE_CONTROL_ID => {
+                expect_size(id, off, p, RATE_CONTROL_SIZE)?;
+                checked!(RateControl::decode(p, v, o), None, |r| self
+                    .rate_controls
+                    .push(r));
+            }
+            CELESTIAL_SPHERE_CONTROL_ID => {
+                expect_size(id, off, p, CELESTIAL_SPHERE_CONTROL_SIZE)?;
+                checked!(CelestialSphereControl::decode(p, o), None, |c| self
+                    .celestial =
+                    Some(c));
+            }
+            ATMOSPHERE_CONTROL_ID => {
+                expect_size(id, off, p, ATMOSPHERE_CONTROL_SIZE)?;
+                checked!(AtmosphereControl::decode(p, o), None, |a| self.atmosphere =
+                    Some(a));
+            }
+            VIEW_CONTROL_ID => {
+                expect_size(id, off, p, VIEW_CONTROL_SIZE)?;
+                let c = ViewControl::decode(&Rd::new(p, o)).ok_or_else(cut)?;
+                c.check()?;
+                self.view_controls.push(c);
+            }
+            VIEW_DEFINITION_ID => {
+                expect_size(id, off, p, VIEW_DEFINITION_SIZE)?;
+                let d = ViewDefinition::decode(&Rd::new(p, o)).ok_or_else(cut)?;
+                d.check()?;
+                self.view_definitions.push(d);
+            }
+            HAT_HOT_REQUEST_ID => {
+                expect_size(id, off, p, HAT_HOT_REQUEST_SIZE)?;
+                checked!(HatHotRequest::decode(p, v, o), request_id, |r| self
+                    .requests
+                    .push(CigiRequest::HatHot(r)));
+            }
+            LOS_SEGMENT_REQUEST_ID => {
+                expect_size(id, off, p, LOS_SEGMENT_REQUEST_SIZE)?;
+                checked!(LosSegmentRequest::decode(p, v, o), request_id, |r| self
+                    .requests
+                    .push(CigiRequest::LosSegment(r)));
+            }
+            LOS_VECTOR_REQUEST_ID => {
+                expect_size(id, off, p, LOS_VECTOR_REQUEST_SIZE)?;
+                checked!(LosVectorRequest::decode(p, v, o), request_id, |r| self
+                    .requests
+                    .push(CigiRequest::LosVector(r)));
+            }
+            IG_CONTROL_ID => self.reject(
+                id,
+                off,
+                None,
+                DecodeError::malformed(P, format!("a second IG Control at offset {off}")),
+            ),
+            _ => self.skipped += 1,
+        }
+        Ok(())
     }
 }
 
-/// Decodes a host → IG message; validates the ownship pose and every enabled view value.
+/// Decodes a host → IG message of any CIGI 3.x minor version, in either byte order. The
+/// message is dropped (an error naming the offset or field) when its IG Control or any
+/// packet's framing is broken, when a known packet has the wrong size, when the ownship pose
+/// or an enabled view value is invalid; a request, another entity or an environment packet
+/// whose values fail their checks is left out and listed in [`CigiMessage::rejected`].
 pub fn decode(b: &[u8]) -> Result<CigiMessage, DecodeError> {
     if b.first() != Some(&IG_CONTROL_ID) {
         return Err(DecodeError::malformed(
@@ -80,87 +227,53 @@ pub fn decode(b: &[u8]) -> Result<CigiMessage, DecodeError> {
             });
         }
     }
-    if b.len() < IG_CONTROL_SIZE as usize {
+    if b.len() < usize::from(IG_CONTROL_SIZE_V3_0) {
         return Err(DecodeError::BadSize {
             protocol: P,
             len: b.len(),
-            expected: IG_CONTROL_SIZE.into(),
+            expected: IG_CONTROL_SIZE_V3_0.into(),
         });
     }
-    if b[1] != IG_CONTROL_SIZE {
+    let Some(version) = CigiVersion::from_ig_control(b[1], b[4]) else {
         return Err(DecodeError::malformed(
             P,
-            format!("IG Control size byte is {}, expected 24", b[1]),
+            format!(
+                "IG Control size byte is {}, expected 16 (CIGI 3.0/3.1) or 24 (3.2/3.3)",
+                b[1]
+            ),
         ));
+    };
+    let size = usize::from(version.ig_control_size());
+    if b.len() < size {
+        return Err(DecodeError::BadSize {
+            protocol: P,
+            len: b.len(),
+            expected: size,
+        });
     }
     let order = byte_order(b)?;
     let mut msg = CigiMessage {
         byte_order: order,
-        ig_control: IgControl::decode(&Rd::new(b, order)).ok_or_else(cut)?,
+        version,
+        ig_control: IgControl::decode(&b[..size], version, order)?,
         ownship: None,
+        entities: Vec::new(),
+        conformal_clamped: Vec::new(),
+        rate_controls: Vec::new(),
+        celestial: None,
+        atmosphere: None,
         view_controls: Vec::new(),
         view_definitions: Vec::new(),
+        requests: Vec::new(),
+        packet_counts: PacketCounts::default(),
+        rejected: Vec::new(),
         skipped: 0,
     };
-    let mut off = IG_CONTROL_SIZE as usize;
-    while off < b.len() {
-        let (id, size) = match b.get(off..off + 2) {
-            Some(&[id, size]) => (id, usize::from(size)),
-            _ => {
-                return Err(DecodeError::malformed(
-                    P,
-                    format!("packet header cut at offset {off}"),
-                ))
-            }
-        };
-        if size < 2 {
-            return Err(DecodeError::malformed(
-                P,
-                format!("packet {id} at offset {off} has size {size}"),
-            ));
-        }
-        let Some(p) = b.get(off..off + size) else {
-            return Err(DecodeError::malformed(
-                P,
-                format!(
-                    "packet {id} at offset {off} (size {size}) runs past the end ({} bytes)",
-                    b.len()
-                ),
-            ));
-        };
-        let expect = |want: u8| -> Result<Rd, DecodeError> {
-            if size == usize::from(want) {
-                Ok(Rd::new(p, order))
-            } else {
-                Err(DecodeError::malformed(
-                    P,
-                    format!("packet {id} at offset {off} has size {size}, expected {want}"),
-                ))
-            }
-        };
-        match id {
-            ENTITY_CONTROL_ID => {
-                let e = EntityControl::decode(&expect(ENTITY_CONTROL_SIZE)?).ok_or_else(cut)?;
-                if e.entity_id == OWNSHIP {
-                    msg.ownship = Some(e);
-                } else {
-                    msg.skipped += 1;
-                }
-            }
-            VIEW_CONTROL_ID => {
-                let v = ViewControl::decode(&expect(VIEW_CONTROL_SIZE)?).ok_or_else(cut)?;
-                v.check()?;
-                msg.view_controls.push(v);
-            }
-            VIEW_DEFINITION_ID => {
-                let v = ViewDefinition::decode(&expect(VIEW_DEFINITION_SIZE)?).ok_or_else(cut)?;
-                v.check()?;
-                msg.view_definitions.push(v);
-            }
-            _ => msg.skipped += 1,
-        }
-        off += size;
-    }
+    msg.packet_counts.add(IG_CONTROL_ID);
+    each_packet(b, size, |id, off, p| {
+        msg.packet_counts.add(id);
+        msg.take(id, off, p)
+    })?;
     if let Some(e) = msg.ownship {
         if e.attached {
             return Err(DecodeError::Unsupported {

@@ -2,7 +2,7 @@
 
 use super::format::MAX_VIEWS;
 use super::message::CigiMessage;
-use super::packets::{ViewControl, ViewDefinition};
+use super::view_packets::{ViewControl, ViewDefinition};
 
 /// What the host has set for one view (fields it never enabled are `None`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

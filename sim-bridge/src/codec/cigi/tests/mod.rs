@@ -120,8 +120,6 @@ fn expected_entity() -> EntityControl {
         entity_id: 0,
         entity_state: 1,
         attached: false,
-        flags_hi: 0,
-        animation_flags: 0,
         alpha: 255,
         entity_type: 0x0102,
         parent_id: 0,
@@ -131,6 +129,7 @@ fn expected_entity() -> EntityControl {
         lat_deg: 45.0,
         lon_deg: 11.0,
         alt_m: 1500.0,
+        ..EntityControl::default()
     }
 }
 
@@ -264,23 +263,39 @@ fn golden_start_of_frame_both_orders() {
 }
 
 #[test]
-fn unknown_packets_are_skipped_by_size() {
-    // An 8-byte unknown packet (ID 200), a Celestial-sphere-like 16-byte packet (ID 9)
-    // and an entity other than the ownship, around the ownship.
+fn every_packet_is_counted_and_unknown_ones_are_skipped_by_size() {
+    // An 8-byte user-defined packet (ID 200), a 12-byte Component Control-sized packet of an
+    // ID aerie does not read (4), a Celestial Sphere Control (9, all zeros: valid), and an
+    // entity other than the ownship before the ownship.
     let mut other_entity = ENTITY_BE;
     other_entity[3] = 7;
     let unknown8 = [200u8, 8, 1, 2, 3, 4, 5, 6];
-    let unknown16 = [9u8, 16, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0];
+    let unknown12 = [4u8, 12, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0];
+    let celestial = [9u8, 16, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0];
     let m = decode(&message(&[
         &IG_CONTROL_BE,
         &unknown8,
         &other_entity,
+        &unknown12,
         &ENTITY_BE,
-        &unknown16,
+        &celestial,
+        &unknown8,
     ]))
     .unwrap();
     assert_eq!(m.skipped, 3);
     assert_eq!(m.ownship, Some(expected_entity()));
+    let ids: Vec<u16> = m.entities.iter().map(|e| e.entity_id).collect();
+    assert_eq!(ids, [7, 0], "every entity, in message order");
+    assert_eq!(m.celestial, Some(CelestialSphereControl::default()));
+    assert_eq!(
+        m.packet_counts.as_slice(),
+        [(1, 1), (2, 2), (4, 1), (9, 1), (200, 2)]
+    );
+    assert_eq!(
+        m.packet_counts.to_string(),
+        "1 IG Control ×1, 2 Entity Control ×2, 4 Component Control ×1, \
+         9 Celestial Sphere Control ×1, 200 user-defined ×2"
+    );
 }
 
 #[test]
@@ -382,3 +397,9 @@ fn disabled_view_fields_keep_their_values() {
     assert_eq!(t.views().len(), MAX_VIEWS);
     assert!(t.views().windows(2).all(|w| w[0].view_id < w[1].view_id));
 }
+
+mod any;
+mod ccl;
+mod ccl_bytes;
+mod checks;
+mod roundtrip;
