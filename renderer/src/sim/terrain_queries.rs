@@ -228,7 +228,9 @@ mod tests {
             .unwrap()
             .unwrap();
         assert!((hit.range_m - 200.0).abs() < 1e-6, "{hit:?}");
-        assert!(matches!(hit.point, PosePosition::Geodetic { alt_m, .. } if (alt_m - 200.0).abs() < 1e-6));
+        assert!(
+            matches!(hit.point, PosePosition::Geodetic { alt_m, .. } if (alt_m - 200.0).abs() < 1e-6)
+        );
     }
 
     #[test]

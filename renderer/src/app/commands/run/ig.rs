@@ -18,13 +18,42 @@ use aerie_terrain::query::InMemorySource;
 use glam::DVec3;
 use std::sync::Arc;
 
+use crate::app::commands::run::args::RunArgs;
 use crate::app::commands::run::database::{
     DatabaseAction, DatabaseChoice, DatabaseLoader, DatabaseReport,
 };
+use crate::app::commands::run::plan::Plan;
 use crate::render::frame::{Lighting, TerrainRenderer};
 use crate::sim::pose_input::{GeoMapping, SimInput};
 use crate::sim::terrain_queries::DatasetQueries;
 use crate::tools::percentile::percentile;
+
+/// The IG of a run whose input is UDP (CIGI and native queries arrive there); `None` for
+/// shared memory or no input. `[databases]` paths are relative to the config file's folder.
+pub(crate) fn ig_driver(
+    a: &RunArgs,
+    plan: &Plan,
+    input: Option<&SimInput>,
+    ds: &Arc<Dataset>,
+    bake: &Arc<ErrorBake>,
+) -> Option<IgDriver> {
+    let link = input?.ig_link()?;
+    let dir = a
+        .config
+        .as_deref()
+        .and_then(Path::parent)
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
+    Some(IgDriver::new(
+        link,
+        ds,
+        bake,
+        plan.config.databases.clone(),
+        &dir,
+        &a.dem,
+        plan.config.render.tile_size,
+    ))
+}
 
 /// The IG side of one run.
 pub struct IgDriver {
@@ -206,8 +235,9 @@ impl IgDriver {
         q.sort_by(f64::total_cmp);
         let packets: serde_json::Map<String, serde_json::Value> = s
             .packets
+            .as_slice()
             .iter()
-            .map(|(id, n)| (id.to_string(), n.into()))
+            .map(|&(id, n)| (id.to_string(), n.into()))
             .collect();
         serde_json::json!({
             "ig_frames": self.ig_frame,
@@ -245,17 +275,17 @@ impl IgDriver {
         let s = self.link.stats();
         let mut us = self.answer_us.clone();
         us.sort_by(f64::total_cmp);
-        let packets: Vec<String> = s
-            .packets
-            .iter()
-            .map(|(id, n)| format!("{id}×{n}"))
-            .collect();
+        let packets = if s.packets.is_empty() {
+            "none".to_string()
+        } else {
+            s.packets.to_string()
+        };
         format!(
             "IG: {} frames, {} Start of Frames, {} host messages (packets by ID: {}); {} requests, {} answered ({} invalid), {} native; answering median {:.0} µs, max {:.0} µs per frame; latency max {} frames; {} resets",
             self.ig_frame,
             s.start_of_frames,
             s.messages,
-            if packets.is_empty() { "none".into() } else { packets.join(" ") },
+            packets,
             s.requests_received,
             s.answered + s.answered_invalid,
             s.answered_invalid,

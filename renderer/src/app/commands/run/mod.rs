@@ -16,6 +16,7 @@
 pub mod args;
 pub mod database;
 pub mod headless;
+pub mod ig;
 pub mod plan;
 pub mod poses;
 pub mod settings;
