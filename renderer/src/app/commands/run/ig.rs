@@ -69,6 +69,8 @@ pub struct IgDriver {
     /// Questions asked per frame (same frames as `answer_us`).
     questions: Vec<f64>,
     lighting: Lighting,
+    /// The host set the sun / the visibility (the light is not the default one).
+    host_light: (bool, bool),
     /// Database loads: (number, path, outcome).
     loads: Vec<(i8, String, Result<(), String>)>,
 }
@@ -106,6 +108,7 @@ impl IgDriver {
             answer_us: Vec::new(),
             questions: Vec::new(),
             lighting: Lighting::default(),
+            host_light: (false, false),
             loads: Vec::new(),
         }
     }
@@ -177,7 +180,9 @@ impl IgDriver {
             let (lat, lon, _) = g.to_geodetic(eye);
             env.sun_direction_enu(monotonic_s(), lat, lon)
         });
-        let lighting = Lighting::from_host(sun, env.visibility_m());
+        let visibility = env.visibility_m();
+        self.host_light = (sun.is_some(), visibility.is_some());
+        let lighting = Lighting::from_host(sun, visibility);
         if lighting != self.lighting {
             self.lighting = lighting;
             renderer.set_lighting(lighting);
@@ -265,6 +270,12 @@ impl IgDriver {
             "database_loads": self.loads.iter().map(|(n, p, r)| serde_json::json!({
                 "number": n, "path": p, "error": r.as_ref().err(),
             })).collect::<Vec<_>>(),
+            "lighting": {
+                "sun_enu": self.lighting.sun_enu,
+                "haze_distance_m": self.lighting.haze_distance_m,
+                "sun_from_host": self.host_light.0,
+                "visibility_from_host": self.host_light.1,
+            },
             "resets": self.link.state().resets,
             "entities": self.link.state().entities,
         })
