@@ -43,6 +43,7 @@ void hot_request(Link& link, CigiOutgoingMsg& out, int id, int type, bool entity
   j.str("sent", "hot_req")
       .integer("id", id)
       .integer("n", link.counts.sent)
+      .integer("rx", link.counts.received)
       .str("type", kTypeNames[type])
       .str("coord", entity ? "entity" : "geodetic");
   if (entity) {
@@ -79,6 +80,7 @@ void los_segment(Link& link, CigiOutgoingMsg& out, int id, bool extended,
       .str("sent", "los_seg")
       .integer("id", id)
       .integer("n", link.counts.sent)
+      .integer("rx", link.counts.received)
       .boolean("extended", extended)
       .num("lat", s[0])
       .num("lon", s[1])
@@ -114,6 +116,7 @@ void los_vector(Link& link, CigiOutgoingMsg& out, int id, bool extended,
       .str("sent", "los_vect")
       .integer("id", id)
       .integer("n", link.counts.sent)
+      .integer("rx", link.counts.received)
       .boolean("extended", extended)
       .num("lat", v[0])
       .num("lon", v[1])

@@ -1,0 +1,12 @@
+//! The CIGI host test kit: the host program written with the CIGI Class Library
+//! (`tests/cigi-host/`, built on demand into a cache), its JSON-lines output, and the
+//! independent references the answers are checked against (the SRTM samples read here, the
+//! geodetic ↔ grid mapping restated).
+
+mod output;
+mod program;
+mod srtm;
+
+pub use output::HostOutput;
+pub use program::{ccl_source_dir, host_program, Arch, HostProgram};
+pub use srtm::{Bilinear, Srtm};

@@ -1,0 +1,1218 @@
+//! A real CIGI host end to end (issue 12): the host program in `tests/cigi-host/`, written
+//! with the CIGI Class Library's host API (`CigiHostSession`, `CigiOutgoingMsg`,
+//! `CigiIncomingMsg` with event processors) and decoding aerie's answers with the CCL's own
+//! packet classes, drives `aerie run --headless` on the embedded DEM. It checks:
+//! - poses: every `--stats` row shows the camera at the pose the host sent (1 mm, 0.001°);
+//! - HAT/HOT of every request type (HAT, HOT, extended; geodetic and ownship-relative;
+//!   one-shot and periodic) against (a) `aerie_terrain::query` on the same dataset and (b) a
+//!   bilinear read of the SRTM samples done here, within the quad's triangulation bound;
+//! - line of sight (segments and vectors, basic and extended): hits where the oracle hits,
+//!   misses where it is clear;
+//! - IG modes: Reset → Standby → Operate in the Start of Frames, periodic requests dropped;
+//! - a synchronous host: Start of Frames ≤ rendered frames, each answer in the next message;
+//! - CIGI 3.0, 3.1, 3.2 and 3.3 hosts in both byte orders: little-endian natively, big-endian
+//!   as a real s390x host under qemu-s390x (the CCL never byte-swaps what it sends).
+//!
+//! The CCL is built once per source hash into `target/cigi-ccl/` by `tests/cigi-host/build.sh`
+//! (`make ccl`, which `make test` runs first; a plain `cargo test` builds it on demand).
+//!
+//! **Frames.** Geodetic points map to the dataset's local metres as `GeoMapping` does
+//! (`x = Δlon/dlon · spacing_x`, `y = Δlat/dlat · spacing_y`, `z = alt`), restated here; a
+//! LOS vector's azimuth and elevation are taken in that local frame (grid north is +y
+//! everywhere, as for pose headings); ownship-relative points are the entity's body axes
+//! (x forward, y right, z down) rotated by its heading, pitch and roll and placed with the
+//! WGS84 tangent plane at the entity.
+
+use std::collections::HashMap;
+use std::net::UdpSocket;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::{Arc, OnceLock};
+use std::time::{Duration, Instant};
+
+use aerie::terrain::bake::{bake, BakeParams};
+use aerie::terrain::dataset::load_dataset;
+use aerie::terrain::query::{first_hit, height_of_terrain, InMemorySource, Lookup, Ray};
+use aerie::terrain::GeoReference;
+use aerie_sim_bridge::{Geodetic, LocalTangentPlane};
+use aerie_tests::cigi_host::{host_program, Arch, HostOutput, Srtm};
+use glam::DVec3;
+use serde_json::Value;
+
+// ---------------------------------------------------------------- processes
+
+/// target/<profile>/, where cargo puts the binaries (this test runs from target/<profile>/deps).
+fn aerie_bin() -> &'static PathBuf {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| {
+        let exe = std::env::current_exe().expect("test executable path");
+        let dir = exe
+            .parent()
+            .and_then(Path::parent)
+            .expect("target/<profile>/deps/<test>");
+        // Always ask cargo (a no-op when up to date): never test a binary left from an older
+        // checkout.
+        let status = Command::new(env!("CARGO"))
+            .args(["build", "-p", "aerie", "--bin", "aerie"])
+            .current_dir(aerie_tests::repo_root())
+            .status()
+            .expect("run cargo build");
+        assert!(status.success(), "cargo build of aerie failed");
+        dir.join("aerie")
+    })
+}
+
+/// The demo DEM copied (with its bake, made once) into a temporary folder: aerie never writes
+/// a bake next to the repository's copy.
+fn demo_dem() -> &'static PathBuf {
+    static DEM: OnceLock<(tempfile::TempDir, PathBuf)> = OnceLock::new();
+    &DEM.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("N47E011.hgt.zip");
+        std::fs::copy(aerie_tests::demo_dem(), &p).unwrap();
+        let out = Command::new(aerie_bin())
+            .arg("bake")
+            .arg(&p)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "bake: {}", text(&out.stderr));
+        (dir, p)
+    })
+    .1
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn free_port() -> u16 {
+    UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+/// Waits for `child` at most `limit`; kills it and returns `Err` with its stderr if longer.
+fn wait(mut child: Child, limit: Duration, what: &str) -> Result<Output, String> {
+    let start = Instant::now();
+    // Drain stdout/stderr while waiting: a chatty host must never block on a full pipe.
+    let mut out = child.stdout.take().unwrap();
+    let mut err = child.stderr.take().unwrap();
+    let o = std::thread::spawn(move || {
+        let mut b = Vec::new();
+        std::io::Read::read_to_end(&mut out, &mut b).ok();
+        b
+    });
+    let e = std::thread::spawn(move || {
+        let mut b = Vec::new();
+        std::io::Read::read_to_end(&mut err, &mut b).ok();
+        b
+    });
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break Some(s);
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let (stdout, stderr) = (o.join().unwrap(), e.join().unwrap());
+    match status {
+        Some(status) => Ok(Output {
+            status,
+            stdout,
+            stderr,
+        }),
+        None => Err(format!(
+            "{what} did not finish within {limit:?}; stderr:\n{}",
+            text(&stderr)
+        )),
+    }
+}
+
+/// One `aerie run` driven by one host.
+struct IgRun {
+    label: String,
+    arch: Arch,
+    minor: u8,
+    frames: u64,
+    summary: Value,
+    rows: Vec<HashMap<String, String>>,
+    host: HostOutput,
+}
+
+/// Runs `aerie run --headless` for `frames` frames at `fps`, and the host program (`command`,
+/// `--version 3.<minor>`, `args`) on `arch` against it.
+fn ig_run(arch: Arch, minor: u8, frames: u64, fps: u32, command: &str, args: &[&str]) -> IgRun {
+    let label = format!("{command} 3.{minor} {}", arch.byte_order());
+    let host = host_program(arch).unwrap_or_else(|e| panic!("{e}"));
+    let dir = tempfile::tempdir().unwrap();
+    let (stats, json) = (dir.path().join("stats.csv"), dir.path().join("run.json"));
+    let port = free_port();
+    let listen = format!("127.0.0.1:{port}");
+    let s = |p: &Path| p.display().to_string();
+    let run_args = [
+        "run",
+        "--headless",
+        "--size",
+        "64x36",
+        "--protocol",
+        "cigi",
+        "--max-extrapolation-ms",
+        "0",
+        // A host whose every message is refused fails in 20 s rather than hanging.
+        "--wait-pose-s",
+        "20",
+    ];
+    let aerie = Command::new(aerie_bin())
+        .args(run_args)
+        .args(["--frames", &frames.to_string(), "--fps", &fps.to_string()])
+        .args(["--listen", &listen, "--dem", &s(demo_dem())])
+        .args(["--stats", &s(&stats), "--json", &s(&json)])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn aerie run");
+    let mut host_args: Vec<String> = vec![
+        command.into(),
+        "--ig".into(),
+        listen,
+        "--version".into(),
+        format!("3.{minor}"),
+        // The IG is done when it has been silent this long; never longer than the test's limit.
+        "--idle-exit-s".into(),
+        "1.5".into(),
+        "--seconds".into(),
+        "100".into(),
+    ];
+    host_args.extend(args.iter().map(|a| a.to_string()));
+    let host_child = host
+        .command(&host_args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap_or_else(|e| panic!("{label}: spawn {}: {e}", host.exe.display()));
+    let aerie_out = wait(aerie, Duration::from_secs(120), "aerie run");
+    let host_out = wait(host_child, Duration::from_secs(120), "cigi-host")
+        .unwrap_or_else(|e| panic!("{label}: {e}"));
+    let aerie_out = aerie_out.unwrap_or_else(|e| panic!("{label}: {e}"));
+    assert!(
+        aerie_out.status.success(),
+        "{label}: aerie run exit {:?}\nstderr:\n{}\nhost stderr:\n{}",
+        aerie_out.status.code(),
+        text(&aerie_out.stderr),
+        text(&host_out.stderr)
+    );
+    assert!(
+        host_out.status.success(),
+        "{label}: cigi-host exit {:?}\nstderr:\n{}",
+        host_out.status.code(),
+        text(&host_out.stderr)
+    );
+    let host =
+        HostOutput::parse(&text(&host_out.stdout)).unwrap_or_else(|e| panic!("{label}: {e}"));
+    let summary: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    IgRun {
+        label,
+        arch,
+        minor,
+        frames,
+        summary,
+        rows: read_csv(&stats),
+        host,
+    }
+}
+
+fn read_csv(path: &Path) -> Vec<HashMap<String, String>> {
+    let t = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = t.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .zip(l.split(','))
+                .map(|(h, c)| (h.to_string(), c.to_string()))
+                .collect()
+        })
+        .collect()
+}
+
+// ---------------------------------------------------------------- findings
+
+/// Every problem a run shows, reported together (one failing check does not hide the others).
+struct Problems {
+    label: String,
+    list: Vec<String>,
+}
+
+impl Problems {
+    fn new(label: &str) -> Self {
+        Self {
+            label: label.to_string(),
+            list: Vec::new(),
+        }
+    }
+
+    fn check(&mut self, ok: bool, what: impl FnOnce() -> String) {
+        if !ok {
+            self.list.push(what());
+        }
+    }
+
+    fn finish(self) {
+        if self.list.is_empty() {
+            return;
+        }
+        let shown: Vec<&String> = self.list.iter().take(40).collect();
+        panic!(
+            "{}: {} problem(s):\n  {}{}",
+            self.label,
+            self.list.len(),
+            shown
+                .iter()
+                .map(|s| s.as_str())
+                .collect::<Vec<_>>()
+                .join("\n  "),
+            if self.list.len() > 40 { "\n  …" } else { "" }
+        );
+    }
+}
+
+fn f(v: &Value) -> f64 {
+    v.as_f64().unwrap_or(f64::NAN)
+}
+
+fn angle_diff(a: f64, b: f64) -> f64 {
+    ((a - b + 540.0).rem_euclid(360.0) - 180.0).abs()
+}
+
+// ---------------------------------------------------------------- the terrain's references
+
+/// The demo dataset as the IG loads it, its query source, its geodetic mapping and the SRTM
+/// samples read independently.
+struct Terrain {
+    src: InMemorySource,
+    south: f64,
+    west: f64,
+    dlat: f64,
+    dlon: f64,
+    sx: f64,
+    sy: f64,
+    srtm: Srtm,
+}
+
+fn terrain() -> &'static Terrain {
+    static T: OnceLock<Terrain> = OnceLock::new();
+    T.get_or_init(|| {
+        let dem = aerie_tests::demo_dem();
+        let ds = load_dataset(&dem).unwrap();
+        let Some(GeoReference::Geographic {
+            south_lat_deg,
+            west_lon_deg,
+            dlat_deg,
+            dlon_deg,
+        }) = ds.hf.geo.clone()
+        else {
+            panic!("{}: not a geographic grid", dem.display())
+        };
+        let (sx, sy) = (ds.hf.spacing_x, ds.hf.spacing_y);
+        let b = bake(&ds, BakeParams::default(), &|_, _| {});
+        let src = InMemorySource::new(Arc::new(ds), Arc::new(b)).unwrap();
+        Terrain {
+            src,
+            south: south_lat_deg,
+            west: west_lon_deg,
+            dlat: dlat_deg,
+            dlon: dlon_deg,
+            sx,
+            sy,
+            srtm: Srtm::read(&dem).unwrap(),
+        }
+    })
+}
+
+impl Terrain {
+    /// Geodetic → the dataset's local metres (what `GeoMapping::to_local` computes).
+    fn local(&self, lat: f64, lon: f64, alt: f64) -> DVec3 {
+        DVec3::new(
+            (lon - self.west) / self.dlon * self.sx,
+            (lat - self.south) / self.dlat * self.sy,
+            alt,
+        )
+    }
+
+    /// Height of terrain and normal from the query service; `None` where there is no terrain.
+    fn hot(&self, lat: f64, lon: f64) -> Option<(f64, DVec3)> {
+        let p = self.local(lat, lon, 0.0);
+        match height_of_terrain(&self.src, p.x, p.y) {
+            Lookup::Ready(g) => Some((g.height_m, g.normal)),
+            Lookup::NoTerrain => None,
+            Lookup::Pending { tile } => panic!("in-memory source pending on tile {tile:?}"),
+        }
+    }
+
+    /// First hit along `ray` (local metres): range and point, or `None` when clear.
+    fn los(&self, ray: &Ray) -> Option<(f64, DVec3, DVec3)> {
+        match first_hit(&self.src, ray) {
+            Lookup::Ready(h) => h.map(|h| (h.range_m, h.point, h.normal)),
+            Lookup::NoTerrain => None,
+            Lookup::Pending { tile } => panic!("in-memory source pending on tile {tile:?}"),
+        }
+    }
+}
+
+/// CIGI's normal azimuth (clockwise from north) and elevation (above the horizontal), degrees.
+fn normal_az_el(n: DVec3) -> (f64, f64) {
+    (
+        n.x.atan2(n.y).to_degrees(),
+        n.z.clamp(-1.0, 1.0).asin().to_degrees(),
+    )
+}
+
+/// A point `offset` (body axes: x forward, y right, z down, metres) from an entity at
+/// `lat, lon, alt` with heading, pitch and roll in degrees.
+fn entity_relative(pose: [f64; 6], offset: [f64; 3]) -> Geodetic {
+    let [lat, lon, alt, yaw, pitch, roll] = pose;
+    let (sy, cy) = yaw.to_radians().sin_cos();
+    let (sp, cp) = pitch.to_radians().sin_cos();
+    let (sr, cr) = roll.to_radians().sin_cos();
+    let [x, y, z] = offset;
+    // Body → north-east-down: R = Rz(heading) · Ry(pitch) · Rx(roll).
+    let n = cp * cy * x + (sr * sp * cy - cr * sy) * y + (cr * sp * cy + sr * sy) * z;
+    let e = cp * sy * x + (sr * sp * sy + cr * cy) * y + (cr * sp * sy - sr * cy) * z;
+    let d = -sp * x + sr * cp * y + cr * cp * z;
+    LocalTangentPlane::new(Geodetic::new(lat, lon, alt)).enu_to_geodetic(DVec3::new(e, n, -d))
+}
+
+#[test]
+fn entity_offsets_follow_heading_pitch_and_roll() {
+    let at = [47.3, 11.4, 3000.0, 90.0, 0.0, 0.0];
+    let ltp = LocalTangentPlane::new(Geodetic::new(47.3, 11.4, 3000.0));
+    let enu = |g: Geodetic| ltp.geodetic_to_enu(g);
+    // Heading east: forward is east, right is south, down is down.
+    let fwd = enu(entity_relative(at, [100.0, 0.0, 0.0]));
+    assert!((fwd - DVec3::new(100.0, 0.0, 0.0)).length() < 1e-6, "{fwd}");
+    let right = enu(entity_relative(at, [0.0, 50.0, 0.0]));
+    assert!(
+        (right - DVec3::new(0.0, -50.0, 0.0)).length() < 1e-6,
+        "{right}"
+    );
+    // Nose up 30° (heading north): forward climbs.
+    let up = enu(entity_relative(
+        [47.3, 11.4, 3000.0, 0.0, 30.0, 0.0],
+        [100.0, 0.0, 0.0],
+    ));
+    assert!(
+        (up - DVec3::new(0.0, 86.602_540_378, 50.0)).length() < 1e-6,
+        "{up}"
+    );
+    // Right wing down 90° (heading north): body y points down.
+    let wing = enu(entity_relative(
+        [47.3, 11.4, 3000.0, 0.0, 0.0, 90.0],
+        [0.0, 10.0, 0.0],
+    ));
+    assert!(
+        (wing - DVec3::new(0.0, 0.0, -10.0)).length() < 1e-6,
+        "{wing}"
+    );
+}
+
+/// The demo DEM's reference points: the oracles agree with each other there, and the SRTM
+/// quads under them have no voids (the test's own design, checked before any host runs).
+#[test]
+fn the_references_agree_where_the_tests_ask() {
+    let t = terrain();
+    for (lat, lon, _) in HOT_POINTS.iter().chain(&[VERSIONS_HOT]) {
+        let b = t.srtm.bilinear(*lat, *lon).expect("a void-free SRTM quad");
+        let (h, n) = t.hot(*lat, *lon).expect("terrain");
+        assert!(
+            (h - b.height_m).abs() <= b.twist_bound_m + 1e-9,
+            "{lat},{lon}: {h} vs {b:?}"
+        );
+        assert!((n.length() - 1.0).abs() < 1e-12 && n.z > 0.0);
+    }
+    // At a sample itself the triangles, the bilinear patch and the raw sample coincide.
+    let (lat, lon) = (47.25, 11.4);
+    let raw = t.srtm.sample(480, 300).unwrap();
+    assert!((t.srtm.bilinear(lat, lon).unwrap().height_m - raw).abs() < 1e-9);
+    assert!((t.hot(lat, lon).unwrap().0 - raw).abs() < 1e-9);
+    assert!(t.hot(OUTSIDE.0, OUTSIDE.1).is_none());
+}
+
+// ---------------------------------------------------------------- the scenario
+
+/// The ownship of the answer runs: over the Inn valley north of Innsbruck, heading 30°, nose
+/// up 5°, right wing down 10° (lat, lon, alt, heading, pitch, roll).
+const OWNSHIP: [f64; 6] = [47.3, 11.4, 3000.0, 30.0, 5.0, -10.0];
+/// Geodetic HAT/HOT points (lat, lon, alt): the valley floor, a slope, Patscherkofel.
+const HOT_POINTS: [(f64, f64, f64); 3] = [
+    (47.271_234_5, 11.392_345_6, 1000.0),
+    (47.303_456_7, 11.381_234_5, 2500.0),
+    (47.212_345_6, 11.461_234_5, 3000.0),
+];
+/// South of the tile: no terrain, an invalid answer.
+const OUTSIDE: (f64, f64, f64) = (46.9, 11.4, 1000.0);
+/// Ownship-relative points (x forward, y right, z down).
+const ENTITY_OFFSETS: [[f64; 3]; 3] = [
+    [0.0, 0.0, 0.0],
+    [800.0, -300.0, 200.0],
+    [-1500.0, 1200.0, -100.0],
+];
+/// LOS segments (lat, lon, alt → lat, lon, alt): into the slope west of the ownship (a hit),
+/// and above every summit (clear).
+const SEGMENTS: [[f64; 6]; 2] = [
+    [47.3, 11.4, 2600.0, 47.303_456_7, 11.381_234_5, 1000.0],
+    [47.3, 11.4, 3000.0, 47.28, 11.42, 3200.0],
+];
+/// LOS vectors (lat, lon, alt, azimuth, elevation, min, max range): 30° down towards the
+/// south-south-west (a hit), 10° up (clear), and the first one cut short at 500 m (clear).
+const VECTORS: [[f64; 7]; 3] = [
+    [47.3, 11.4, 3000.0, -160.0, -30.0, 0.0, 8000.0],
+    [47.3, 11.4, 3000.0, 45.0, 10.0, 0.0, 5000.0],
+    [47.3, 11.4, 3000.0, -160.0, -30.0, 0.0, 500.0],
+];
+/// The point each version run asks about.
+const VERSIONS_HOT: (f64, f64, f64) = (47.261_234_5, 11.352_345_6, 800.0);
+/// Periodic requests in the answer run: every 3 IG frames, cancelled 30 host frames later.
+const PERIOD: u64 = 3;
+/// Request IDs the host uses (tests/cigi-host/scripts.cpp).
+const PERIODIC_IDS: std::ops::Range<u64> = 300..303;
+
+/// HAT/HOT agree with the query service to f64 rounding for geodetic points; ownship-relative
+/// points go through the tangent-plane rotation first (the IG's and this test's floating-point
+/// order may differ: 0.1 mm).
+const TOL_GEODETIC_M: f64 = 1e-6;
+const TOL_ENTITY_M: f64 = 1e-4;
+/// LOS ranges and points: both sides map the same f64 points into the same frame and
+/// intersect the same triangles; 1 mm is the poses' tolerance.
+const TOL_LOS_M: f64 = 1e-3;
+/// Normals travel as f32 degrees.
+const TOL_NORMAL_DEG: f64 = 1e-3;
+
+fn point_args(p: (f64, f64, f64)) -> String {
+    format!("{},{},{}", p.0, p.1, p.2)
+}
+
+fn list(v: &[f64]) -> String {
+    v.iter()
+        .map(|x| x.to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// The run every answer check shares: HAT/HOT of every kind, periodic requests, LOS.
+fn answers_run() -> &'static IgRun {
+    static RUN: OnceLock<IgRun> = OnceLock::new();
+    RUN.get_or_init(|| {
+        let mut a: Vec<String> = vec!["--start".into(), list(&OWNSHIP)];
+        for p in HOT_POINTS.iter().chain(&[OUTSIDE]) {
+            a.extend(["--at".into(), point_args(*p)]);
+        }
+        for o in ENTITY_OFFSETS {
+            a.extend(["--entity-at".into(), list(&o)]);
+        }
+        for s in SEGMENTS {
+            a.extend(["--segment".into(), list(&s)]);
+        }
+        for v in VECTORS {
+            a.extend(["--vector".into(), list(&v)]);
+        }
+        a.extend(["--period", &PERIOD.to_string(), "--cancel-after", "30"].map(String::from));
+        let a: Vec<&str> = a.iter().map(String::as_str).collect();
+        ig_run(Arch::Native, 3, 60, 30, "hot", &a)
+    })
+}
+
+// ---------------------------------------------------------------- checks
+
+/// The session: one Start of Frame per rendered frame, in the host's version and byte order,
+/// every host message accepted, nothing the CCL refused.
+fn check_session(r: &IgRun, p: &mut Problems) {
+    let Some(s) = r.host.summary() else {
+        p.check(false, || "the host printed no summary".into());
+        return;
+    };
+    let n = |k: &str| s[k].as_u64().unwrap_or(u64::MAX);
+    let (igc, sof) = if r.minor >= 2 { (24, 24) } else { (16, 16) };
+    p.check(s["byte_order"] == r.arch.byte_order(), || {
+        format!(
+            "host byte order {} (expected {})",
+            s["byte_order"],
+            r.arch.byte_order()
+        )
+    });
+    p.check(n("sof") == r.frames, || {
+        format!(
+            "{} Start of Frames for {} rendered frames (one per frame)",
+            n("sof"),
+            r.frames
+        )
+    });
+    p.check(
+        s["ig_frame_steps"]
+            .as_object()
+            .is_some_and(|m| m.keys().all(|k| k == "1")),
+        || {
+            format!(
+                "IG frame counter steps {} (each Start of Frame the next frame)",
+                s["ig_frame_steps"]
+            )
+        },
+    );
+    p.check(n("exceptions") == 0, || {
+        format!("{} messages the CCL refused", n("exceptions"))
+    });
+    p.check(n("sof_swapped") == 0, || {
+        format!(
+            "{} Start of Frames in the other byte order",
+            n("sof_swapped")
+        )
+    });
+    let only = |k: &str, want: u64| {
+        s[k].as_object()
+            .is_some_and(|m| m.len() == 1 && m.contains_key(&want.to_string()))
+    };
+    p.check(only("sof_sizes", sof), || {
+        format!(
+            "Start of Frame sizes {} (CIGI 3.{} has {sof} bytes)",
+            s["sof_sizes"], r.minor
+        )
+    });
+    p.check(only("sent_igc_sizes", igc), || {
+        format!(
+            "IG Control sizes sent {} (3.{}: {igc} bytes)",
+            s["sent_igc_sizes"], r.minor
+        )
+    });
+    if r.minor >= 2 {
+        // The CCL moves its host to the newest version the IG answers in: an IG answering
+        // 3.3 to a 3.2 host turns it into a 3.3 host.
+        p.check(only("sof_minors", r.minor.into()), || {
+            format!(
+                "Start of Frame minor versions {} (host 3.{})",
+                s["sof_minors"], r.minor
+            )
+        });
+        p.check(only("sent_minors", r.minor.into()), || {
+            format!(
+                "the host sent minor versions {} (asked 3.{})",
+                s["sent_minors"], r.minor
+            )
+        });
+    }
+    let input = &r.summary["input"];
+    p.check(input["dropped_total"] == 0, || {
+        format!("aerie dropped host messages: {input}")
+    });
+    p.check(input["accepted"].as_u64().unwrap_or(0) > 0, || {
+        "aerie accepted nothing".into()
+    });
+    let v = &r.summary["validation"];
+    p.check(v["errors"] == 0 && v["warnings"] == 0, || {
+        format!("validation {v}")
+    });
+}
+
+/// Every frame drew the pose the host sent in the message the row names.
+fn check_poses(r: &IgRun, moving: bool, p: &mut Problems) {
+    let t = terrain();
+    let sent: HashMap<u64, &Value> = r
+        .host
+        .sent("msg")
+        .map(|m| (m["host_frame"].as_u64().unwrap(), m))
+        .collect();
+    p.check(r.rows.len() as u64 == r.frames, || {
+        format!("{} stats rows", r.rows.len())
+    });
+    let mut frames = Vec::new();
+    for row in &r.rows {
+        let num = |k: &str| row[k].parse::<f64>().unwrap_or(f64::NAN);
+        let hf = num("host_frame") as u64;
+        let Some(m) = sent.get(&hf) else {
+            p.check(false, || {
+                format!("frame {}: host frame {hf} was never sent", row["frame"])
+            });
+            continue;
+        };
+        frames.push(hf);
+        p.check(row["extrapolated"] == "0", || {
+            format!("row {row:?} extrapolated")
+        });
+        let want = t.local(f(&m["lat"]), f(&m["lon"]), f(&m["alt"]));
+        for (k, w) in ["x_m", "y_m", "z_m"].into_iter().zip(want.to_array()) {
+            p.check((num(k) - w).abs() <= 1e-3, || {
+                format!("host frame {hf}: {k} {} vs sent {w}", num(k))
+            });
+        }
+        for (k, s) in [
+            ("heading_deg", "yaw"),
+            ("pitch_deg", "pitch"),
+            ("roll_deg", "roll"),
+        ] {
+            p.check(angle_diff(num(k), f(&m[s])) <= 1e-3, || {
+                format!("host frame {hf}: {k} {} vs sent {}", num(k), m[s])
+            });
+        }
+        for (k, s) in [("lat_deg", "lat"), ("lon_deg", "lon")] {
+            p.check((num(k) - f(&m[s])).abs() <= 1e-8, || {
+                format!("host frame {hf}: {k} {} vs sent {}", num(k), m[s])
+            });
+        }
+    }
+    frames.dedup();
+    if moving {
+        p.check(frames.len() >= 5, || {
+            format!("only host frames {frames:?} drawn")
+        });
+    }
+}
+
+/// Start of Frame of each received message, by message number.
+fn sofs_by_msg(r: &IgRun) -> HashMap<u64, &Value> {
+    r.host
+        .recv("sof")
+        .map(|s| (s["msg"].as_u64().unwrap(), s))
+        .collect()
+}
+
+/// The pose of the message numbered `n` (lat, lon, alt, yaw, pitch, roll).
+fn pose_of(r: &IgRun, n: u64) -> Option<[f64; 6]> {
+    let m = r.host.sent("msg").find(|m| m["n"] == n)?;
+    Some(["lat", "lon", "alt", "yaw", "pitch", "roll"].map(|k| f(&m[k])))
+}
+
+/// One HAT/HOT response against both references. `req` is the host's request line.
+fn check_hot_answer(r: &IgRun, req: &Value, resp: &Value, p: &mut Problems) {
+    let t = terrain();
+    let id = &req["id"];
+    let entity = req["coord"] == "entity";
+    let (lat, lon, alt) = if entity {
+        let Some(pose) = pose_of(r, req["n"].as_u64().unwrap()) else {
+            p.check(false, || format!("request {id}: no message {}", req["n"]));
+            return;
+        };
+        let g = entity_relative(pose, ["x", "y", "z"].map(|k| f(&req[k])));
+        (g.lat_deg, g.lon_deg, g.alt_m)
+    } else {
+        (f(&req["lat"]), f(&req["lon"]), f(&req["alt"]))
+    };
+    let tol = if entity { TOL_ENTITY_M } else { TOL_GEODETIC_M };
+    let ext = req["type"] == "ext";
+    p.check(resp["recv"] == if ext { "hotx" } else { "hot" }, || {
+        format!(
+            "request {id} ({}) answered by {}",
+            req["type"], resp["recv"]
+        )
+    });
+    if !ext {
+        p.check(resp["type"] == req["type"], || {
+            format!(
+                "request {id}: {} answer to a {} request",
+                resp["type"], req["type"]
+            )
+        });
+    }
+    let Some((hot, normal)) = t.hot(lat, lon) else {
+        p.check(resp["valid"] == false, || {
+            format!("request {id} off the terrain answered {resp}")
+        });
+        return;
+    };
+    p.check(resp["valid"] == true, || {
+        format!("request {id} at {lat},{lon}: invalid {resp}")
+    });
+    let (hat_got, hot_got) = if ext {
+        (f(&resp["hat"]), f(&resp["hot"]))
+    } else if resp["type"] == "hat" {
+        (f(&resp["height"]), alt - f(&resp["height"]))
+    } else {
+        (alt - f(&resp["height"]), f(&resp["height"]))
+    };
+    p.check((hot_got - hot).abs() <= tol, || {
+        format!("request {id}: HOT {hot_got} vs query {hot} at {lat},{lon}")
+    });
+    p.check((hat_got - (alt - hot)).abs() <= tol, || {
+        format!(
+            "request {id}: HAT {hat_got} vs {} (alt {alt} − query {hot})",
+            alt - hot
+        )
+    });
+    if let Some(b) = t.srtm.bilinear(lat, lon) {
+        p.check((hot_got - b.height_m).abs() <= b.twist_bound_m + tol, || {
+            format!(
+                "request {id}: HOT {hot_got} vs SRTM bilinear {} beyond the quad's triangulation bound {}",
+                b.height_m, b.twist_bound_m
+            )
+        });
+    } else {
+        p.check(entity, || {
+            format!("request {id}: SRTM void under a geodetic point")
+        });
+    }
+    if ext {
+        let (az, el) = normal_az_el(normal);
+        p.check((f(&resp["norm_el"]) - el).abs() <= TOL_NORMAL_DEG, || {
+            format!("request {id}: normal elevation {} vs {el}", resp["norm_el"])
+        });
+        p.check(
+            el > 89.9 || angle_diff(f(&resp["norm_az"]), az) <= TOL_NORMAL_DEG,
+            || format!("request {id}: normal azimuth {} vs {az}", resp["norm_az"]),
+        );
+        p.check(resp["material"] == 0, || {
+            format!("request {id}: material {}", resp["material"])
+        });
+    }
+    if r.minor >= 2 {
+        // The least significant nibble of the last host frame the IG had when it computed the
+        // answer, i.e. that of the Start of Frame of the same message.
+        let sof = sofs_by_msg(r)
+            .get(&resp["msg"].as_u64().unwrap_or(0))
+            .copied()
+            .cloned();
+        let lsn = sof.map(|s| s["last_host_frame"].as_u64().unwrap_or(99) & 0xF);
+        p.check(resp["host_frame_lsn"].as_u64() == lsn, || {
+            format!(
+                "request {id}: host frame LSN {} vs Start of Frame's {lsn:?}",
+                resp["host_frame_lsn"]
+            )
+        });
+    }
+}
+
+/// Every one-shot HAT/HOT request: answered once, in the IG's next message (an asynchronous
+/// host's request may land just after a frame began: then the one after), right.
+fn check_hot(r: &IgRun, p: &mut Problems) {
+    let mut asked = 0;
+    for req in r.host.sent("hot_req").filter(|q| q["period"] == 0) {
+        let id = req["id"].as_u64().unwrap();
+        if PERIODIC_IDS.contains(&id) {
+            continue;
+        }
+        asked += 1;
+        let resp = r.host.responses(id);
+        p.check(resp.len() == 1, || {
+            format!("request {id}: {} answers {resp:?}", resp.len())
+        });
+        let Some(first) = resp.first() else { continue };
+        p.check(
+            first["latency_msgs"]
+                .as_u64()
+                .is_some_and(|l| (1..=2).contains(&l)),
+            || {
+                format!(
+                    "request {id}: answered {} IG messages later",
+                    first["latency_msgs"]
+                )
+            },
+        );
+        check_hot_answer(r, req, first, p);
+    }
+    p.check(asked > 0, || "no HAT/HOT request was sent".into());
+}
+
+/// Periodic requests: one answer every `PERIOD` IG frames until the host cancels them.
+fn check_periodic(r: &IgRun, p: &mut Problems) {
+    for id in PERIODIC_IDS {
+        let reqs: Vec<&Value> = r.host.sent("hot_req").filter(|q| q["id"] == id).collect();
+        let (Some(start), Some(cancel)) = (
+            reqs.iter().find(|q| q["period"] != 0),
+            reqs.iter().find(|q| q["period"] == 0),
+        ) else {
+            p.check(false, || {
+                format!("periodic request {id}: not sent and cancelled: {reqs:?}")
+            });
+            continue;
+        };
+        let rx_cancel = cancel["rx"].as_u64().unwrap();
+        let resp = r.host.responses(id);
+        let before: Vec<&&Value> = resp
+            .iter()
+            .filter(|a| a["msg"].as_u64().unwrap() <= rx_cancel)
+            .collect();
+        p.check(before.len() >= 3, || {
+            format!(
+                "periodic request {id}: {} answers before the cancel",
+                before.len()
+            )
+        });
+        let frames: Vec<u64> = before
+            .iter()
+            .map(|a| a["ig_frame"].as_u64().unwrap())
+            .collect();
+        p.check(frames.windows(2).all(|w| w[1] - w[0] == PERIOD), || {
+            format!(
+                "periodic request {id} (every {PERIOD} frames) answered at IG frames {frames:?}"
+            )
+        });
+        // The cancelling request itself may be answered once (it is a one-shot request).
+        let late: Vec<u64> = resp
+            .iter()
+            .map(|a| a["msg"].as_u64().unwrap())
+            .filter(|&m| m > rx_cancel + 2)
+            .collect();
+        p.check(late.is_empty(), || {
+            format!(
+                "periodic request {id} cancelled by message {} still answered in messages {late:?}",
+                cancel["n"]
+            )
+        });
+        for a in before {
+            check_hot_answer(r, start, a, p);
+        }
+    }
+}
+
+/// The oracle's line of sight for a host's LOS request line, and whether it is a segment.
+fn los_oracle(req: &Value) -> (Option<(f64, DVec3, DVec3)>, bool) {
+    let t = terrain();
+    let from = t.local(f(&req["lat"]), f(&req["lon"]), f(&req["alt"]));
+    if req["sent"] == "los_seg" {
+        let to = t.local(f(&req["lat2"]), f(&req["lon2"]), f(&req["alt2"]));
+        (t.los(&Ray::segment(from, to).unwrap()), true)
+    } else {
+        let (az, el) = (f(&req["az"]).to_radians(), f(&req["el"]).to_radians());
+        let dir = DVec3::new(az.sin() * el.cos(), az.cos() * el.cos(), el.sin());
+        let ray = Ray::new(from, dir, f(&req["min"]), f(&req["max"])).unwrap();
+        (t.los(&ray), false)
+    }
+}
+
+fn check_los(r: &IgRun, p: &mut Problems) {
+    let t = terrain();
+    let reqs: Vec<&Value> = r
+        .host
+        .sent("los_seg")
+        .chain(r.host.sent("los_vect"))
+        .collect();
+    p.check(reqs.len() == 2 * (SEGMENTS.len() + VECTORS.len()), || {
+        format!("{} LOS requests sent", reqs.len())
+    });
+    for req in reqs {
+        let id = req["id"].as_u64().unwrap();
+        let resp = r.host.responses(id);
+        p.check(resp.len() == 1, || {
+            format!("LOS {id}: {} answers {resp:?}", resp.len())
+        });
+        let Some(a) = resp.first() else { continue };
+        let ext = req["extended"] == true;
+        p.check(a["recv"] == if ext { "losx" } else { "los" }, || {
+            format!("LOS {id} (extended {ext}) answered by {}", a["recv"])
+        });
+        p.check(
+            a["latency_msgs"]
+                .as_u64()
+                .is_some_and(|l| (1..=2).contains(&l)),
+            || format!("LOS {id}: answered {} IG messages later", a["latency_msgs"]),
+        );
+        p.check(a["entity_id_valid"] == false, || {
+            format!("LOS {id}: entity hit {a}")
+        });
+        let (oracle, segment) = los_oracle(req);
+        match oracle {
+            Some((range, point, normal)) => {
+                p.check(a["valid"] == true, || {
+                    format!("LOS {id}: the oracle hits at {range} m, answer {a}")
+                });
+                if segment {
+                    p.check(a["visible"] == false, || {
+                        format!("LOS {id}: blocked segment visible {a}")
+                    });
+                }
+                p.check((f(&a["range"]) - range).abs() <= TOL_LOS_M, || {
+                    format!("LOS {id}: range {} vs oracle {range}", a["range"])
+                });
+                if ext {
+                    p.check(a["range_valid"] == true, || {
+                        format!("LOS {id}: range invalid {a}")
+                    });
+                    let got = t.local(f(&a["lat"]), f(&a["lon"]), f(&a["alt"]));
+                    p.check((got - point).length() <= TOL_LOS_M, || {
+                        format!("LOS {id}: intersection {got} vs oracle {point}")
+                    });
+                    let ground = t.hot(f(&a["lat"]), f(&a["lon"])).map(|g| g.0);
+                    p.check(
+                        ground.is_some_and(|g| (g - f(&a["alt"])).abs() <= TOL_LOS_M),
+                        || {
+                            format!(
+                                "LOS {id}: intersection alt {} but the ground there is {ground:?}",
+                                a["alt"]
+                            )
+                        },
+                    );
+                    let (az, el) = normal_az_el(normal);
+                    p.check((f(&a["norm_el"]) - el).abs() <= TOL_NORMAL_DEG, || {
+                        format!("LOS {id}: normal elevation {} vs {el}", a["norm_el"])
+                    });
+                    p.check(
+                        el > 89.9 || angle_diff(f(&a["norm_az"]), az) <= TOL_NORMAL_DEG,
+                        || format!("LOS {id}: normal azimuth {} vs {az}", a["norm_az"]),
+                    );
+                    p.check(a["material"] == 0, || {
+                        format!("LOS {id}: material {}", a["material"])
+                    });
+                }
+            }
+            None => {
+                p.check(a["valid"] == false, || {
+                    format!("LOS {id}: clear per the oracle, answer {a}")
+                });
+                if segment {
+                    p.check(a["visible"] == true, || {
+                        format!("LOS {id}: clear segment not visible {a}")
+                    });
+                }
+                if ext {
+                    p.check(a["range_valid"] == false, || {
+                        format!("LOS {id}: clear but range valid {a}")
+                    });
+                }
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------- tests
+
+/// The scenario is what it claims: the hit segment and vector hit, the others are clear.
+#[test]
+fn the_line_of_sight_scenario_hits_and_misses_as_designed() {
+    let seg = |s: [f64; 6]| {
+        los_oracle(
+            &serde_json::json!({"sent": "los_seg", "lat": s[0], "lon": s[1], "alt": s[2],
+            "lat2": s[3], "lon2": s[4], "alt2": s[5]}),
+        )
+        .0
+    };
+    let vect = |v: [f64; 7]| {
+        los_oracle(
+            &serde_json::json!({"sent": "los_vect", "lat": v[0], "lon": v[1], "alt": v[2],
+            "az": v[3], "el": v[4], "min": v[5], "max": v[6]}),
+        )
+        .0
+    };
+    let hit = seg(SEGMENTS[0]).expect("segment 0 hits");
+    assert!(hit.0 > 100.0, "{hit:?}");
+    assert!(seg(SEGMENTS[1]).is_none());
+    let v = vect(VECTORS[0]).expect("vector 0 hits");
+    assert!(v.0 > 500.0 && v.0 < 8000.0, "{v:?}");
+    assert!(vect(VECTORS[1]).is_none());
+    assert!(vect(VECTORS[2]).is_none(), "cut short before the ground");
+}
+
+#[test]
+fn hat_hot_answers_match_the_query_service_and_the_srtm_samples() {
+    let r = answers_run();
+    let mut p = Problems::new(&r.label);
+    check_session(r, &mut p);
+    check_poses(r, false, &mut p);
+    check_hot(r, &mut p);
+    check_periodic(r, &mut p);
+    p.finish();
+}
+
+#[test]
+fn line_of_sight_hits_where_the_query_service_hits() {
+    let r = answers_run();
+    let mut p = Problems::new(&r.label);
+    check_los(r, &mut p);
+    p.finish();
+}
+
+/// Operate → Reset (Standby) → Operate: each Start of Frame reports the mode of the newest
+/// host message the IG had, and the Reset drops the host's periodic request for good.
+#[test]
+fn reset_reports_standby_until_operate_and_drops_requests() {
+    let at = point_args(HOT_POINTS[0]);
+    let start = list(&OWNSHIP);
+    let args = [
+        "--start",
+        &start,
+        "--at",
+        &at,
+        "--period",
+        "1",
+        "--cancel-after",
+        "100000",
+        "--operate-frames",
+        "20",
+        "--reset-frames",
+        "20",
+    ];
+    let r = ig_run(Arch::Native, 3, 60, 30, "modes", &args);
+    let mut p = Problems::new(&r.label);
+    check_session(&r, &mut p);
+    let msgs: Vec<&Value> = r.host.sent("msg").collect();
+    let reset: Vec<u64> = msgs
+        .iter()
+        .filter(|m| m["mode"] == "standby")
+        .map(|m| m["host_frame"].as_u64().unwrap())
+        .collect();
+    let (Some(&r0), Some(&r1)) = (reset.first(), reset.last()) else {
+        panic!("{}: the host sent no Reset", r.label)
+    };
+    let again = r1 + 1;
+    let sofs: Vec<&Value> = r.host.recv("sof").collect();
+    for s in &sofs {
+        let lh = s["last_host_frame"].as_u64().unwrap();
+        if (r0..=r1).contains(&lh) {
+            p.check(s["mode"] == "standby", || {
+                format!(
+                    "IG frame {} (host frame {lh}, a Reset) reports {}",
+                    s["ig_frame"], s["mode"]
+                )
+            });
+        }
+        if lh >= again {
+            p.check(s["mode"] == "operate", || {
+                format!(
+                    "IG frame {} (host frame {lh}, Operate again) reports {}",
+                    s["ig_frame"], s["mode"]
+                )
+            });
+        }
+        p.check(s["database"].as_i64().is_some_and(|d| d >= 0), || {
+            format!(
+                "IG frame {}: database {} (loading) though none was asked",
+                s["ig_frame"], s["database"]
+            )
+        });
+    }
+    p.check(
+        sofs.iter()
+            .any(|s| s["mode"] == "operate" && s["last_host_frame"].as_u64() < Some(r0)),
+        || "no Start of Frame in Operate before the Reset".into(),
+    );
+    let first_standby = sofs
+        .iter()
+        .find(|s| s["mode"] == "standby")
+        .map(|s| s["msg"].as_u64().unwrap());
+    p.check(first_standby.is_some(), || {
+        format!("no Start of Frame reported Standby (Reset in host frames {r0}..={r1})")
+    });
+    let answers: Vec<u64> = PERIODIC_IDS
+        .flat_map(|id| r.host.responses(id))
+        .map(|a| a["msg"].as_u64().unwrap())
+        .collect();
+    let cut = first_standby.unwrap_or(u64::MAX);
+    p.check(answers.iter().any(|&m| m < cut), || {
+        "the periodic request was never answered before the Reset".into()
+    });
+    let after: Vec<u64> = answers.iter().copied().filter(|&m| m >= cut).collect();
+    p.check(after.is_empty(), || {
+        format!("the periodic request survived the Reset: answers in messages {after:?}")
+    });
+    p.finish();
+}
+
+/// A synchronous host (each message only after a Start of Frame, as the CCL's MiniHost) is
+/// paced by the IG: no more Start of Frames than rendered frames, one host message per Start
+/// of Frame, and the height asked in each message answered in the very next IG message.
+#[test]
+fn a_synchronous_host_is_paced_by_the_rendered_frames() {
+    let start = list(&OWNSHIP);
+    let r = ig_run(
+        Arch::Native,
+        3,
+        40,
+        20,
+        "sync",
+        &["--start", &start, "--quiet"],
+    );
+    let mut p = Problems::new(&r.label);
+    check_session(&r, &mut p);
+    let s = r.host.summary().expect("summary");
+    let n = |k: &str| s[k].as_u64().unwrap_or(u64::MAX);
+    let rendered = r.summary["frames"].as_u64().unwrap();
+    p.check(n("sof") <= rendered, || {
+        format!(
+            "{} Start of Frames for {rendered} rendered frames: the host ran ahead of the IG",
+            n("sof")
+        )
+    });
+    p.check(n("sent") <= n("sof") + n("timeouts") + 1, || {
+        format!(
+            "{} messages sent for {} Start of Frames and {} timeouts",
+            n("sent"),
+            n("sof"),
+            n("timeouts")
+        )
+    });
+    let lat = s["latency_msgs"].as_object().cloned().unwrap_or_default();
+    p.check(lat.keys().all(|k| k == "1"), || {
+        format!("answer latencies (IG messages) {lat:?}")
+    });
+    p.check(n("hot") + 2 >= n("sof"), || {
+        format!("{} answers for {} Start of Frames", n("hot"), n("sof"))
+    });
+    p.finish();
+}
+
+/// A host of one CIGI version and byte order: its poses drawn exactly, every HAT/HOT type
+/// answered right, in its own version and byte order.
+fn version_run(arch: Arch, minor: u8) {
+    let at = point_args(VERSIONS_HOT);
+    let args = [
+        "--start",
+        "47.25,11.35,2500,10,-3,2",
+        "--move",
+        "0.00001,0.000012,0.5,0.25",
+        "--at",
+        &at,
+    ];
+    let r = ig_run(arch, minor, 20, 20, "poses", &args);
+    let mut p = Problems::new(&r.label);
+    check_session(&r, &mut p);
+    check_poses(&r, true, &mut p);
+    check_hot(&r, &mut p);
+    p.check(r.host.sent("hot_req").count() == 3, || {
+        "three HAT/HOT requests".into()
+    });
+    p.finish();
+}
+
+#[test]
+fn cigi_3_0_little_endian_host() {
+    version_run(Arch::Native, 0);
+}
+
+#[test]
+fn cigi_3_1_little_endian_host() {
+    version_run(Arch::Native, 1);
+}
+
+#[test]
+fn cigi_3_2_little_endian_host() {
+    version_run(Arch::Native, 2);
+}
+
+#[test]
+fn cigi_3_3_little_endian_host() {
+    version_run(Arch::Native, 3);
+}
+
+#[test]
+fn cigi_3_0_big_endian_host() {
+    version_run(Arch::S390x, 0);
+}
+
+#[test]
+fn cigi_3_1_big_endian_host() {
+    version_run(Arch::S390x, 1);
+}
+
+#[test]
+fn cigi_3_2_big_endian_host() {
+    version_run(Arch::S390x, 2);
+}
+
+#[test]
+fn cigi_3_3_big_endian_host() {
+    version_run(Arch::S390x, 3);
+}
