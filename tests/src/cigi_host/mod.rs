@@ -5,8 +5,12 @@
 
 mod output;
 mod program;
+mod reference;
+mod run;
 mod srtm;
 
 pub use output::HostOutput;
 pub use program::{ccl_source_dir, host_program, Arch, HostProgram};
+pub use reference::{entity_relative, normal_az_el, terrain, Terrain};
+pub use run::{angle_diff, f, ig_run, IgRun, Problems};
 pub use srtm::{Bilinear, Srtm};
