@@ -169,7 +169,9 @@ pub fn first_hit<S: SurfaceSource + ?Sized>(src: &S, ray: &Ray) -> Lookup<Option
         return Lookup::NoTerrain;
     };
     // The top nodes: every tile of the bake's coarsest level.
-    let top = grid.levels - 1;
+    let Some(top) = grid.levels.checked_sub(1) else {
+        return Lookup::NoTerrain;
+    };
     let (nx, ny) = grid.tiles(top);
     let s = w.j + top;
     let n = (1u64 << s) as f64;

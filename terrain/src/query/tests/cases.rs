@@ -116,8 +116,8 @@ fn a_cliff_is_hit_on_its_slope() {
     let x = 90.0 + (300.0 - 100.0) / 500.0 * 10.0;
     assert!((h.range_m - (x - 5.0)).abs() < 1e-9, "{h:?}");
     assert!((h.normal - DVec3::new(-50.0, 0.0, 1.0).normalize()).length() < 1e-12);
-    // From the top, looking west and down: it misses the wall's top (it is over the upper
-    // terrace there) and hits the low terrace.
+    // From just above the wall's top, looking west and steeply down: it clears the lip and
+    // the slope and lands on the low terrace.
     let r = ray([101.0, 55.0, 650.0], [-1.0, 0.0, -10.0], 1000.0);
     let h = hit(first_hit(&src, &r));
     assert!(
