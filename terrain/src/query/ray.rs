@@ -152,7 +152,15 @@ pub struct RayHit {
 
 /// The first intersection of `ray` with the level-0 surface: `Ready(Some(hit))`, `Ready(None)`
 /// when clear, `NoTerrain` when no part of the ray's range is over real data, `Pending` when
-/// a tile it needs is not resident. See the module documentation for the exact definition.
+/// a level-0 tile it needs is not resident.
+///
+/// For `p(t) = origin + t · dir` over `[t_min, t_max]`, let `T` be the part of that range where
+/// `p(t)` is over the real data (the closed rectangle of [`SurfaceGrid::real_extent_m`]). The
+/// hit is the smallest `t ∈ T` with `p(t).z ≤ h(p(t).xy)`, `h` the level-0 surface. So a ray
+/// that starts on or below the ground hits at its start (range `t_min`, point = the start
+/// itself, normal = the triangle under it); a ray entering the data from outside below the
+/// terrain's height hits where it enters (the data's edge acts as a wall); nothing beyond the
+/// real data is ever hit, and a ray that leaves it is clear if nothing was hit before.
 pub fn first_hit<S: SurfaceSource + ?Sized>(src: &S, ray: &Ray) -> Lookup<Option<RayHit>> {
     if ray.dir.x == 0.0 && ray.dir.y == 0.0 {
         return vertical(src, ray);
