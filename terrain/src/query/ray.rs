@@ -1,23 +1,20 @@
 //! Line of sight: the first point of a ray (or segment) on or below the level-0 triangles,
 //! found by a front-to-back descent of the max-height hierarchy.
 //!
-//! **What is answered.** For a ray `p(t) = origin + t · dir` (`dir` unit, `t` in metres) over
-//! `[t_min, t_max]`, let `T` be the part of that range where `p(t)` is over the real data
-//! (the closed rectangle of [`SurfaceGrid::real_extent_m`]). The hit is the smallest `t ∈ T`
-//! with `p(t).z ≤ h(p(t).xy)`, `h` the level-0 surface. So a ray that starts on or below the
-//! ground hits at its start (range `t_min`, the point is the start itself), and a ray that
-//! enters the data from outside below the terrain's height hits where it enters (the data's
-//! edge acts as a wall); nothing beyond the real data is ever hit. `T` empty → `NoTerrain`.
+//! **What is answered**: see [`first_hit`] (the smallest range at which the ray is on or below
+//! the surface over real data).
 //!
 //! **Descent.** A node is a square of `2^s × 2^s` quads: `s ≥ j` are the bake's level-`(s−j)`
 //! tiles (their maximum is the bake's), `1 ≤ s < j` the fine blocks of one level-0 tile
-//! ([`super::hierarchy`]), `s = 0` a quad (the max of its corners). For each node the ray's
-//! parameter interval over the node's rectangle is clipped (slabs), and the node is skipped when
-//! the ray's lower end over that interval is above the node's maximum (the ray is straight, so
-//! its lowest point over an interval is at one end). Children are visited in the order the ray
-//! enters them, so the first quad with a hit holds the answer. In a quad, the interval is split
-//! where the ray crosses the diagonal, and on each piece the ray's height above the piece's
-//! plane is linear in `t`: its first zero (or the piece's start, when already ≤ 0) is the hit.
+//! ([`super::hierarchy`]), `s = 0` a quad (the max of its corners). A node's range interval is
+//! split at its two mid lines into its children's (in quad units, so each crossing is computed
+//! once, from the same numbers on both sides), and a child is skipped when the ray's lower end
+//! over its interval is above the child's maximum (the ray is straight, so its lowest point
+//! over an interval is at one end). Children are visited in the order the ray enters them, so
+//! the first quad with a hit holds the answer. In a quad, the interval is split where the ray
+//! crosses the diagonal, and on each piece the ray's height above the piece's plane is linear
+//! in `t`: its first zero (or the piece's start, when already ≤ 0) is the hit. A ray with no
+//! horizontal motion is answered from the height of terrain under it.
 //!
 //! **Pending.** A level-0 tile that the ray cannot skip and whose samples are not resident
 //! makes the answer `Pending` naming it (every node in front of it was a miss, so the answer
@@ -81,10 +78,14 @@ impl Ray {
                 value: t_max.to_string(),
             });
         }
-        let len = direction.length();
-        if !(len > 0.0 && len.is_finite()) {
+        // Scaled by its largest component first, so that neither a huge nor a tiny direction
+        // overflows or underflows on its way to unit length.
+        let big = direction.abs().max_element();
+        if big == 0.0 {
             return Err(RayError::ZeroDirection);
         }
+        let direction = direction / big;
+        let len = direction.length();
         if t_min > t_max {
             return Err(RayError::EmptyRange { t_min, t_max });
         }
@@ -272,7 +273,10 @@ impl<'a, S: SurfaceSource + ?Sized> Walker<'a, S> {
     fn new(src: &'a S, ray: &'a Ray) -> Self {
         let grid = src.grid();
         let (o, d) = (ray.origin, ray.dir);
-        let dg = [d.x / grid.spacing_x, d.y / grid.spacing_y];
+        // A component so small that its inverse overflows moves the ray less than rounding
+        // does over any range: taken as 0, so no crossing time is infinite or NaN.
+        let flush = |v: f64| if (1.0 / v).is_finite() { v } else { 0.0 };
+        let dg = [flush(d.x / grid.spacing_x), flush(d.y / grid.spacing_y)];
         Walker {
             src,
             grid,
