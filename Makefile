@@ -8,7 +8,7 @@ TARGET_DIR := $(or $(CARGO_TARGET_DIR),target)
 AERIE := $(TARGET_DIR)/debug/aerie
 AERIE_RELEASE := $(TARGET_DIR)/release/aerie
 
-.PHONY: setup demo test lint fmt bench bench-run
+.PHONY: setup demo test lint fmt bench bench-run ccl
 
 setup:
 	@scripts/setup-debian.sh
@@ -31,8 +31,17 @@ lint:
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
 
+# The CIGI Class Library (../shared/tools/cigi-ccl, or AERIE_CIGI_CCL) and the test host written
+# with it (tests/cigi-host/), for this machine and as a big-endian s390x host run under qemu:
+# built once per source hash into target/cigi-ccl/ (about 3 minutes on 2 cores, then a second).
+# tests/tests/cigi_host.rs builds it on demand too; `make test` builds it first so the time
+# shows here and not inside a test.
+ccl: setup
+	tests/cigi-host/build.sh native >/dev/null
+	tests/cigi-host/build.sh s390x >/dev/null
+
 # aerie-bench (criterion) is left out: compiling criterion is not worth CI's 2-core budget.
-test: setup
+test: setup ccl
 	cargo fmt --all -- --check
 	cargo test --workspace --exclude aerie-bench
 

@@ -1,6 +1,7 @@
 //! Shared helpers for aerie's integration tests: paths to the data, a headless render that
 //! fails on any validation message, and image comparison with a diff image on failure.
 
+pub mod cigi_host;
 pub mod imports;
 
 use std::path::{Path, PathBuf};

@@ -62,55 +62,59 @@ fn encode(min: f32, max: f32, block_max: f32) -> u8 {
 /// Builds one tile's fine hierarchy into `out` (`fine_len(q)` bytes) from its `(q+1)²`
 /// samples (`samples[j · stride + i]`, i east, j north) and returns the largest sample, which
 /// the caller compares with the bake's `max` (the codes are only conservative when the bake's
-/// bounds are the tile's). `min`, `max`: the tile's bake bounds.
+/// bounds are the tile's). `min`, `max`: the tile's bake bounds. `scratch` is working memory,
+/// kept between calls so that building every tile of a grid allocates once.
 pub fn build_tile(
     q: usize,
     samples: &[f32],
     stride: usize,
-    min: f32,
-    max: f32,
+    (min, max): (f32, f32),
     out: &mut [u8],
+    scratch: &mut Vec<f32>,
 ) -> f32 {
     debug_assert!(q.is_power_of_two() && q >= 2);
     debug_assert_eq!(out.len(), fine_len(q));
     let j = q.trailing_zeros();
     let n1 = q / 2;
     // Level 1 from the samples: per sample row, the max of each 3-sample run (2i ..= 2i+2),
-    // then per block the max of three such rows.
-    let mut run = vec![f32::NEG_INFINITY; n1 * (q + 1)];
+    // then per block the max of three such rows. The blocks of level k go to `cur`, and each
+    // next level (a block is exactly its 2×2 children, edges shared) is folded in place.
+    scratch.clear();
+    scratch.resize(n1 * (q + 1) + n1 * n1, f32::NEG_INFINITY);
+    let (run, cur) = scratch.split_at_mut(n1 * (q + 1));
     for r in 0..=q {
         let row = &samples[r * stride..r * stride + q + 1];
         for (bi, m) in run[r * n1..(r + 1) * n1].iter_mut().enumerate() {
             *m = row[2 * bi].max(row[2 * bi + 1]).max(row[2 * bi + 2]);
         }
     }
-    let mut cur = vec![f32::NEG_INFINITY; n1 * n1];
     for bj in 0..n1 {
         for bi in 0..n1 {
-            cur[bj * n1 + bi] = (0..3)
-                .map(|d| run[(2 * bj + d) * n1 + bi])
-                .fold(f32::NEG_INFINITY, f32::max);
+            let at = |d: usize| run[(2 * bj + d) * n1 + bi];
+            cur[bj * n1 + bi] = at(0).max(at(1)).max(at(2));
         }
     }
     let mut n = n1;
     for k in 1..j {
         let off = level_offset(q, k);
-        for (o, &b) in out[off..off + n * n].iter_mut().zip(&cur) {
+        for (o, &b) in out[off..off + n * n].iter_mut().zip(cur.iter()) {
             *o = encode(min, max, b);
         }
-        // The next level: a block is exactly its 2×2 children (edges shared).
+        // Folding in place is safe in this order: block i of the next level is written after
+        // every child it reads (children 2·bi, 2·bj ≥ bi, bj come at or after index i).
         let m = n / 2;
-        let next: Vec<f32> = (0..m * m)
-            .map(|i| {
-                let (bi, bj) = (i % m, i / m);
+        for bj in 0..m {
+            for bi in 0..m {
                 let c = |di: usize, dj: usize| cur[(2 * bj + dj) * n + 2 * bi + di];
-                c(0, 0).max(c(1, 0)).max(c(0, 1)).max(c(1, 1))
-            })
-            .collect();
-        cur = next;
+                cur[bj * m + bi] = c(0, 0).max(c(1, 0)).max(c(0, 1)).max(c(1, 1));
+            }
+        }
         n = m;
     }
-    cur.into_iter().fold(f32::NEG_INFINITY, f32::max)
+    cur[..n * n]
+        .iter()
+        .copied()
+        .fold(f32::NEG_INFINITY, f32::max)
 }
 
 #[cfg(test)]
@@ -170,7 +174,7 @@ mod tests {
         s[4 * stride + 4] = 1000.0;
         let (min, max) = (0.0, 1000.0);
         let mut out = vec![0u8; fine_len(q)];
-        let top = build_tile(q, &s, stride, min, max, &mut out);
+        let top = build_tile(q, &s, stride, (min, max), &mut out, &mut Vec::new());
         assert_eq!(top, 1000.0);
         for k in 1..3u32 {
             let n = q >> k;

@@ -1,23 +1,20 @@
 //! Line of sight: the first point of a ray (or segment) on or below the level-0 triangles,
 //! found by a front-to-back descent of the max-height hierarchy.
 //!
-//! **What is answered.** For a ray `p(t) = origin + t · dir` (`dir` unit, `t` in metres) over
-//! `[t_min, t_max]`, let `T` be the part of that range where `p(t)` is over the real data
-//! (the closed rectangle of [`SurfaceGrid::real_extent_m`]). The hit is the smallest `t ∈ T`
-//! with `p(t).z ≤ h(p(t).xy)`, `h` the level-0 surface. So a ray that starts on or below the
-//! ground hits at its start (range `t_min`, the point is the start itself), and a ray that
-//! enters the data from outside below the terrain's height hits where it enters (the data's
-//! edge acts as a wall); nothing beyond the real data is ever hit. `T` empty → `NoTerrain`.
+//! **What is answered**: see [`first_hit`] (the smallest range at which the ray is on or below
+//! the surface over real data).
 //!
 //! **Descent.** A node is a square of `2^s × 2^s` quads: `s ≥ j` are the bake's level-`(s−j)`
 //! tiles (their maximum is the bake's), `1 ≤ s < j` the fine blocks of one level-0 tile
-//! ([`super::hierarchy`]), `s = 0` a quad (the max of its corners). For each node the ray's
-//! parameter interval over the node's rectangle is clipped (slabs), and the node is skipped when
-//! the ray's lower end over that interval is above the node's maximum (the ray is straight, so
-//! its lowest point over an interval is at one end). Children are visited in the order the ray
-//! enters them, so the first quad with a hit holds the answer. In a quad, the interval is split
-//! where the ray crosses the diagonal, and on each piece the ray's height above the piece's
-//! plane is linear in `t`: its first zero (or the piece's start, when already ≤ 0) is the hit.
+//! ([`super::hierarchy`]), `s = 0` a quad (the max of its corners). A node's range interval is
+//! split at its two mid lines into its children's (in quad units, so each crossing is computed
+//! once, from the same numbers on both sides), and a child is skipped when the ray's lower end
+//! over its interval is above the child's maximum (the ray is straight, so its lowest point
+//! over an interval is at one end). Children are visited in the order the ray enters them, so
+//! the first quad with a hit holds the answer. In a quad, the interval is split where the ray
+//! crosses the diagonal, and on each piece the ray's height above the piece's plane is linear
+//! in `t`: its first zero (or the piece's start, when already ≤ 0) is the hit. A ray with no
+//! horizontal motion is answered from the height of terrain under it.
 //!
 //! **Pending.** A level-0 tile that the ray cannot skip and whose samples are not resident
 //! makes the answer `Pending` naming it (every node in front of it was a miss, so the answer
@@ -81,10 +78,14 @@ impl Ray {
                 value: t_max.to_string(),
             });
         }
-        let len = direction.length();
-        if !(len > 0.0 && len.is_finite()) {
+        // Scaled by its largest component first, so that neither a huge nor a tiny direction
+        // overflows or underflows on its way to unit length.
+        let big = direction.abs().max_element();
+        if big == 0.0 {
             return Err(RayError::ZeroDirection);
         }
+        let direction = direction / big;
+        let len = direction.length();
         if t_min > t_max {
             return Err(RayError::EmptyRange { t_min, t_max });
         }
@@ -152,25 +153,45 @@ pub struct RayHit {
 
 /// The first intersection of `ray` with the level-0 surface: `Ready(Some(hit))`, `Ready(None)`
 /// when clear, `NoTerrain` when no part of the ray's range is over real data, `Pending` when
-/// a tile it needs is not resident. See the module documentation for the exact definition.
+/// a level-0 tile it needs is not resident.
+///
+/// For `p(t) = origin + t · dir` over `[t_min, t_max]`, let `T` be the part of that range where
+/// `p(t)` is over the real data (the closed rectangle of [`SurfaceGrid::real_extent_m`]). The
+/// hit is the smallest `t ∈ T` with `p(t).z ≤ h(p(t).xy)`, `h` the level-0 surface. So a ray
+/// that starts on or below the ground hits at its start (range `t_min`, point = the start
+/// itself, normal = the triangle under it); a ray entering the data from outside below the
+/// terrain's height hits where it enters (the data's edge acts as a wall); nothing beyond the
+/// real data is ever hit, and a ray that leaves it is clear if nothing was hit before.
 pub fn first_hit<S: SurfaceSource + ?Sized>(src: &S, ray: &Ray) -> Lookup<Option<RayHit>> {
-    let grid = src.grid();
     if ray.dir.x == 0.0 && ray.dir.y == 0.0 {
         return vertical(src, ray);
     }
+    let grid = src.grid();
     let w = Walker::new(src, ray);
-    let (east, north) = grid.real_extent_m();
-    let Some((t0, t1)) = w.clip(0.0, east, 0.0, north, ray.t_min, ray.t_max) else {
+    // The part of the range over the real data, in quad units ([0, valid − 1] per axis).
+    let Some((t0, t1)) = w.clip(
+        [0.0, w.real[0] as f64],
+        [0.0, w.real[1] as f64],
+        ray.t_min,
+        ray.t_max,
+    ) else {
         return Lookup::NoTerrain;
     };
     // The top nodes: every tile of the bake's coarsest level.
-    let top = grid.levels - 1;
+    let Some(top) = grid.levels.checked_sub(1) else {
+        return Lookup::NoTerrain;
+    };
     let (nx, ny) = grid.tiles(top);
     let s = w.j + top;
+    let n = (1u64 << s) as f64;
     let mut order = Vec::with_capacity(4);
     for ty in 0..ny {
         for tx in 0..nx {
-            if let Some(c) = w.candidate(s, tx, ty, t0, t1, None) {
+            let (x0, y0) = (f64::from(tx) * n, f64::from(ty) * n);
+            let Some((a, b)) = w.clip([x0, x0 + n], [y0, y0 + n], t0, t1) else {
+                continue;
+            };
+            if let Some(c) = w.candidate(s, tx, ty, a, b, None) {
                 order.push(c);
             }
         }
@@ -228,11 +249,20 @@ enum Step {
     Pending([u32; 2]),
 }
 
+/// An empty interval.
+const EMPTY: (f64, f64) = (f64::INFINITY, f64::NEG_INFINITY);
+
+/// The descent of one ray. Horizontal positions are in quad units (`x / spacing_x`, `y /
+/// spacing_y`), so node edges are whole numbers and the crossing of an edge is one
+/// subtraction and one product, the same numbers on both sides of it.
 struct Walker<'a, S: ?Sized> {
     src: &'a S,
     grid: &'a SurfaceGrid,
     ray: &'a Ray,
-    /// 1 / dir.x, 1 / dir.y (unused where the component is 0).
+    /// Origin and direction (per metre of range) in quad units.
+    og: [f64; 2],
+    dg: [f64; 2],
+    /// 1 / dg (unused where dg is 0).
     inv: [f64; 2],
     j: u32,
     /// Real quads per axis (`valid − 1`): nodes starting at or beyond are padding.
@@ -242,28 +272,54 @@ struct Walker<'a, S: ?Sized> {
 impl<'a, S: SurfaceSource + ?Sized> Walker<'a, S> {
     fn new(src: &'a S, ray: &'a Ray) -> Self {
         let grid = src.grid();
+        let (o, d) = (ray.origin, ray.dir);
+        // A component so small that its inverse overflows moves the ray less than rounding
+        // does over any range: taken as 0, so no crossing time is infinite or NaN.
+        let flush = |v: f64| if (1.0 / v).is_finite() { v } else { 0.0 };
+        let dg = [flush(d.x / grid.spacing_x), flush(d.y / grid.spacing_y)];
         Walker {
             src,
             grid,
             ray,
-            inv: [1.0 / ray.dir.x, 1.0 / ray.dir.y],
+            og: [o.x / grid.spacing_x, o.y / grid.spacing_y],
+            dg,
+            inv: [1.0 / dg[0], 1.0 / dg[1]],
             j: grid.log2_tile_quads(),
             real: [grid.valid_width as u64 - 1, grid.valid_height as u64 - 1],
         }
     }
 
-    /// The ray's interval over [x0, x1] × [y0, y1] within [t0, t1]. Shared edges are computed
-    /// from the same numbers on both sides, so neighbours' intervals meet exactly.
-    #[inline]
-    fn clip(&self, x0: f64, x1: f64, y0: f64, y1: f64, t0: f64, t1: f64) -> Option<(f64, f64)> {
-        let (lo, hi) = slab(self.ray.origin.x, self.ray.dir.x, self.inv[0], x0, x1)?;
+    /// The ray's interval over the box [x0, x1] × [y0, y1] (quad units) within [t0, t1].
+    fn clip(&self, x: [f64; 2], y: [f64; 2], t0: f64, t1: f64) -> Option<(f64, f64)> {
+        let (lo, hi) = slab(self.og[0], self.dg[0], self.inv[0], x[0], x[1])?;
         let (t0, t1) = (t0.max(lo), t1.min(hi));
-        let (lo, hi) = slab(self.ray.origin.y, self.ray.dir.y, self.inv[1], y0, y1)?;
+        let (lo, hi) = slab(self.og[1], self.dg[1], self.inv[1], y[0], y[1])?;
         let (t0, t1) = (t0.max(lo), t1.min(hi));
         (t0 <= t1).then_some((t0, t1))
     }
 
-    /// Node (s, nx, ny) if the ray meets it within [t0, t1] low enough to hit something.
+    /// The parts of [t0, t1] on the low and the high side of grid line `line` of axis `a`.
+    #[inline]
+    fn split(&self, a: usize, line: f64, t0: f64, t1: f64) -> [(f64, f64); 2] {
+        let d = self.dg[a];
+        if d == 0.0 {
+            let o = self.og[a];
+            return [
+                if o <= line { (t0, t1) } else { EMPTY },
+                if o >= line { (t0, t1) } else { EMPTY },
+            ];
+        }
+        let tm = (line - self.og[a]) * self.inv[a];
+        let (first, second) = ((t0, t1.min(tm)), (t0.max(tm), t1));
+        if d > 0.0 {
+            [first, second]
+        } else {
+            [second, first]
+        }
+    }
+
+    /// Node (s, nx, ny) with interval [t0, t1], if it is real and the ray comes low enough
+    /// over it to hit something.
     #[inline]
     fn candidate(
         &self,
@@ -274,20 +330,9 @@ impl<'a, S: SurfaceSource + ?Sized> Walker<'a, S> {
         t1: f64,
         tile: Option<&TileView<'_>>,
     ) -> Option<Node> {
-        let (q0x, q0y) = (u64::from(nx) << s, u64::from(ny) << s);
-        if q0x >= self.real[0] || q0y >= self.real[1] {
+        if t0 > t1 || u64::from(nx) << s >= self.real[0] || u64::from(ny) << s >= self.real[1] {
             return None;
         }
-        let n = 1u64 << s;
-        let (sx, sy) = (self.grid.spacing_x, self.grid.spacing_y);
-        let (t0, t1) = self.clip(
-            q0x as f64 * sx,
-            (q0x + n) as f64 * sx,
-            q0y as f64 * sy,
-            (q0y + n) as f64 * sy,
-            t0,
-            t1,
-        )?;
         let low = self.z(t0).min(self.z(t1));
         if low > self.max_of(s, nx, ny, tile) {
             return None;
@@ -300,7 +345,7 @@ impl<'a, S: SurfaceSource + ?Sized> Walker<'a, S> {
         self.ray.origin.z + t * self.ray.dir.z
     }
 
-    /// Upper bound of the heights of node (s, nx, ny).
+    /// Upper bound of the heights of node (s, nx, ny), s ≥ 1.
     #[inline]
     fn max_of(&self, s: u32, nx: u32, ny: u32, tile: Option<&TileView<'_>>) -> f64 {
         if s >= self.j {
@@ -311,31 +356,10 @@ impl<'a, S: SurfaceSource + ?Sized> Walker<'a, S> {
             return f64::INFINITY;
         };
         let local = (1u32 << (self.j - s)) - 1;
-        let (bi, bj) = ((nx & local) as usize, (ny & local) as usize);
-        if s == 0 {
-            self.quad(v, bi, bj).max()
-        } else {
-            v.block_max(s, bi, bj)
-        }
-    }
-
-    #[inline]
-    fn quad(&self, v: &TileView<'_>, i: usize, j: usize) -> Quad {
-        Quad {
-            sw: v.h(i, j),
-            se: v.h(i + 1, j),
-            nw: v.h(i, j + 1),
-            ne: v.h(i + 1, j + 1),
-        }
+        v.block_max(s, (nx & local) as usize, (ny & local) as usize)
     }
 
     fn visit(&self, node: Node, tile: Option<&TileView<'_>>) -> Step {
-        if node.s == 0 {
-            return match tile {
-                Some(v) => self.leaf(node, v),
-                None => Step::Miss,
-            };
-        }
         let owned;
         let tile = if node.s == self.j {
             match self.src.tile(node.nx, node.ny) {
@@ -349,29 +373,26 @@ impl<'a, S: SurfaceSource + ?Sized> Walker<'a, S> {
             tile
         };
         let s = node.s - 1;
+        let (cx, cy) = (2 * node.nx, 2 * node.ny);
+        let xs = self.split(0, f64::from(cx + 1) * (1u64 << s) as f64, node.t0, node.t1);
+        let ys = self.split(1, f64::from(cy + 1) * (1u64 << s) as f64, node.t0, node.t1);
+        let interval = |a: usize, b: usize| (xs[a].0.max(ys[b].0), xs[a].1.min(ys[b].1));
+        if s == 0 {
+            let Some(v) = tile else {
+                return Step::Miss;
+            };
+            return self.quads(node, v, interval);
+        }
         let mut kids: [Option<Node>; 4] = [None; 4];
         let mut n = 0;
-        for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-            if let Some(c) = self.candidate(
-                s,
-                2 * node.nx + dx,
-                2 * node.ny + dy,
-                node.t0,
-                node.t1,
-                tile,
-            ) {
-                // Insertion by entry range: front to back.
-                let mut k = n;
-                while k > 0 && kids[k - 1].is_some_and(|p| p.t0 > c.t0) {
-                    kids[k] = kids[k - 1];
-                    k -= 1;
-                }
-                kids[k] = Some(c);
-                n += 1;
+        for (a, b) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let (t0, t1) = interval(a, b);
+            if let Some(c) = self.candidate(s, cx + a as u32, cy + b as u32, t0, t1, tile) {
+                insert(&mut kids, &mut n, c, |k| k.t0);
             }
         }
-        for c in kids.into_iter().take(n).flatten() {
-            match self.visit(c, tile) {
+        for c in kids[..n].iter().flatten() {
+            match self.visit(*c, tile) {
                 Step::Miss => {}
                 done => return done,
             }
@@ -379,20 +400,65 @@ impl<'a, S: SurfaceSource + ?Sized> Walker<'a, S> {
         Step::Miss
     }
 
-    /// The first hit inside one quad over [t0, t1], if any.
-    fn leaf(&self, node: Node, v: &TileView<'_>) -> Step {
+    /// The four quads of a 2 × 2 block, front to back: the first hit among them.
+    fn quads(
+        &self,
+        node: Node,
+        v: &TileView<'_>,
+        interval: impl Fn(usize, usize) -> (f64, f64),
+    ) -> Step {
         let local = (1u32 << self.j) - 1;
-        let (i, j) = ((node.nx & local) as usize, (node.ny & local) as usize);
-        let quad = self.quad(v, i, j);
+        let mut kids: [Option<(Node, Quad)>; 4] = [None; 4];
+        let mut n = 0;
+        for (a, b) in [(0u32, 0u32), (1, 0), (0, 1), (1, 1)] {
+            let (t0, t1) = interval(a as usize, b as usize);
+            let (nx, ny) = (2 * node.nx + a, 2 * node.ny + b);
+            if t0 > t1 || u64::from(nx) >= self.real[0] || u64::from(ny) >= self.real[1] {
+                continue;
+            }
+            let (i, j) = ((nx & local) as usize, (ny & local) as usize);
+            let quad = Quad {
+                sw: v.h(i, j),
+                se: v.h(i + 1, j),
+                nw: v.h(i, j + 1),
+                ne: v.h(i + 1, j + 1),
+            };
+            if self.z(t0).min(self.z(t1)) > quad.max() {
+                continue;
+            }
+            let c = (
+                Node {
+                    s: 0,
+                    nx,
+                    ny,
+                    t0,
+                    t1,
+                },
+                quad,
+            );
+            insert(&mut kids, &mut n, c, |k| k.0.t0);
+        }
+        for (node, quad) in kids[..n].iter().flatten() {
+            if let Some(h) = self.leaf(*node, quad) {
+                return Step::Hit(h);
+            }
+        }
+        Step::Miss
+    }
+
+    /// The first hit inside one quad over [t0, t1], if any.
+    fn leaf(&self, node: Node, quad: &Quad) -> Option<RayHit> {
         let (c, r) = (f64::from(node.nx), f64::from(node.ny));
-        let (sx, sy) = (self.grid.spacing_x, self.grid.spacing_y);
-        let uv = |t: f64| {
-            let p = self.ray.at(t);
-            (p.x / sx - c, p.y / sy - r, p.z)
+        let uvz = |t: f64| {
+            (
+                self.og[0] + t * self.dg[0] - c,
+                self.og[1] + t * self.dg[1] - r,
+                self.z(t),
+            )
         };
         // Split where the ray crosses the diagonal, so each piece lies in one triangle.
-        let (u0, v0, _) = uv(node.t0);
-        let (u1, v1, _) = uv(node.t1);
+        let (u0, v0, _) = uvz(node.t0);
+        let (u1, v1, _) = uvz(node.t1);
         let (g0, g1) = (Quad::side(u0, v0), Quad::side(u1, v1));
         let mut pieces = [(node.t0, node.t1), (node.t1, node.t1)];
         let mut count = 1;
@@ -404,10 +470,10 @@ impl<'a, S: SurfaceSource + ?Sized> Walker<'a, S> {
             }
         }
         for &(a, b) in &pieces[..count] {
-            let (um, vm, _) = uv(0.5 * (a + b));
+            let (um, vm, _) = uvz(0.5 * (a + b));
             let plane = quad.plane(um, vm);
             let above = |t: f64| {
-                let (u, v, z) = uv(t);
+                let (u, v, z) = uvz(t);
                 z - plane.z(u, v)
             };
             let fa = above(a);
@@ -420,14 +486,27 @@ impl<'a, S: SurfaceSource + ?Sized> Walker<'a, S> {
                 }
                 (a + (b - a) * (fa / (fa - fb))).clamp(a, b)
             };
-            return Step::Hit(RayHit {
+            return Some(RayHit {
                 range_m: t,
                 point: self.ray.at(t),
                 normal: plane.normal(self.grid),
             });
         }
-        Step::Miss
+        None
     }
+}
+
+/// Inserts `c` into the first `n` entries of `kids`, kept sorted by entry range `t0` (front
+/// to back; equal entries keep their order).
+#[inline]
+fn insert<T: Copy>(kids: &mut [Option<T>; 4], n: &mut usize, c: T, t0: impl Fn(&T) -> f64) {
+    let mut k = *n;
+    while k > 0 && kids[k - 1].as_ref().is_some_and(|p| t0(p) > t0(&c)) {
+        kids[k] = kids[k - 1];
+        k -= 1;
+    }
+    kids[k] = Some(c);
+    *n += 1;
 }
 
 /// The interval of `t` where `o + t · d` is within [lo, hi]; everything when `d = 0` and `o`

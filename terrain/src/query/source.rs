@@ -61,21 +61,23 @@ pub struct TileView<'a> {
     samples: &'a [f32],
     stride: usize,
     q: usize,
-    min: f32,
-    max: f32,
+    // References, not values: a height-of-terrain query never reads them (one cache miss
+    // fewer), only the descent of a ray does.
+    min: &'a f32,
+    max: &'a f32,
     fine: &'a [u8],
 }
 
 impl<'a> TileView<'a> {
     /// A view of tile samples `samples[j · stride + i]` (i east, j north, both `0 ..= q`),
-    /// whose bake bounds are `min`, `max` and whose fine hierarchy is `fine` (built with
+    /// whose bake bounds are `(min, max)` and whose fine hierarchy is `fine` (built with
     /// [`super::hierarchy::build_tile`] against the same bounds). `None` when a slice is too
     /// short for that.
     pub fn new(
         samples: &'a [f32],
         stride: usize,
         q: usize,
-        bounds: (f32, f32),
+        (min, max): (&'a f32, &'a f32),
         fine: &'a [u8],
     ) -> Option<Self> {
         let fits = q.is_power_of_two()
@@ -87,8 +89,8 @@ impl<'a> TileView<'a> {
             samples,
             stride,
             q,
-            min: bounds.0,
-            max: bounds.1,
+            min,
+            max,
             fine,
         })
     }
@@ -104,8 +106,8 @@ impl<'a> TileView<'a> {
     pub fn block_max(&self, k: u32, bi: usize, bj: usize) -> f64 {
         let n = self.q >> k;
         decode(
-            self.min,
-            self.max,
+            *self.min,
+            *self.max,
             self.fine[level_offset(self.q, k) + bj * n + bi],
         )
     }
@@ -245,7 +247,10 @@ impl SurfaceSource for InMemorySource {
 
     #[inline]
     fn tile_max(&self, level: u32, tx: u32, ty: u32) -> f32 {
-        self.bake.bounds(level, tx, ty).1
+        // The bake's table itself (what `ErrorBake::bounds` reads), without its diagnostics
+        // on the hot path: the walk only asks for tiles inside the grid.
+        let t = &self.bake.levels[level as usize];
+        t.max[(ty * t.tiles_x + tx) as usize]
     }
 
     #[inline]
@@ -262,7 +267,7 @@ impl SurfaceSource for InMemorySource {
             &self.dataset.hf.heights[start..],
             w,
             q,
-            self.bake.bounds(0, tx, ty),
+            (&self.bake.levels[0].min[i], &self.bake.levels[0].max[i]),
             &self.fine[i * self.per_tile..(i + 1) * self.per_tile],
         )
     }
@@ -289,20 +294,15 @@ fn build_fine(
     // One tile row range per thread, each filling its own bytes (joined in order below).
     let build_rows = |rows: std::ops::Range<usize>| -> Result<Vec<u8>, (u32, u32, f32)> {
         let mut out = vec![0u8; rows.len() * nx * per_tile];
+        let mut scratch = Vec::new();
         for (dr, ty) in rows.enumerate() {
             for tx in 0..nx {
                 let at = (dr * nx + tx) * per_tile;
                 let start = ty * q * w + tx * q;
-                let (min, max) = bake.bounds(0, tx as u32, ty as u32);
-                let got = build_tile(
-                    q,
-                    &heights[start..],
-                    w,
-                    min,
-                    max,
-                    &mut out[at..at + per_tile],
-                );
-                if got != max {
+                let bounds = bake.bounds(0, tx as u32, ty as u32);
+                let out = &mut out[at..at + per_tile];
+                let got = build_tile(q, &heights[start..], w, bounds, out, &mut scratch);
+                if got != bounds.1 {
                     return Err((tx as u32, ty as u32, got));
                 }
             }

@@ -123,8 +123,9 @@ fn grid_coord(x: f64, spacing: f64) -> f64 {
 /// Height of terrain and normal at (x, y), local metres from sample (0, 0). `NoTerrain` off
 /// the real data (outside the grid, over padding, or not finite); `Pending` when the tile
 /// holding the point is not resident. The height equals [`quad_surface`] at the point, bit for
-/// bit, so it is the height drawn at level 0; the normal is the containing triangle's, with
-/// the conventions of [`Quad::plane`] on the diagonal and of [`locate`] on grid lines.
+/// bit, so it is the height drawn at level 0; the normal is the containing triangle's: on the
+/// diagonal the south-east triangle's, on a grid line the quad east (north) of it, on the
+/// data's east (north) border the quad west (south) of it.
 pub fn height_of_terrain<S: SurfaceSource + ?Sized>(src: &S, x: f64, y: f64) -> Lookup<Ground> {
     let grid = src.grid();
     let Some((col, row, u, v)) = locate(grid, x, y) else {

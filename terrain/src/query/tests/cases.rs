@@ -116,8 +116,8 @@ fn a_cliff_is_hit_on_its_slope() {
     let x = 90.0 + (300.0 - 100.0) / 500.0 * 10.0;
     assert!((h.range_m - (x - 5.0)).abs() < 1e-9, "{h:?}");
     assert!((h.normal - DVec3::new(-50.0, 0.0, 1.0).normalize()).length() < 1e-12);
-    // From the top, looking west and down: it misses the wall's top (it is over the upper
-    // terrace there) and hits the low terrace.
+    // From just above the wall's top, looking west and steeply down: it clears the lip and
+    // the slope and lands on the low terrace.
     let r = ray([101.0, 55.0, 650.0], [-1.0, 0.0, -10.0], 1000.0);
     let h = hit(first_hit(&src, &r));
     assert!(
@@ -225,6 +225,12 @@ fn vertical_rays() {
             &ray([x, y, g.height_m + 500.0], [1e-9, 1e-9, -1.0], 1e4),
         ));
         assert!((h2.range_m - 500.0).abs() < 1e-5, "{h2:?}");
+        // So small a slant that 1 / slant overflows: the same hit.
+        let h3 = hit(first_hit(
+            &src,
+            &ray([x, y, g.height_m + 500.0], [1e-310, -1e-310, -1.0], 1e4),
+        ));
+        assert!((h3.range_m - 500.0).abs() < 1e-9, "{h3:?}");
     }
     let r = ray([east + 1.0, 5.0, 1e4], [0.0, 0.0, -1.0], 1e5);
     assert_eq!(first_hit(&src, &r), Lookup::NoTerrain);
@@ -428,6 +434,13 @@ fn bad_rays_are_refused_by_name() {
     // A non-unit direction is normalised: ranges are metres.
     let r = Ray::new(o, DVec3::new(0.0, 3.0, 4.0), 0.0, 1.0).unwrap();
     assert_eq!(r.dir(), DVec3::new(0.0, 0.6, 0.8));
+    for scale in [1e-310, 1e300] {
+        let r = Ray::new(o, DVec3::new(0.0, 3.0, 4.0) * scale, 0.0, 1.0).unwrap();
+        assert!(
+            (r.dir() - DVec3::new(0.0, 0.6, 0.8)).length() < 1e-15,
+            "{scale}"
+        );
+    }
 }
 
 #[test]

@@ -33,10 +33,10 @@ fn grid() -> impl Strategy<Value = Grid> {
             for (i, tall) in needles {
                 heights[i] += tall;
             }
-            // A wall: every column east of `wall` raised by 200 m.
-            for r in 0..h {
-                for c in wall..w {
-                    if wall > 0 {
+            // A wall (when `wall` > 0): every column from `wall` east raised by 200 m.
+            if wall > 0 {
+                for r in 0..h {
+                    for c in wall..w {
                         heights[r * w + c] += 200.0;
                     }
                 }
