@@ -31,25 +31,27 @@ pub fn level_offset(q: usize, k: u32) -> usize {
 
 /// The height bound a code stands for, given the tile's bake bounds; see the module
 /// documentation. Build and query both go through this one function, so the guarantee checked
-/// when building holds when querying.
+/// when building holds when querying. (A product, not a division: it runs for every block a
+/// ray visits.)
 #[inline]
 pub fn decode(min: f32, max: f32, code: u8) -> f64 {
     if code == u8::MAX {
         f64::from(max)
     } else {
         let (lo, hi) = (f64::from(min), f64::from(max));
-        lo + f64::from(code) * ((hi - lo) / 255.0)
+        lo + f64::from(code) * ((hi - lo) * (1.0 / 255.0))
     }
 }
 
-/// Smallest code whose bound is ≥ `block_max` (which must be ≤ `max`).
-fn encode(min: f32, max: f32, block_max: f32) -> u8 {
+/// Smallest code whose bound is ≥ `block_max` (which must be ≤ `max`); `inv_step` is
+/// `255 / (max − min)`, computed once per tile (only the first guess uses it).
+fn encode(min: f32, max: f32, inv_step: f64, block_max: f32) -> u8 {
     let (lo, hi, b) = (f64::from(min), f64::from(max), f64::from(block_max));
     if hi <= lo {
         return u8::MAX;
     }
-    let mut c = (((b - lo) / ((hi - lo) / 255.0)).ceil()).clamp(0.0, 255.0) as u8;
-    // The division and the product in `decode` may each round; step until the bound holds.
+    let mut c = ((b - lo) * inv_step).ceil().clamp(0.0, 255.0) as u8;
+    // The guess and the product in `decode` may each round: step until the bound holds.
     while c > 0 && decode(min, max, c - 1) >= b {
         c -= 1;
     }
@@ -94,11 +96,12 @@ pub fn build_tile(
             cur[bj * n1 + bi] = at(0).max(at(1)).max(at(2));
         }
     }
+    let inv_step = 255.0 / (f64::from(max) - f64::from(min));
     let mut n = n1;
     for k in 1..j {
         let off = level_offset(q, k);
         for (o, &b) in out[off..off + n * n].iter_mut().zip(cur.iter()) {
-            *o = encode(min, max, b);
+            *o = encode(min, max, inv_step, b);
         }
         // Folding in place is safe in this order: block i of the next level is written after
         // every child it reads (children 2·bi, 2·bj ≥ bi, bj come at or after index i).
@@ -145,7 +148,7 @@ mod tests {
         ] {
             for i in 0..=1000 {
                 let b = min + (max - min) * (i as f32 / 1000.0);
-                let c = encode(min, max, b);
+                let c = encode(min, max, 255.0 / f64::from(max - min), b);
                 let bound = decode(min, max, c);
                 assert!(bound >= f64::from(b), "{min}..{max}: {b} → {c} → {bound}");
                 if c > 0 && max > min {

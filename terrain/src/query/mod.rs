@@ -33,38 +33,18 @@
 //! (terrain/examples) and the `query` bench measure it.
 //!
 //! Files: `source` (the trait, the in-memory source), `hierarchy` (maxima below a level-0
-//! tile), `surface` (height of terrain), `ray` (line of sight).
+//! tile), `surface` (height of terrain), `ray` (line of sight), `lookup` (the answer type).
 
 pub mod hierarchy;
+mod lookup;
 mod ray;
 mod source;
 mod surface;
 
+pub use lookup::Lookup;
 pub use ray::{first_hit, Ray, RayError, RayHit};
 pub use source::{InMemorySource, SourceError, SurfaceGrid, SurfaceSource, TileView};
 pub use surface::{height_of_terrain, Ground};
-
-/// An answer that may not be available: one for one with the host protocol's
-/// ready / no terrain / pending.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Lookup<T> {
-    /// The answer.
-    Ready(T),
-    /// No real terrain there (outside the data, over padding, or not a finite point).
-    NoTerrain,
-    /// Level-0 tile `tile` = [tx, ty] is needed and not resident; ask again once it is.
-    Pending { tile: [u32; 2] },
-}
-
-impl<T> Lookup<T> {
-    /// The answer, if ready.
-    pub fn ready(self) -> Option<T> {
-        match self {
-            Lookup::Ready(t) => Some(t),
-            _ => None,
-        }
-    }
-}
 
 #[cfg(test)]
 mod tests;

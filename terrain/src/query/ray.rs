@@ -22,9 +22,9 @@
 
 use glam::DVec3;
 
+use super::lookup::Lookup;
 use super::source::{SurfaceGrid, SurfaceSource, TileView};
 use super::surface::{height_of_terrain, Quad};
-use super::Lookup;
 
 /// Why a ray was refused; names the bad argument.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

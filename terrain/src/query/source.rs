@@ -8,7 +8,10 @@ use crate::dataset::Dataset;
 
 use super::hierarchy::{build_tile, decode, fine_len, level_offset};
 
-/// The grid a source serves: the dataset's padded heightfield, tiled as its bake is.
+/// The grid a source serves: the dataset's padded heightfield, tiled as its bake is. What a
+/// source must keep true (an ErrorBake of the dataset does): `tile_quads` is a power of two
+/// ≥ 2, `levels ≥ 1`, `width − 1` and `height − 1` are multiples of `tile_quads · 2^(levels−1)`,
+/// and `2 ≤ valid_width ≤ width`, `2 ≤ valid_height ≤ height`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SurfaceGrid {
     /// Padded samples per row (`2^Kx + 1`).
@@ -125,7 +128,9 @@ pub trait SurfaceSource {
     /// Largest full-resolution height of level-`level` tile (tx, ty), metres (the bake's).
     fn tile_max(&self, level: u32, tx: u32, ty: u32) -> f32;
 
-    /// Level-0 tile (tx, ty), or `None` when its samples are not resident.
+    /// Level-0 tile (tx, ty), or `None` when its samples are not resident. A streamed source
+    /// builds the tile's fine hierarchy with [`super::hierarchy::build_tile`] when its page
+    /// arrives.
     fn tile(&self, tx: u32, ty: u32) -> Option<TileView<'_>>;
 
     /// True when level-0 tile (tx, ty)'s samples are resident.

@@ -6,8 +6,8 @@ use glam::DVec3;
 
 use crate::mesh::{quad_surface, Diagonal, TILE_DIAGONAL};
 
+use super::lookup::Lookup;
 use super::source::{SurfaceGrid, SurfaceSource};
-use super::Lookup;
 
 /// The ground at a point.
 #[derive(Debug, Clone, Copy, PartialEq)]
