@@ -25,7 +25,8 @@ pub struct Decoded {
     pub pose: Option<Pose>,
     /// The sender's sequence number (native sequence, CIGI host frame), for ordering.
     pub sequence: Option<u32>,
-    /// The whole CIGI message (IG Control, views) when `protocol` is CIGI.
+    /// The whole CIGI message (IG Control, entities, views, requests, counts) when `protocol`
+    /// is CIGI.
     pub cigi: Option<cigi::CigiMessage>,
 }
 
@@ -168,12 +169,13 @@ mod tests {
         #[test]
         fn random_bodies_never_panic(
             body in prop::collection::vec(any::<u8>(), 0..600),
-            which in 0usize..4,
+            which in 0usize..5,
             len_hint in prop::sample::select(vec![69usize, 132, 408, 24, 72, 104, 0]),
         ) {
             let mut bytes = match which {
                 0 => native::MAGIC.to_vec(),
                 1 => vec![1, 24, 3, 0, 0, 0, 0x80, 0x00],
+                4 => vec![1, 16, 3, 0, 0, 0, 0x00, 0x80],
                 2 => b"RPOS4".to_vec(),
                 _ => fgfs::VERSION.to_be_bytes().to_vec(),
             };
