@@ -353,10 +353,14 @@ impl IgSession {
             out.requests += 1;
         }
         for r in &m.rejected {
-            if let Some(req) = r
-                .request_id
-                .and_then(|id| cigi_map::rejected_request(r.packet_id, id))
-            {
+            // Answered invalid once, with the response its type asks for when it could be read.
+            let req = match &r.request {
+                Some(req) => Some(cigi_map::request(req)),
+                None => r
+                    .request_id
+                    .and_then(|id| cigi_map::rejected_request(r.packet_id, id)),
+            };
+            if let Some(req) = req {
                 self.stats.requests_rejected += 1;
                 self.requests.refuse(req);
             }

@@ -617,16 +617,28 @@ fn environment_and_rejected_requests() {
     }
     .encode(ByteOrder::Little)
     .to_vec();
-    // A HAT/HOT request with a latitude of 95°: rejected by the codec, answered invalid.
-    let bad = HatHotRequest {
-        request_id: 40,
-        point: [95.0, 0.0, 0.0],
-        ..HatHotRequest::default()
-    }
-    .encode(CigiVersion::V3_3, ByteOrder::Little)
-    .to_vec();
-    let m = operate(1, &[celestial, atmosphere, bad]);
-    assert_eq!(m.rejected.len(), 1, "{:?}", m.rejected);
+    // HAT/HOT requests with a latitude of 95°: rejected by the codec, answered invalid in
+    // the response their type asks for.
+    let bad = |id, t| {
+        HatHotRequest {
+            request_id: id,
+            request_type: t,
+            point: [95.0, 0.0, 0.0],
+            ..HatHotRequest::default()
+        }
+        .encode(CigiVersion::V3_3, ByteOrder::Little)
+        .to_vec()
+    };
+    let m = operate(
+        1,
+        &[
+            celestial,
+            atmosphere,
+            bad(40, HatHotRequestType::Hat),
+            bad(41, HatHotRequestType::Extended),
+        ],
+    );
+    assert_eq!(m.rejected.len(), 2, "{:?}", m.rejected);
     s.receive(&m, host());
     let env = s.state().environment;
     let c = env.celestial.unwrap();
@@ -638,11 +650,12 @@ fn environment_and_rejected_requests() {
     assert!(sun[2] > 0.85 && sun[1] < 0.0, "{sun:?}");
     let m = cigi_of(&s.begin_frame(&frame_n(2), &g)).unwrap();
     assert!(
-        matches!(m.responses[..], [CigiResponse::HatHot(r)] if r.request_id == 40 && !r.valid),
+        matches!(m.responses[..], [CigiResponse::HatHot(r), CigiResponse::HatHotExtended(x)]
+            if r.request_id == 40 && !r.valid && x.request_id == 41 && !x.valid),
         "{:?}",
         m.responses
     );
-    assert_eq!(s.stats().requests_rejected, 1);
+    assert_eq!(s.stats().requests_rejected, 2);
 }
 
 mod random_hosts {
