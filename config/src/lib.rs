@@ -28,9 +28,13 @@
 //!
 //! [[channel]]               # optional, repeated: display channels (see [`Channel`])
 //! name = "centre"
+//!
+//! [databases]               # optional: CIGI database number → dataset (see [`Databases`])
+//! 1 = "dem/N47E011.hgt.zip"
 //! ```
 
 mod channels;
+mod databases;
 mod error;
 mod input;
 mod limits;
@@ -47,6 +51,7 @@ pub use channels::{
     Channel, ChannelDisplay, ChannelFrustum, EyeOffset, FullscreenMode, MonitorSelector,
     PresentMode, ViewOffset,
 };
+pub use databases::{Databases, MAX_DATABASE};
 pub use error::{ConfigError, Location};
 pub use input::{InputProtocolName, InputSettings, MAX_SYNC_FRAMES, MAX_WORLD_BOUND_M};
 pub use limits::{MAX_CHANNELS, MAX_CONFIG_BYTES};
@@ -69,6 +74,9 @@ pub struct RenderConfig {
     /// The `[[channel]]` tables, in file order (empty: none configured).
     #[serde(rename = "channel", skip_serializing_if = "Vec::is_empty")]
     pub channels: Vec<Channel>,
+    /// The `[databases]` table: CIGI database number → dataset.
+    #[serde(skip_serializing_if = "Databases::is_empty")]
+    pub databases: Databases,
 }
 
 impl RenderConfig {
@@ -158,6 +166,7 @@ pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError>
     // 3. Ranges and cross-key rules.
     let mut raw = raw;
     let raw_channels = std::mem::take(&mut raw.channel);
+    let raw_databases = std::mem::take(&mut raw.databases);
     if raw_channels.len() > MAX_CHANNELS {
         return Err(ConfigError::Invalid {
             source_name: source_name.to_owned(),
@@ -184,6 +193,13 @@ pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError>
             key: e.dotted(),
             message: e.message,
         })?;
+    cfg.databases =
+        databases::validate(raw_databases).map_err(|(key, message)| ConfigError::Invalid {
+            source_name: source_name.to_owned(),
+            location: locate::key_location(text, &key),
+            key,
+            message,
+        })?;
     Ok(cfg)
 }
 
@@ -198,6 +214,8 @@ struct RawConfig {
     input: input::RawInput,
     #[serde(default)]
     channel: Vec<channels::RawChannel>,
+    #[serde(default)]
+    databases: std::collections::BTreeMap<String, PathBuf>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -341,6 +359,7 @@ impl RawConfig {
             },
             input,
             channels: Vec::new(),
+            databases: Databases::default(),
         })
     }
 }

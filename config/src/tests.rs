@@ -473,6 +473,7 @@ fn arb_config() -> impl Strategy<Value = RenderConfig> {
                     },
                     input: InputSettings::default(),
                     channels: Vec::new(),
+                    databases: Default::default(),
                 }
             },
         )

@@ -12,6 +12,7 @@ pub mod heightfield;
 pub mod load;
 pub mod mesh;
 pub mod pool;
+pub mod query;
 pub mod select;
 pub mod tiles;
 

@@ -39,7 +39,7 @@ use crate::vk::{Buffer, Device, Instance, ValidationCounters, VkError, VkResultE
 
 pub use crate::render::desc::{RendererDesc, DEFAULT_TILE_SIZE};
 pub use crate::render::stats::{FrameStats, UploadStats};
-pub use crate::render::uniforms::SKY_LINEAR;
+pub use crate::render::uniforms::{Lighting, SKY_LINEAR};
 
 /// Owns every Vulkan object. Destroyed explicitly in reverse creation order by
 /// [`TerrainRenderer::destroy`] (also called from `Drop`).
@@ -64,6 +64,8 @@ pub struct TerrainRenderer {
     channels_generation: u64,
     /// Statistics panel copied into the top-left corner of every frame while set.
     overlay: Option<Panel>,
+    /// Sun and haze of the next frames.
+    lighting: Lighting,
     destroyed: bool,
 }
 
@@ -129,6 +131,7 @@ impl TerrainRenderer {
             channels: Vec::new(),
             channels_generation: 0,
             overlay: None,
+            lighting: Lighting::default(),
             destroyed: false,
         };
         let dst = this.tile_index_buffer.raw;
@@ -197,6 +200,11 @@ impl TerrainRenderer {
     }
 
     /// Changes the LOD decision (mode, τ, curvature...) for the following frames.
+    /// Sun and haze for the next frames (a host's Celestial Sphere / Atmosphere Control).
+    pub fn set_lighting(&mut self, lighting: Lighting) {
+        self.lighting = lighting;
+    }
+
     pub fn set_select_params(&mut self, params: SelectParams) {
         self.desc.select = params;
     }
@@ -342,7 +350,14 @@ impl TerrainRenderer {
         let mut frame = self.ring.begin_frame(d)?;
         t.reserve_instances(d, &mut frame, plan.instances.len())?;
         let (curvature, debug_tiles) = (self.desc.select.curvature, self.desc.debug_tiles);
-        let uniforms = frame_uniforms(camera, &t.dataset, &t.plan.clipmap, curvature, debug_tiles);
+        let uniforms = frame_uniforms(
+            camera,
+            &t.dataset,
+            &t.plan.clipmap,
+            curvature,
+            debug_tiles,
+            &self.lighting,
+        );
         let overlay = self.overlay.as_ref();
         let staged = stage_frame(frame.staging(), &t.dataset.hf, &plan, &uniforms, overlay)?;
         let mut stats = FrameStats {

@@ -4,3 +4,4 @@ pub mod channel;
 pub mod flight;
 pub mod host_view;
 pub mod pose_input;
+pub mod terrain_queries;

@@ -509,6 +509,20 @@ impl SimInput {
         self.sample(monotonic_s() + lead_s)
     }
 
+    /// The IG session of a UDP input (CIGI hosts and native queries are answered through it),
+    /// `None` for shared memory.
+    pub fn ig_link(&self) -> Option<aerie_sim_bridge::ig::IgLink> {
+        match &self.transport {
+            Some(Transport::Udp(rx)) => Some(rx.ig_link()),
+            _ => None,
+        }
+    }
+
+    /// Geodetic poses land through this mapping from now on (a new dataset was loaded).
+    pub fn set_geo(&mut self, geo: Result<GeoMapping, String>) {
+        self.geo = geo;
+    }
+
     /// The UDP address bound (port 0 picks one), `None` for shared memory.
     pub fn local_addr(&self) -> Option<SocketAddr> {
         match &self.transport {

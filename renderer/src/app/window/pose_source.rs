@@ -3,7 +3,7 @@
 
 use aerie_config::Channel;
 
-use crate::render::frame::FrameStats;
+use crate::render::frame::{FrameStats, TerrainRenderer};
 use crate::sim::channel::AircraftPose;
 use crate::sim::host_view::LiveChannel;
 
@@ -11,6 +11,14 @@ use crate::sim::host_view::LiveChannel;
 /// simulator's UDP stream plugs in. Called once per frame; every channel of that frame uses the
 /// same pose.
 pub trait PoseSource {
+    /// The start of display frame `frame`, before [`PoseSource::pose`]: where an image
+    /// generator answers its host (one CIGI Start of Frame per frame, the queries since the
+    /// last one) and applies what the host changed (database, sun, visibility). An `Err` ends
+    /// the session with that error.
+    fn begin_frame(&mut self, _frame: u64, _renderer: &mut TerrainRenderer) -> Result<(), String> {
+        Ok(())
+    }
+
     /// The pose to draw for display frame `frame` (0-based), `t_s` seconds after the first
     /// frame began.
     fn pose(&mut self, frame: u64, t_s: f64) -> AircraftPose;

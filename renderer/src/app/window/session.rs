@@ -267,6 +267,9 @@ impl App<'_> {
             self.frame_ms.push((now - last).as_secs_f64() * 1e3);
         }
         self.last_frame = Some(now);
+        self.pose
+            .begin_frame(self.frames, self.renderer)
+            .map_err(WindowError::System)?;
         let pose = self.pose.pose(self.frames, (now - start).as_secs_f64());
         if let Some(why) = self.pose.failure() {
             return Err(WindowError::System(why));

@@ -12,6 +12,7 @@ use std::time::{Duration, Instant};
 use aerie_config::Channel;
 
 use crate::app::commands::run::args::RunArgs;
+use crate::app::commands::run::ig::{ig_driver, IgDriver};
 use crate::app::commands::run::plan::{plan, renderer_desc, Plan};
 use crate::app::commands::run::poses::{open_input, open_stats, RunPoses, StraightPassSource};
 use crate::app::failure::{bad_input, runtime, Failure};
@@ -47,8 +48,15 @@ pub fn channel_sizes(
 
 /// Waits for the first pose: `Ok` once one arrived, bad input (exit 2) if it cannot be placed,
 /// runtime (exit 1) after `wait_s` naming the input and its counters.
-fn wait_first_pose(input: &mut SimInput, wait_s: f64) -> Result<AircraftPose, Failure> {
+fn wait_first_pose(
+    input: &mut SimInput,
+    wait_s: f64,
+    mut ig: Option<&mut IgDriver>,
+    fps: f64,
+) -> Result<AircraftPose, Failure> {
     let start = Instant::now();
+    let period = Duration::from_secs_f64(1.0 / fps);
+    let mut next_tick = start;
     eprintln!(
         "waiting up to {wait_s} s for the first pose on {}",
         input.what
@@ -56,6 +64,14 @@ fn wait_first_pose(input: &mut SimInput, wait_s: f64) -> Result<AircraftPose, Fa
     loop {
         if let Some((pose, _)) = input.sample_now(0.0).map_err(bad_input)? {
             return Ok(pose);
+        }
+        // A synchronous CIGI host waits for Start of Frame before it sends again: the IG
+        // keeps its frame rate while there is nothing to draw yet.
+        if let Some(ig) = ig.as_deref_mut() {
+            if Instant::now() >= next_tick {
+                ig.idle_frame();
+                next_tick += period;
+            }
         }
         if start.elapsed().as_secs_f64() >= wait_s {
             return Err(runtime(format!(
@@ -89,17 +105,24 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
     // The port is bound before the (slow) device creation, so a sender may start right away.
     let input = open_input(&plan.settings, &ds)?;
     let geo = GeoMapping::of_dataset(&ds).ok();
+    let ig = ig_driver(a, &plan, input.as_ref(), &ds, &bake);
     let mut poses = RunPoses::new(
         input,
         StraightPassSource { pass, period_s },
         0.0,
         open_stats(a, geo)?,
     );
+    poses.ig = ig;
     let desc = renderer_desc(a, &plan, sizes[0], None);
     let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
     let result = (|| {
         let start = match &mut poses.input {
-            Some(input) => wait_first_pose(input, plan.settings.wait_pose_s)?,
+            Some(input) => wait_first_pose(
+                input,
+                plan.settings.wait_pose_s,
+                poses.ig.as_mut(),
+                plan.settings.fps,
+            )?,
             None => poses.default_view(),
         };
         renderer
@@ -142,6 +165,7 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
         "overlay_frames": report.overlay_frames,
         "channels": channels,
         "input": poses.summary_json(),
+        "ig": poses.ig.as_ref().map(IgDriver::summary_json),
         "stats": a.stats.as_ref().map(|p| p.display().to_string()),
         "validation": {
             "enabled": desc.validation,
@@ -163,6 +187,9 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
     );
     if let Some(line) = poses.summary_line() {
         println!("{line}");
+    }
+    if let Some(ig) = &poses.ig {
+        println!("{}", ig.summary_line());
     }
     if let Some(w) = &poses.stats {
         println!("stats: {} rows in {}", w.rows(), w.path().display());
@@ -234,6 +261,7 @@ fn frame_loop(
         } else {
             (started - t0).as_secs_f64()
         };
+        poses.begin_frame(frame, renderer).map_err(runtime)?;
         let (pose, origin) = poses.next(frame, t_s)?;
         // The host's CIGI views replace the channels' view, eye and frustum before selection.
         let views: Vec<_> = poses

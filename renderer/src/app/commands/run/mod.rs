@@ -14,7 +14,9 @@
 //! per frame ([`crate::tools::stats_csv`]).
 
 pub mod args;
+pub mod database;
 pub mod headless;
+pub mod ig;
 pub mod plan;
 pub mod poses;
 pub mod settings;

@@ -8,10 +8,11 @@ use aerie_config::Channel;
 use aerie_sim_bridge::DropReason;
 
 use crate::app::commands::run::args::RunArgs;
+use crate::app::commands::run::ig::IgDriver;
 use crate::app::commands::run::settings::RunSettings;
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::window::pose_source::PoseSource;
-use crate::render::frame::FrameStats;
+use crate::render::frame::{FrameStats, TerrainRenderer};
 use crate::sim::channel::AircraftPose;
 use crate::sim::flight::StraightPass;
 use crate::sim::host_view::{HostViews, LiveChannel};
@@ -69,6 +70,8 @@ pub struct RunPoses {
     pub views: Option<HostViews>,
     /// Window path: this frame's `--stats` row, written once the frame's triangles are known.
     pending: Option<FrameRow>,
+    /// The image generator's side of a UDP input: answers and host state, once per frame.
+    pub ig: Option<IgDriver>,
 }
 
 impl RunPoses {
@@ -96,6 +99,7 @@ impl RunPoses {
             fail: None,
             views: None,
             pending: None,
+            ig: None,
         }
     }
 
@@ -256,6 +260,17 @@ fn pct(n: u64, of: u64) -> f64 {
 }
 
 impl PoseSource for RunPoses {
+    fn begin_frame(&mut self, _frame: u64, renderer: &mut TerrainRenderer) -> Result<(), String> {
+        let eye = self
+            .last_drawn
+            .unwrap_or_else(|| self.default_view())
+            .position;
+        match &mut self.ig {
+            Some(ig) => ig.begin_frame(renderer, self.input.as_mut(), eye),
+            None => Ok(()),
+        }
+    }
+
     fn pose(&mut self, frame: u64, t_s: f64) -> AircraftPose {
         let now = Instant::now();
         let frame_ms = self.last_call.map(|l| (now - l).as_secs_f64() * 1e3);

@@ -4,6 +4,7 @@
 use winit::event_loop::EventLoop;
 
 use crate::app::commands::run::args::RunArgs;
+use crate::app::commands::run::ig::{ig_driver, IgDriver};
 use crate::app::commands::run::plan::{plan, renderer_desc, Plan};
 use crate::app::commands::run::poses::{open_input, open_stats, RunPoses, StraightPassSource};
 use crate::app::failure::{bad_input, runtime, Failure};
@@ -36,6 +37,7 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
     let pass = StraightPass::over(&ds, a.heading, a.pitch, a.speed, a.agl, period_s);
     let input = open_input(&plan.settings, &ds)?;
     let geo = GeoMapping::of_dataset(&ds).ok();
+    let ig = ig_driver(a, &plan, input.as_ref(), &ds, &bake);
     // Predicted display: one frame after the frame starts (FIFO, frames in flight).
     let lead_s = 1.0 / 60.0;
     let mut source = RunPoses::new(
@@ -44,6 +46,7 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
         lead_s,
         open_stats(a, geo)?,
     );
+    source.ig = ig;
     let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
     let start = source.default_view().position;
     renderer.load_terrain(ds, bake, start).map_err(runtime)?;
@@ -88,10 +91,14 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
     })?;
     let mut summary = summary_json(&report, &plan, a, &device, &desc, &counters);
     summary["input"] = source.summary_json();
+    summary["ig"] = source.ig.as_ref().map(IgDriver::summary_json).into();
     summary["stats"] = a.stats.as_ref().map(|p| p.display().to_string()).into();
     print_summary(&report, &device, &counters);
     if let Some(line) = source.summary_line() {
         println!("{line}");
+    }
+    if let Some(ig) = &source.ig {
+        println!("{}", ig.summary_line());
     }
     if let Some(path) = &a.json {
         write_text(path, &format!("{summary:#}\n")).map_err(runtime)?;

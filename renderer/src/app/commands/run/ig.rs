@@ -1,0 +1,299 @@
+//! `aerie run` as an image generator (issue 12): at the start of every rendered frame, one
+//! step of the IG session — one Start of Frame to the host, every HAT/HOT and line-of-sight
+//! answer due (asked on the full-resolution surface of the dataset drawn), native query answers
+//! — then what the host changed applied to the renderer: the database (loaded on a worker
+//! thread, Start of Frame saying −n meanwhile), the sun from its Celestial Sphere Control, the
+//! haze from its Atmosphere Control visibility.
+
+use std::path::Path;
+use std::time::Instant;
+
+use aerie_config::Databases;
+use aerie_sim_bridge::ig::{DatabaseStatus, IgFrame, IgLink, IgStats};
+use aerie_sim_bridge::query::{NoTerrain, TerrainQueries};
+use aerie_sim_bridge::timing::monotonic_s;
+use aerie_terrain::bake::ErrorBake;
+use aerie_terrain::dataset::Dataset;
+use aerie_terrain::query::InMemorySource;
+use glam::DVec3;
+use std::sync::Arc;
+
+use crate::app::commands::run::args::RunArgs;
+use crate::app::commands::run::database::{
+    DatabaseAction, DatabaseChoice, DatabaseLoader, DatabaseReport,
+};
+use crate::app::commands::run::plan::Plan;
+use crate::render::frame::{Lighting, TerrainRenderer};
+use crate::sim::pose_input::{GeoMapping, SimInput};
+use crate::sim::terrain_queries::DatasetQueries;
+use crate::tools::percentile::percentile;
+
+/// The IG of a run whose input is UDP (CIGI and native queries arrive there); `None` for
+/// shared memory or no input. `[databases]` paths are relative to the config file's folder.
+pub(crate) fn ig_driver(
+    a: &RunArgs,
+    plan: &Plan,
+    input: Option<&SimInput>,
+    ds: &Arc<Dataset>,
+    bake: &Arc<ErrorBake>,
+) -> Option<IgDriver> {
+    let link = input?.ig_link()?;
+    let dir = a
+        .config
+        .as_deref()
+        .and_then(Path::parent)
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
+    Some(IgDriver::new(
+        link,
+        ds,
+        bake,
+        plan.config.databases.clone(),
+        &dir,
+        &a.dem,
+        plan.config.render.tile_size,
+    ))
+}
+
+/// The IG side of one run.
+pub struct IgDriver {
+    link: IgLink,
+    queries: Option<DatasetQueries>,
+    geo: Option<GeoMapping>,
+    choice: DatabaseChoice,
+    loader: Option<DatabaseLoader>,
+    tile_size: u32,
+    ig_frame: u32,
+    /// CPU time of each frame's answering step, µs (frames with at least one question).
+    answer_us: Vec<f64>,
+    /// Questions asked per frame (same frames as `answer_us`).
+    questions: Vec<f64>,
+    lighting: Lighting,
+    /// Database loads: (number, path, outcome).
+    loads: Vec<(i8, String, Result<(), String>)>,
+}
+
+/// The query service of a dataset, or why there is none (a bake that does not match).
+fn queries_for(ds: &Arc<Dataset>, bake: &Arc<ErrorBake>) -> Option<DatasetQueries> {
+    match InMemorySource::new(ds.clone(), bake.clone()) {
+        Ok(src) => Some(DatasetQueries::new(src, GeoMapping::of_dataset(ds).ok())),
+        Err(e) => {
+            tracing::error!("{}: terrain queries unavailable: {e}", ds.source);
+            None
+        }
+    }
+}
+
+impl IgDriver {
+    /// The IG for `link`, drawing `ds` (the `--dem`, database `choice`'s current one).
+    pub fn new(
+        link: IgLink,
+        ds: &Arc<Dataset>,
+        bake: &Arc<ErrorBake>,
+        databases: Databases,
+        config_dir: &Path,
+        dem: &Path,
+        tile_size: u32,
+    ) -> Self {
+        Self {
+            link,
+            queries: queries_for(ds, bake),
+            geo: GeoMapping::of_dataset(ds).ok(),
+            choice: DatabaseChoice::new(databases, config_dir, dem),
+            loader: None,
+            tile_size,
+            ig_frame: 0,
+            answer_us: Vec::new(),
+            questions: Vec::new(),
+            lighting: Lighting::default(),
+            loads: Vec::new(),
+        }
+    }
+
+    fn status(&self) -> DatabaseStatus {
+        match self.choice.report() {
+            DatabaseReport::Ready(n) => DatabaseStatus::Ready(n),
+            DatabaseReport::Loading(n) => DatabaseStatus::Loading(n),
+            DatabaseReport::Unavailable => DatabaseStatus::Unavailable,
+        }
+    }
+
+    /// One IG step with no terrain yet (while `aerie run` waits for its first pose): the host
+    /// still gets its Start of Frame, and every question is answered "no terrain".
+    pub fn idle_frame(&mut self) {
+        self.step(&NoTerrain);
+    }
+
+    fn step(&mut self, terrain: &dyn TerrainQueries) {
+        let frame = IgFrame {
+            ig_frame: self.ig_frame,
+            time_s: monotonic_s(),
+            database: self.status(),
+        };
+        let t = Instant::now();
+        let answers = self.link.begin_frame(&frame, terrain);
+        let asked = answers.responses + answers.native;
+        if asked > 0 {
+            self.answer_us.push(t.elapsed().as_secs_f64() * 1e6);
+            self.questions.push(asked as f64);
+        }
+        self.ig_frame = self.ig_frame.wrapping_add(1);
+    }
+
+    /// The start of a rendered frame: a finished database load swapped in, the host's
+    /// requests acted on, the frame's answers sent, the host's light applied. `eye` is where
+    /// the last frame was drawn from (the clipmap is filled around it after a load).
+    pub fn begin_frame(
+        &mut self,
+        renderer: &mut TerrainRenderer,
+        input: Option<&mut SimInput>,
+        eye: DVec3,
+    ) -> Result<(), String> {
+        self.finish_load(renderer, input, eye)?;
+        let state = self.link.state();
+        if let Some(n) = state.database_request {
+            match self.choice.request(n) {
+                DatabaseAction::None => {}
+                DatabaseAction::Load(n, path) => {
+                    eprintln!("CIGI host asks for database {n}: loading {}", path.display());
+                    self.loader = Some(DatabaseLoader::start(n, path, self.tile_size));
+                }
+                DatabaseAction::Unknown(n) => eprintln!(
+                    "CIGI host asks for database {n}, which the configuration's [databases] table does not have (configured: {:?}); Start of Frame reports it unavailable",
+                    self.choice.configured()
+                ),
+            }
+        }
+        match self.queries.take() {
+            Some(q) => {
+                self.step(&q);
+                self.queries = Some(q);
+            }
+            None => self.step(&NoTerrain),
+        }
+        // The host's light, at the eye's latitude and longitude.
+        let env = state.environment;
+        let sun = self.geo.as_ref().and_then(|g| {
+            let (lat, lon, _) = g.to_geodetic(eye);
+            env.sun_direction_enu(monotonic_s(), lat, lon)
+        });
+        let lighting = Lighting::from_host(sun, env.visibility_m());
+        if lighting != self.lighting {
+            self.lighting = lighting;
+            renderer.set_lighting(lighting);
+        }
+        Ok(())
+    }
+
+    fn finish_load(
+        &mut self,
+        renderer: &mut TerrainRenderer,
+        input: Option<&mut SimInput>,
+        eye: DVec3,
+    ) -> Result<(), String> {
+        let Some(result) = self.loader.as_ref().and_then(DatabaseLoader::poll) else {
+            return Ok(());
+        };
+        let loader = self.loader.take().expect("polled above");
+        let n = loader.number;
+        let path = loader.path.display().to_string();
+        match result {
+            Ok((ds, bake)) => {
+                renderer
+                    .load_terrain(ds.clone(), bake.clone(), eye)
+                    .map_err(|e| format!("database {n} ({path}): {e}"))?;
+                self.queries = queries_for(&ds, &bake);
+                let geo = GeoMapping::of_dataset(&ds);
+                self.geo = geo.clone().ok();
+                if let Some(i) = input {
+                    i.set_geo(geo);
+                }
+                eprintln!("database {n} ready: {}", ds.summary());
+                self.choice.finished(n, true);
+                self.loads.push((n, path, Ok(())));
+            }
+            Err(e) => {
+                eprintln!("database {n} ({path}) failed to load, keeping the current one: {e}");
+                self.choice.finished(n, false);
+                self.loads.push((n, path, Err(e)));
+            }
+        }
+        Ok(())
+    }
+
+    /// The session's counters.
+    pub fn stats(&self) -> IgStats {
+        self.link.stats()
+    }
+
+    /// The summary's `ig` object.
+    pub fn summary_json(&self) -> serde_json::Value {
+        let s = self.link.stats();
+        let mut us = self.answer_us.clone();
+        us.sort_by(f64::total_cmp);
+        let mut q = self.questions.clone();
+        q.sort_by(f64::total_cmp);
+        let packets: serde_json::Map<String, serde_json::Value> = s
+            .packets
+            .as_slice()
+            .iter()
+            .map(|&(id, n)| (id.to_string(), n.into()))
+            .collect();
+        serde_json::json!({
+            "ig_frames": self.ig_frame,
+            "messages": s.messages,
+            "start_of_frames": s.start_of_frames,
+            "packets": packets,
+            "requests_received": s.requests_received,
+            "responses_sent": s.responses_sent,
+            "answered": s.answered,
+            "answered_invalid": s.answered_invalid,
+            "timed_out": s.timed_out,
+            "native_received": s.native_received,
+            "native_answered": s.native_answered,
+            "latency_frames": s.latency_frames.to_vec(),
+            "latency_max_frames": s.latency_max_frames,
+            "answer_cpu_us": {
+                "frames": us.len(),
+                "median": percentile(&us, 0.5),
+                "p99": percentile(&us, 0.99),
+                "max": percentile(&us, 1.0),
+            },
+            "questions_per_frame_max": percentile(&q, 1.0),
+            "database": self.status().wire(),
+            "databases_configured": self.choice.configured(),
+            "database_loads": self.loads.iter().map(|(n, p, r)| serde_json::json!({
+                "number": n, "path": p, "error": r.as_ref().err(),
+            })).collect::<Vec<_>>(),
+            "resets": self.link.state().resets,
+            "entities": self.link.state().entities,
+        })
+    }
+
+    /// One summary line.
+    pub fn summary_line(&self) -> String {
+        let s = self.link.stats();
+        let mut us = self.answer_us.clone();
+        us.sort_by(f64::total_cmp);
+        let packets = if s.packets.is_empty() {
+            "none".to_string()
+        } else {
+            s.packets.to_string()
+        };
+        format!(
+            "IG: {} frames, {} Start of Frames, {} host messages (packets by ID: {}); {} requests, {} answered ({} invalid), {} native; answering median {:.0} µs, max {:.0} µs per frame; latency max {} frames; {} resets",
+            self.ig_frame,
+            s.start_of_frames,
+            s.messages,
+            packets,
+            s.requests_received,
+            s.answered + s.answered_invalid,
+            s.answered_invalid,
+            s.native_answered,
+            percentile(&us, 0.5),
+            percentile(&us, 1.0),
+            s.latency_max_frames,
+            self.link.state().resets,
+        )
+    }
+}
