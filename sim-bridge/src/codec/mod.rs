@@ -27,7 +27,8 @@ pub struct Decoded {
     pub pose: Option<Pose>,
     /// The sender's sequence number (native sequence, CIGI host frame), for ordering.
     pub sequence: Option<u32>,
-    /// The whole CIGI message (IG Control, views) when `protocol` is CIGI.
+    /// The whole CIGI message (IG Control, entities, views, requests, counts) when `protocol`
+    /// is CIGI.
     pub cigi: Option<cigi::CigiMessage>,
 }
 
@@ -193,8 +194,8 @@ mod tests {
         #[test]
         fn random_bodies_never_panic(
             body in prop::collection::vec(any::<u8>(), 0..600),
-            which in 0usize..7,
-            len_hint in prop::sample::select(vec![69usize, 132, 408, 552, 24, 72, 76, 84, 104, 0]),
+            which in 0usize..8,
+            len_hint in prop::sample::select(vec![69usize, 132, 408, 552, 24, 16, 72, 76, 84, 104, 0]),
         ) {
             let mut bytes = match which {
                 0 => native::MAGIC.to_vec(),
@@ -203,7 +204,8 @@ mod tests {
                 3 => fgfs::VERSION.to_be_bytes().to_vec(),
                 4 => fgfs::VERSION_25.to_be_bytes().to_vec(),
                 5 => native::QUERY_MAGIC.to_vec(),
-                _ => native::REPLY_MAGIC.to_vec(),
+                6 => native::REPLY_MAGIC.to_vec(),
+                _ => vec![1, 16, 3, 0, 0, 0, 0x00, 0x80],
             };
             bytes.extend_from_slice(&body);
             if len_hint > 0 {

@@ -369,9 +369,16 @@ pub struct Anchor {
 pub struct Placed {
     /// Where it is.
     pub point: Geodetic,
-    /// The referenced entity's body axes (columns x forward, y right, z down) in the local
-    /// east-north-up frame at `point`.
-    pub body_to_enu: DMat3,
+    /// The referenced entity's body axes (columns x forward, y right, z down) in ECEF.
+    pub body_to_ecef: DMat3,
+}
+
+impl Placed {
+    /// The referenced entity's body axes in the local east-north-up frame at the point (only
+    /// a vector's direction needs them: computed on demand).
+    pub fn body_to_enu(&self) -> DMat3 {
+        LocalTangentPlane::new(self.point).enu_axes().transpose() * self.body_to_ecef
+    }
 }
 
 impl Anchor {
@@ -398,12 +405,9 @@ impl Anchor {
         };
         let ltp = LocalTangentPlane::new(origin);
         let point = ltp.enu_to_geodetic(root_axes * self.offset_m);
-        // The body axes carried through ECEF into the tangent plane at the point itself.
-        let ecef = ltp.enu_axes() * root_axes * self.rotation;
-        let here = LocalTangentPlane::new(point).enu_axes();
         Answer::Ready(Placed {
             point,
-            body_to_enu: here.transpose() * ecef,
+            body_to_ecef: ltp.enu_axes() * root_axes * self.rotation,
         })
     }
 }
@@ -549,7 +553,7 @@ mod tests {
         assert!(close(got, want, 1e-6), "{got} vs {want}");
         // The body axes at the point: forward still 30° up, 1 km away (the tangent planes
         // differ by 0.009°).
-        let axes = p.ready().unwrap().body_to_enu;
+        let axes = p.ready().unwrap().body_to_enu();
         assert!((axes.x_axis.z.asin().to_degrees() - 30.0).abs() < 0.02);
     }
 
@@ -580,7 +584,7 @@ mod tests {
         let got = ltp.geodetic_to_enu(p.ready().unwrap().point);
         assert!(close(got, DVec3::new(10.0, -5.0, 0.0), 1e-6), "{got}");
         assert!(close(
-            p.ready().unwrap().body_to_enu.x_axis,
+            p.ready().unwrap().body_to_enu().x_axis,
             -DVec3::Y,
             1e-5
         ));
@@ -625,8 +629,8 @@ mod tests {
         let p = a.place(&ground).ready().unwrap();
         assert!((p.point.alt_m - 640.0).abs() < 1e-9);
         // Facing north up the slope: nose up by 10°.
-        assert!((p.body_to_enu.x_axis.z.asin().to_degrees() - 10.0).abs() < 1e-9);
-        assert!(p.body_to_enu.y_axis.z.abs() < 1e-12, "no roll");
+        assert!((p.body_to_enu().x_axis.z.asin().to_degrees() - 10.0).abs() < 1e-9);
+        assert!(p.body_to_enu().y_axis.z.abs() < 1e-12, "no roll");
         // Not ready or no terrain: said so.
         assert_eq!(a.place(&|_, _| Answer::Pending), Answer::Pending);
         assert_eq!(a.place(&|_, _| Answer::NoTerrain), Answer::NoTerrain);

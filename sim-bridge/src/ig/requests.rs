@@ -22,7 +22,7 @@ use crate::geodesy::{Geodetic, LocalTangentPlane};
 use crate::pose::PosePosition;
 use crate::query::{Answer, LosHit, Surface, TerrainQueries, MAX_PENDING_FRAMES};
 
-use super::entities::{Anchor, AnchorError, EntityTable};
+use super::entities::{Anchor, AnchorError, EntityTable, Placed};
 
 /// Live requests of each kind (HAT/HOT, LOS) at most; further IDs are answered invalid at once.
 pub const MAX_REQUESTS: usize = 4096;
@@ -202,9 +202,8 @@ impl Located {
         }
     }
 
-    /// The point, and the body axes of the entity it is relative to (`None` for a geodetic
-    /// point), in the local frame at the point.
-    fn place(&self, terrain: &dyn TerrainQueries) -> Result<(Geodetic, Option<glam::DMat3>), Miss> {
+    /// The point, and (for an entity-relative one) where the entity's body axes are.
+    fn place(&self, terrain: &dyn TerrainQueries) -> Result<(Geodetic, Option<Placed>), Miss> {
         match self {
             Located::Point(g) => Ok((*g, None)),
             Located::Unknown(_) => Err(Miss::Unresolved),
@@ -217,7 +216,7 @@ impl Located {
                     })
                 };
                 match a.place(&ground) {
-                    Answer::Ready(p) => Ok((p.point, Some(p.body_to_enu))),
+                    Answer::Ready(p) => Ok((p.point, Some(p))),
                     Answer::NoTerrain => Err(Miss::NoTerrain),
                     Answer::Pending => Err(Miss::Pending),
                 }
@@ -355,10 +354,12 @@ impl Job {
                 // An entity's vector is in its body axes: turned into the local frame here.
                 let (az, el) = match body {
                     None => (*azimuth_deg, *elevation_deg),
-                    Some(axes) => {
+                    Some(placed) => {
                         let (sa, ca) = azimuth_deg.to_radians().sin_cos();
                         let (se, ce) = elevation_deg.to_radians().sin_cos();
-                        azimuth_elevation_deg(axes * DVec3::new(ce * ca, ce * sa, -se))
+                        azimuth_elevation_deg(
+                            placed.body_to_enu() * DVec3::new(ce * ca, ce * sa, -se),
+                        )
                     }
                 };
                 answer(terrain.line_of_sight_vector(

@@ -122,10 +122,10 @@ pub struct FrameAnswers {
 }
 
 /// The host-visible state, for the frame loop.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct IgState {
     /// The mode Start of Frame reports (Standby or Operate).
-    pub mode: Option<IgMode>,
+    pub mode: IgMode,
     /// Times the host reset the IG (the renderer watches it: views back to the configuration).
     pub resets: u64,
     /// The host's last non-zero Database Number.
@@ -142,6 +142,22 @@ pub struct IgState {
     pub entities: usize,
     /// Requests live (HAT/HOT + LOS), periodic ones included.
     pub requests_live: usize,
+}
+
+impl Default for IgState {
+    fn default() -> Self {
+        Self {
+            mode: IgMode::Operate,
+            resets: 0,
+            database_request: None,
+            environment: Environment::default(),
+            host_version: None,
+            host: None,
+            last_host_frame: None,
+            entities: 0,
+            requests_live: 0,
+        }
+    }
 }
 
 /// What [`IgSession::receive`] did.
@@ -236,10 +252,6 @@ impl IgSession {
     pub fn new(config: IgConfig) -> Self {
         Self {
             config,
-            state: IgState {
-                mode: Some(IgMode::Operate),
-                ..IgState::default()
-            },
             ..Self::default()
         }
     }
@@ -287,7 +299,7 @@ impl IgSession {
             if !self.standby {
                 self.standby = true;
                 self.state.resets += 1;
-                self.state.mode = Some(IgMode::ResetOrStandby);
+                self.state.mode = IgMode::ResetOrStandby;
                 self.stats.requests_dropped += self.requests.clear() as u64;
                 self.stats.requests_dropped += self.deferred.len() as u64;
                 self.deferred.clear();
@@ -300,7 +312,7 @@ impl IgSession {
         }
         if self.standby {
             self.standby = false;
-            self.state.mode = Some(IgMode::Operate);
+            self.state.mode = IgMode::Operate;
         }
         for e in &m.entities {
             let change = self
@@ -341,10 +353,14 @@ impl IgSession {
             out.requests += 1;
         }
         for r in &m.rejected {
-            if let Some(req) = r
-                .request_id
-                .and_then(|id| cigi_map::rejected_request(r.packet_id, id))
-            {
+            // Answered invalid once, with the response its type asks for when it could be read.
+            let req = match &r.request {
+                Some(req) => Some(cigi_map::request(req)),
+                None => r
+                    .request_id
+                    .and_then(|id| cigi_map::rejected_request(r.packet_id, id)),
+            };
+            if let Some(req) = req {
                 self.stats.requests_rejected += 1;
                 self.requests.refuse(req);
             }

@@ -309,7 +309,7 @@ fn reset_clears_host_state_and_reports_standby_until_operate() {
     let st = s.state();
     assert_eq!((st.entities, st.requests_live, st.resets), (1, 0, 1));
     assert!(s.entities().get(0).is_some());
-    assert_eq!(st.mode, Some(IgMode::ResetOrStandby));
+    assert_eq!(st.mode, IgMode::ResetOrStandby);
     // Standby in every Start of Frame until the host says Operate, and nothing answered.
     for n in 1..4 {
         let m = cigi_of(&s.begin_frame(&frame_n(n), &g)).unwrap();
@@ -332,7 +332,7 @@ fn reset_clears_host_state_and_reports_standby_until_operate() {
     let m = cigi_of(&s.begin_frame(&frame_n(5), &g)).unwrap();
     assert_eq!(m.start_of_frame.ig_mode, IgMode::Operate.bits());
     assert_eq!(s.state().entities, 2);
-    assert_eq!(s.state().mode, Some(IgMode::Operate));
+    assert_eq!(s.state().mode, IgMode::Operate);
 }
 
 #[test]
@@ -617,16 +617,28 @@ fn environment_and_rejected_requests() {
     }
     .encode(ByteOrder::Little)
     .to_vec();
-    // A HAT/HOT request with a latitude of 95°: rejected by the codec, answered invalid.
-    let bad = HatHotRequest {
-        request_id: 40,
-        point: [95.0, 0.0, 0.0],
-        ..HatHotRequest::default()
-    }
-    .encode(CigiVersion::V3_3, ByteOrder::Little)
-    .to_vec();
-    let m = operate(1, &[celestial, atmosphere, bad]);
-    assert_eq!(m.rejected.len(), 1, "{:?}", m.rejected);
+    // HAT/HOT requests with a latitude of 95°: rejected by the codec, answered invalid in
+    // the response their type asks for.
+    let bad = |id, t| {
+        HatHotRequest {
+            request_id: id,
+            request_type: t,
+            point: [95.0, 0.0, 0.0],
+            ..HatHotRequest::default()
+        }
+        .encode(CigiVersion::V3_3, ByteOrder::Little)
+        .to_vec()
+    };
+    let m = operate(
+        1,
+        &[
+            celestial,
+            atmosphere,
+            bad(40, HatHotRequestType::Hat),
+            bad(41, HatHotRequestType::Extended),
+        ],
+    );
+    assert_eq!(m.rejected.len(), 2, "{:?}", m.rejected);
     s.receive(&m, host());
     let env = s.state().environment;
     let c = env.celestial.unwrap();
@@ -638,9 +650,228 @@ fn environment_and_rejected_requests() {
     assert!(sun[2] > 0.85 && sun[1] < 0.0, "{sun:?}");
     let m = cigi_of(&s.begin_frame(&frame_n(2), &g)).unwrap();
     assert!(
-        matches!(m.responses[..], [CigiResponse::HatHot(r)] if r.request_id == 40 && !r.valid),
+        matches!(m.responses[..], [CigiResponse::HatHot(r), CigiResponse::HatHotExtended(x)]
+            if r.request_id == 40 && !r.valid && x.request_id == 41 && !x.valid),
         "{:?}",
         m.responses
     );
-    assert_eq!(s.stats().requests_rejected, 1);
+    assert_eq!(s.stats().requests_rejected, 2);
+}
+
+mod random_hosts {
+    use super::*;
+    use crate::codec::cigi::{ConformalClampedEntityControl, RateControl};
+    use proptest::prelude::*;
+
+    /// Answers drawn from a seed: ready (with a hit or not), no terrain, or pending.
+    struct Dice(Cell<u64>);
+
+    impl Dice {
+        fn roll(&self) -> u64 {
+            let x = self
+                .0
+                .get()
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            self.0.set(x);
+            x >> 33
+        }
+        fn pick<T>(&self, t: T) -> Answer<T> {
+            match self.roll() % 4 {
+                0 => Answer::NoTerrain,
+                1 => Answer::Pending,
+                _ => Answer::Ready(t),
+            }
+        }
+    }
+
+    impl TerrainQueries for Dice {
+        fn height_of_terrain(&self, _: &PosePosition) -> Answer<Surface> {
+            self.pick(Surface {
+                height_m: (self.roll() % 3000) as f64,
+                normal_enu: [0.0, 0.6, 0.8],
+            })
+        }
+        fn line_of_sight(&self, from: &PosePosition, _: &PosePosition) -> LosAnswer {
+            let hit = self.roll() % 2 == 0;
+            self.pick(hit.then_some(LosHit {
+                range_m: 10.0,
+                point: *from,
+                normal_enu: [0.0, 0.0, 1.0],
+            }))
+        }
+        fn line_of_sight_vector(
+            &self,
+            f: &PosePosition,
+            _: f64,
+            _: f64,
+            _: f64,
+            _: f64,
+        ) -> LosAnswer {
+            self.line_of_sight(f, f)
+        }
+    }
+
+    fn value() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            -90.0..90.0f64,
+            -1e7..1e7f64,
+            Just(0.0),
+            Just(1e300),
+            Just(-1e300),
+        ]
+    }
+
+    fn packet() -> impl Strategy<Value = (u8, u16, u8, bool, [f64; 3], u16)> {
+        (
+            0u8..7,
+            0u16..6,
+            0u8..4,
+            any::<bool>(),
+            [value(), value(), value()],
+            0u16..6,
+        )
+    }
+
+    fn encode(p: &(u8, u16, u8, bool, [f64; 3], u16), v: CigiVersion, o: ByteOrder) -> Vec<u8> {
+        let &(kind, id, small, flag, point, other) = p;
+        let cs = if flag {
+            CoordinateSystem::Entity
+        } else {
+            CoordinateSystem::Geodetic
+        };
+        match kind {
+            0 => HatHotRequest {
+                request_id: id,
+                request_type: match small % 3 {
+                    0 => HatHotRequestType::Hat,
+                    1 => HatHotRequestType::Hot,
+                    _ => HatHotRequestType::Extended,
+                },
+                coordinate_system: cs,
+                update_period: small,
+                entity_id: other,
+                point,
+            }
+            .encode(v, o)
+            .to_vec(),
+            1 => LosSegmentRequest {
+                request_id: id,
+                source_coordinate_system: cs,
+                destination_coordinate_system: cs,
+                destination_entity_id_valid: small % 2 == 0,
+                destination_entity_id: other,
+                entity_id: other,
+                update_period: small,
+                source: point,
+                destination: [point[1], point[0], point[2] - 100.0],
+                ..LosSegmentRequest::default()
+            }
+            .encode(v, o)
+            .to_vec(),
+            2 => LosVectorRequest {
+                request_id: id,
+                source_coordinate_system: cs,
+                entity_id: other,
+                azimuth_deg: (point[0] as f32).clamp(-180.0, 180.0),
+                elevation_deg: (point[1] as f32).clamp(-90.0, 90.0),
+                max_range_m: 1000.0,
+                update_period: small,
+                source: point,
+                ..LosVectorRequest::default()
+            }
+            .encode(v, o)
+            .to_vec(),
+            3 | 4 => EntityControl {
+                entity_id: id,
+                entity_state: small % 3,
+                attached: flag,
+                parent_id: other,
+                alpha: 255,
+                yaw_deg: point[0] as f32,
+                lat_deg: point[0],
+                lon_deg: point[1],
+                alt_m: point[2],
+                ..EntityControl::default()
+            }
+            .encode(o)
+            .to_vec(),
+            5 => ConformalClampedEntityControl {
+                entity_id: id,
+                yaw_deg: 10.0,
+                lat_deg: point[0],
+                lon_deg: point[1],
+            }
+            .encode(o)
+            .to_vec(),
+            _ => RateControl {
+                entity_id: id,
+                apply_to_articulated_part: flag,
+                linear_m_s: [1.0, 2.0, 3.0],
+                ..RateControl::default()
+            }
+            .encode(v, o)
+            .to_vec(),
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(128))]
+
+        /// Any sequence of host messages and frames: never a panic, one decodable message per
+        /// frame once the host is known (under the size bound), the mode it reports the last
+        /// message's, and nothing pending beyond the bound.
+        #[test]
+        fn any_host_gets_one_message_per_frame(
+            seed in any::<u64>(),
+            steps in prop::collection::vec(
+                (0u8..5, 0usize..4, any::<bool>(), prop::collection::vec(packet(), 0..6)),
+                1..40,
+            ),
+        ) {
+            let mut s = session();
+            let dice = Dice(Cell::new(seed));
+            let mut host_frame = 0u32;
+            let mut frame = 0u32;
+            let mut known = false;
+            let mut standby = false;
+            for (what, version, big, packets) in steps {
+                if what == 0 {
+                    frame += 1;
+                    let a = s.begin_frame(&frame_n(frame), &dice);
+                    let cigi: Vec<_> = a.datagrams.iter().filter(|d| d.to == host()).collect();
+                    prop_assert_eq!(cigi.len(), usize::from(known));
+                    if let Some(d) = cigi.first() {
+                        prop_assert!(d.bytes.len() <= MAX_MESSAGE_BYTES);
+                        let m = decode_ig_message(&d.bytes).unwrap();
+                        prop_assert_eq!(m.start_of_frame.ig_frame, frame);
+                        prop_assert_eq!(m.start_of_frame.ig_mode == 0, standby);
+                        prop_assert_eq!(m.responses.len(), a.responses);
+                    }
+                    continue;
+                }
+                let v = CigiVersion::ALL[version];
+                let o = if big { ByteOrder::Big } else { ByteOrder::Little };
+                let mode = if what == 1 { IgMode::ResetOrStandby } else { IgMode::Operate };
+                host_frame += 1;
+                let mut b = ig_control(host_frame, mode).encode_as(v, o);
+                for p in &packets {
+                    b.extend(encode(p, v, o));
+                }
+                if let Ok(m) = cigi::decode(&b) {
+                    s.receive(&m, host());
+                    known = true;
+                    standby = mode == IgMode::ResetOrStandby;
+                }
+            }
+            // However the dice fell, nothing waits longer than the pending bound.
+            for _ in 0..MAX_PENDING_FRAMES + 1 {
+                frame += 1;
+                s.begin_frame(&frame_n(frame), &NoTerrain);
+            }
+            let st = s.stats();
+            prop_assert_eq!(st.periodic_live, st.requests_live);
+            prop_assert!(st.latency_max_frames <= u64::from(MAX_PENDING_FRAMES));
+        }
+    }
 }

@@ -25,6 +25,9 @@ pub struct RejectedPacket {
     /// The request ID (HAT/HOT ID, LOS ID) of a rejected request, so that it can still be
     /// answered as invalid.
     pub request_id: Option<u16>,
+    /// The rejected request as decoded, when its fields could be read (a reserved request
+    /// type cannot): its type tells which response answers it.
+    pub request: Option<CigiRequest>,
     /// What is wrong, naming the field.
     pub error: DecodeError,
 }
@@ -87,6 +90,11 @@ impl CigiMessage {
         })
     }
 
+    /// The host frame number's four low bits, as 3.2+ responses carry them.
+    pub fn host_frame_lsn(&self) -> u8 {
+        (self.ig_control.host_frame & 0x0F) as u8
+    }
+
     /// A Start of Frame in Operate that names this message's host frame and database.
     pub fn start_of_frame(&self, ig_frame: u32, timestamp: u32) -> StartOfFrame {
         StartOfFrame {
@@ -107,25 +115,51 @@ impl CigiMessage {
             .encode(self.version, self.byte_order)
     }
 
-    fn reject(&mut self, packet_id: u8, offset: usize, request_id: Option<u16>, e: DecodeError) {
+    fn reject(&mut self, packet_id: u8, offset: usize, e: DecodeError) {
         self.rejected.push(RejectedPacket {
             packet_id,
             offset,
-            request_id,
+            request_id: None,
+            request: None,
             error: e,
+        });
+    }
+
+    /// Files a decoded request, or rejects it keeping its ID (read apart from the packet's
+    /// bytes when the request itself could not be decoded).
+    fn take_request(
+        &mut self,
+        packet_id: u8,
+        offset: usize,
+        raw_id: Option<u16>,
+        decoded: Result<CigiRequest, DecodeError>,
+    ) {
+        let (request, error) = match decoded {
+            Ok(r) => match r.check() {
+                Ok(()) => return self.requests.push(r),
+                Err(e) => (Some(r), e),
+            },
+            Err(e) => (None, e),
+        };
+        self.rejected.push(RejectedPacket {
+            packet_id,
+            offset,
+            request_id: request.map(|r| r.request_id()).or(raw_id),
+            request,
+            error,
         });
     }
 
     /// Decodes, checks and files one packet (the size already matched its ID's).
     fn take(&mut self, id: u8, off: usize, p: &[u8]) -> Result<(), DecodeError> {
         let (v, o) = (self.version, self.byte_order);
-        // A request's ID is read apart so that a request failing its check can be answered.
-        let request_id = Rd::new(p, o).u16(2);
+        // A request's ID is read apart so that an undecodable request can still be answered.
+        let raw_id = Rd::new(p, o).u16(2);
         macro_rules! checked {
-            ($decoded:expr, $request:expr, |$x:ident| $file:expr) => {
+            ($decoded:expr, |$x:ident| $file:expr) => {
                 match $decoded.and_then(|$x| $x.check().map(|()| $x)) {
                     Ok($x) => $file,
-                    Err(e) => self.reject(id, off, $request, e),
+                    Err(e) => self.reject(id, off, e),
                 }
             };
         }
@@ -138,30 +172,27 @@ impl CigiMessage {
                     self.ownship = Some(e);
                     self.entities.push(e);
                 } else {
-                    checked!(Ok(e), None, |e| self.entities.push(e));
+                    checked!(Ok(e), |e| self.entities.push(e));
                 }
             }
             CONFORMAL_CLAMPED_ENTITY_CONTROL_ID => {
                 expect_size(id, off, p, CONFORMAL_CLAMPED_ENTITY_CONTROL_SIZE)?;
-                checked!(ConformalClampedEntityControl::decode(p, o), None, |c| self
+                checked!(ConformalClampedEntityControl::decode(p, o), |c| self
                     .conformal_clamped
                     .push(c));
             }
             RATE_CONTROL_ID => {
                 expect_size(id, off, p, RATE_CONTROL_SIZE)?;
-                checked!(RateControl::decode(p, v, o), None, |r| self
-                    .rate_controls
-                    .push(r));
+                checked!(RateControl::decode(p, v, o), |r| self.rate_controls.push(r));
             }
             CELESTIAL_SPHERE_CONTROL_ID => {
                 expect_size(id, off, p, CELESTIAL_SPHERE_CONTROL_SIZE)?;
-                checked!(CelestialSphereControl::decode(p, o), None, |c| self
-                    .celestial =
+                checked!(CelestialSphereControl::decode(p, o), |c| self.celestial =
                     Some(c));
             }
             ATMOSPHERE_CONTROL_ID => {
                 expect_size(id, off, p, ATMOSPHERE_CONTROL_SIZE)?;
-                checked!(AtmosphereControl::decode(p, o), None, |a| self.atmosphere =
+                checked!(AtmosphereControl::decode(p, o), |a| self.atmosphere =
                     Some(a));
             }
             VIEW_CONTROL_ID => {
@@ -178,26 +209,34 @@ impl CigiMessage {
             }
             HAT_HOT_REQUEST_ID => {
                 expect_size(id, off, p, HAT_HOT_REQUEST_SIZE)?;
-                checked!(HatHotRequest::decode(p, v, o), request_id, |r| self
-                    .requests
-                    .push(CigiRequest::HatHot(r)));
+                self.take_request(
+                    id,
+                    off,
+                    raw_id,
+                    HatHotRequest::decode(p, v, o).map(CigiRequest::HatHot),
+                );
             }
             LOS_SEGMENT_REQUEST_ID => {
                 expect_size(id, off, p, LOS_SEGMENT_REQUEST_SIZE)?;
-                checked!(LosSegmentRequest::decode(p, v, o), request_id, |r| self
-                    .requests
-                    .push(CigiRequest::LosSegment(r)));
+                self.take_request(
+                    id,
+                    off,
+                    raw_id,
+                    LosSegmentRequest::decode(p, v, o).map(CigiRequest::LosSegment),
+                );
             }
             LOS_VECTOR_REQUEST_ID => {
                 expect_size(id, off, p, LOS_VECTOR_REQUEST_SIZE)?;
-                checked!(LosVectorRequest::decode(p, v, o), request_id, |r| self
-                    .requests
-                    .push(CigiRequest::LosVector(r)));
+                self.take_request(
+                    id,
+                    off,
+                    raw_id,
+                    LosVectorRequest::decode(p, v, o).map(CigiRequest::LosVector),
+                );
             }
             IG_CONTROL_ID => self.reject(
                 id,
                 off,
-                None,
                 DecodeError::malformed(P, format!("a second IG Control at offset {off}")),
             ),
             _ => self.skipped += 1,

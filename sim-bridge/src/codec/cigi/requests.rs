@@ -539,6 +539,15 @@ impl CigiRequest {
         }
     }
 
+    /// The request's value checks.
+    pub fn check(&self) -> Result<(), DecodeError> {
+        match self {
+            CigiRequest::HatHot(r) => r.check(),
+            CigiRequest::LosSegment(r) => r.check(),
+            CigiRequest::LosVector(r) => r.check(),
+        }
+    }
+
     /// The packet ID it came in.
     pub fn packet_id(&self) -> u8 {
         match self {

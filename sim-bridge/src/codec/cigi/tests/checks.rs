@@ -91,11 +91,12 @@ fn hat_hot_requests_are_checked_and_rejects_keep_their_id() {
         ([45.0, 11.0, f64::NAN], "hat_hot_request.altitude"),
         ([f64::INFINITY, 11.0, 0.0], "hat_hot_request.latitude"),
     ] {
-        let r = rejected(
-            HatHotRequest { point, ..hat_hot() }.encode(v, O).to_vec(),
-            name,
-        );
+        let bad = HatHotRequest { point, ..hat_hot() };
+        let r = rejected(bad.encode(v, O).to_vec(), name);
         assert_eq!((r.packet_id, r.request_id), (HAT_HOT_REQUEST_ID, Some(31)));
+        // NaN != NaN: compare the request's bytes, which keep every field.
+        let back = r.request.expect("the request decoded").encode(v, O);
+        assert_eq!(back, bad.encode(v, O).to_vec());
         assert_eq!(field(&r.error), name);
         assert_eq!(r.error.reason(), DropReason::Invalid);
     }
@@ -116,6 +117,7 @@ fn hat_hot_requests_are_checked_and_rejects_keep_their_id() {
     b[4] |= 0x03;
     let r = rejected(b.to_vec(), "request type 3 is reserved");
     assert_eq!(r.request_id, Some(31));
+    assert_eq!(r.request, None, "a reserved type cannot be decoded");
     assert_eq!(r.error.reason(), DropReason::Malformed);
 }
 
@@ -207,6 +209,7 @@ fn los_requests_are_checked() {
             (r.packet_id, r.request_id),
             (LOS_VECTOR_REQUEST_ID, Some(9))
         );
+        assert!(matches!(r.request, Some(CigiRequest::LosVector(x)) if x.request_id == 9));
         assert_eq!(field(&r.error), name);
     }
 }
