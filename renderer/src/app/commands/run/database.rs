@@ -11,6 +11,7 @@ use std::sync::Arc;
 use aerie_config::Databases;
 use aerie_terrain::bake::ErrorBake;
 use aerie_terrain::dataset::Dataset;
+use aerie_terrain::query::InMemorySource;
 
 use crate::app::prepare::prepare_terrain;
 
@@ -130,8 +131,13 @@ fn same_path(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// A loaded database: the terrain and its bake.
-pub type LoadedTerrain = (Arc<Dataset>, Arc<ErrorBake>);
+/// A loaded database: the terrain, its bake, and the query service on it (built on the loader
+/// thread too: on a 16385² grid its hierarchy takes seconds; `Err` says why there is none).
+pub struct LoadedTerrain {
+    pub dataset: Arc<Dataset>,
+    pub bake: Arc<ErrorBake>,
+    pub queries: Result<InMemorySource, String>,
+}
 
 /// One dataset loading on a worker thread.
 pub struct DatabaseLoader {
@@ -148,7 +154,14 @@ impl DatabaseLoader {
         std::thread::Builder::new()
             .name(format!("aerie-database-{number}"))
             .spawn(move || {
-                let r = prepare_terrain(&p, tile_size).map_err(|f| f.message);
+                let r = prepare_terrain(&p, tile_size)
+                    .map(|(dataset, bake)| LoadedTerrain {
+                        queries: InMemorySource::new(dataset.clone(), bake.clone())
+                            .map_err(|e| e.to_string()),
+                        dataset,
+                        bake,
+                    })
+                    .map_err(|f| f.message);
                 let _ = tx.send(r);
             })
             .map_or_else(

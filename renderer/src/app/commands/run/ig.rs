@@ -20,7 +20,7 @@ use std::sync::Arc;
 
 use crate::app::commands::run::args::RunArgs;
 use crate::app::commands::run::database::{
-    DatabaseAction, DatabaseChoice, DatabaseLoader, DatabaseReport,
+    DatabaseAction, DatabaseChoice, DatabaseLoader, DatabaseReport, LoadedTerrain,
 };
 use crate::app::commands::run::plan::Plan;
 use crate::render::frame::{Lighting, TerrainRenderer};
@@ -203,11 +203,21 @@ impl IgDriver {
         let n = loader.number;
         let path = loader.path.display().to_string();
         match result {
-            Ok((ds, bake)) => {
+            Ok(LoadedTerrain {
+                dataset: ds,
+                bake,
+                queries,
+            }) => {
                 renderer
-                    .load_terrain(ds.clone(), bake.clone(), eye)
+                    .load_terrain(ds.clone(), bake, eye)
                     .map_err(|e| format!("database {n} ({path}): {e}"))?;
-                self.queries = queries_for(&ds, &bake);
+                self.queries = match queries {
+                    Ok(src) => Some(DatasetQueries::new(src, GeoMapping::of_dataset(&ds).ok())),
+                    Err(e) => {
+                        tracing::error!("database {n}: terrain queries unavailable: {e}");
+                        None
+                    }
+                };
                 let geo = GeoMapping::of_dataset(&ds);
                 self.geo = geo.clone().ok();
                 if let Some(i) = input {
