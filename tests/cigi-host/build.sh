@@ -10,7 +10,8 @@
 # packets in the CPU's own byte order and never swaps outgoing ones, so a real big-endian
 # host needs a big-endian CPU; see README.md here).
 #
-# The CCL source is ../shared/tools/cigi-ccl next to the repository, or $AERIE_CIGI_CCL. The
+# The CCL source is $AERIE_CIGI_CCL, else ../shared/tools/cigi-ccl next to the repository, else
+# the unmodified copy in third_party/cigi-ccl. The
 # cache is <target>/cigi-ccl/<arch>-<key>/ (<target>: $CARGO_TARGET_DIR or target/), <key> a
 # hash of the CCL's files, the compiler's version and the flags: a changed source or compiler
 # builds a new library, an unchanged one is reused. Builds are atomic (a temporary folder
@@ -21,7 +22,14 @@ set -euo pipefail
 arch="${1:-native}"
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
-ccl="${AERIE_CIGI_CCL:-$root/../shared/tools/cigi-ccl}"
+if [ -n "${AERIE_CIGI_CCL:-}" ]; then
+  ccl="$AERIE_CIGI_CCL"
+elif [ -f "$root/../shared/tools/cigi-ccl/include/CigiHostSession.h" ]; then
+  ccl="$root/../shared/tools/cigi-ccl"
+else
+  # The unmodified copy kept in the repository (third_party/cigi-ccl/VENDORED.md).
+  ccl="$root/third_party/cigi-ccl"
+fi
 target="${CARGO_TARGET_DIR:-$root/target}"
 case "$target" in /*) ;; *) target="$PWD/$target" ;; esac
 

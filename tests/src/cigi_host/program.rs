@@ -10,21 +10,31 @@ use std::sync::OnceLock;
 use crate::repo_root;
 
 /// Where the CCL's source is: `$AERIE_CIGI_CCL`, else `../shared/tools/cigi-ccl` next to the
-/// repository; `Err` says where it looked.
+/// repository, else the unmodified copy in `third_party/cigi-ccl` (the order `build.sh` uses);
+/// `Err` says where it looked.
 pub fn ccl_source_dir() -> Result<PathBuf, String> {
-    let dir = match std::env::var_os("AERIE_CIGI_CCL") {
-        Some(d) => PathBuf::from(d),
-        None => repo_root().join("../shared/tools/cigi-ccl"),
+    let candidates = match std::env::var_os("AERIE_CIGI_CCL") {
+        Some(d) => vec![PathBuf::from(d)],
+        None => vec![
+            repo_root().join("../shared/tools/cigi-ccl"),
+            repo_root().join("third_party/cigi-ccl"),
+        ],
     };
-    if dir.join("include/CigiHostSession.h").is_file() {
-        Ok(dir)
-    } else {
-        Err(format!(
-            "the CIGI Class Library source is not at {} (../shared/tools/cigi-ccl next to the \
-             repository, or $AERIE_CIGI_CCL)",
-            dir.display()
-        ))
-    }
+    candidates
+        .iter()
+        .find(|d| d.join("include/CigiHostSession.h").is_file())
+        .cloned()
+        .ok_or_else(|| {
+            format!(
+                "the CIGI Class Library source is not at {} ($AERIE_CIGI_CCL, or \
+                 ../shared/tools/cigi-ccl next to the repository, or third_party/cigi-ccl)",
+                candidates
+                    .iter()
+                    .map(|d| d.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(" nor ")
+            )
+        })
 }
 
 /// The CPU the host runs on.
