@@ -256,7 +256,8 @@ pub fn answer_line(plan: &QueryPlan, reply: &TerrainReply) -> String {
     }
 }
 
-fn json_string(s: &str) -> String {
+/// `s` as a JSON string literal (quotes, backslashes and control characters escaped).
+pub fn json_string(s: &str) -> String {
     let mut o = String::from('"');
     for c in s.chars() {
         match c {

@@ -11,8 +11,8 @@ use aerie_sim_bridge::codec::cigi::StartOfFrame;
 use aerie_sim_bridge::geodesy::{Geodetic, LocalTangentPlane};
 use aerie_sim_bridge::script::{Script, ScriptSample, Straight, Waypoints};
 use aerie_sim_bridge::send::query::{
-    answer_json, answer_line, ask, exit_status, parse_hot, parse_los, parse_los_vector, QueryPlan,
-    DEFAULT_TIMEOUT, RESEND_EVERY,
+    answer_json, answer_line, ask, exit_status, json_string, parse_hot, parse_los,
+    parse_los_vector, QueryPlan, DEFAULT_TIMEOUT, RESEND_EVERY,
 };
 use aerie_sim_bridge::send::{
     datagram, packet_count, parse_view_control, parse_view_definition, pose_for, SendProtocol,
@@ -437,20 +437,6 @@ struct Summary {
     cigi_answers: u64,
     elapsed_s: f64,
     last_frame: u32,
-}
-
-fn json_string(s: &str) -> String {
-    let mut o = String::from('"');
-    for c in s.chars() {
-        match c {
-            '"' => o.push_str("\\\""),
-            '\\' => o.push_str("\\\\"),
-            c if (c as u32) < 0x20 => o.push_str(&format!("\\u{:04x}", c as u32)),
-            c => o.push(c),
-        }
-    }
-    o.push('"');
-    o
 }
 
 fn main() {
