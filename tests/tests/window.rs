@@ -967,3 +967,112 @@ fn overlay_key_toggles_the_statistics_panel_on_screen() {
         after.rgb(455, 522)
     );
 }
+
+/// `aerie run --windowed` is an image generator too: the window loop takes the same IG step at
+/// the start of every frame (`PoseSource::begin_frame`), so a host's native height-of-terrain
+/// questions are answered from the drawn dataset's full-resolution surface while the window
+/// presents.
+#[test]
+fn windowed_run_answers_the_hosts_terrain_questions() {
+    use aerie_sim_bridge::codec::native;
+    use aerie_sim_bridge::query::{Answer, TerrainReply, TerrainRequest};
+    use aerie_sim_bridge::{Pose, PosePosition};
+    use std::net::UdpSocket;
+
+    let dir = tempfile::tempdir().unwrap();
+    let dem = raw_dem(dir.path());
+    let json = dir.path().join("run.json");
+    let port = UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let to = format!("127.0.0.1:{port}");
+    let s = |p: &Path| p.display().to_string();
+    let args = vec![
+        "--dem".to_string(),
+        s(&dem),
+        "--windowed".into(),
+        "--window-size".into(),
+        "160x90".into(),
+        "--frames".into(),
+        "40".into(),
+        "--listen".into(),
+        to.clone(),
+        "--protocol".into(),
+        "auto".into(),
+        "--json".into(),
+        s(&json),
+    ];
+    // The host: local poses over the hill and a question per pose about the sample (64, 40).
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let host = {
+        let stop = stop.clone();
+        std::thread::spawn(move || {
+            let sock = UdpSocket::bind("127.0.0.1:0").unwrap();
+            sock.set_read_timeout(Some(Duration::from_millis(10)))
+                .unwrap();
+            let mut answers = Vec::new();
+            let mut buf = [0u8; 256];
+            let mut seq = 0u32;
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) && seq < 3000 {
+                seq += 1;
+                let pose = Pose {
+                    position: PosePosition::LocalEnu {
+                        x: 1920.0,
+                        y: 600.0,
+                        z: 900.0,
+                    },
+                    attitude_deg: [0.0, -20.0, 0.0],
+                    sim_time_s: f64::from(seq) / 60.0,
+                    frame: u64::from(seq),
+                    velocity_enu: None,
+                    angular_rates_deg_s: None,
+                };
+                let _ = sock.send_to(&native::encode(&pose, seq), &to);
+                let ask = TerrainRequest::HeightOfTerrain {
+                    at: PosePosition::LocalEnu {
+                        x: 64.0 * 30.0,
+                        y: 40.0 * 30.0,
+                        z: 900.0,
+                    },
+                };
+                let _ = sock.send_to(&native::encode_query(seq, &ask), &to);
+                while let Ok((n, _)) = sock.recv_from(&mut buf) {
+                    if let Ok((_, reply)) = native::decode_reply(&buf[..n]) {
+                        answers.push(reply);
+                    }
+                }
+            }
+            answers
+        })
+    };
+    let result = run_command(args);
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let answers = host.join().unwrap();
+    let Some(result) = result else {
+        return;
+    };
+    let summary = result.unwrap_or_else(|(c, m)| panic!("exit {c}: {m}"));
+    assert_eq!(summary["frames"], 40);
+    assert_eq!(summary["validation"]["errors"], 0);
+    let ig = &summary["ig"];
+    assert!(ig["native_answered"].as_u64().unwrap() > 0, "{ig:#}");
+    assert!(
+        ig["ig_frames"].as_u64().unwrap() >= 40,
+        "one IG step per presented frame: {ig:#}"
+    );
+    // The raw DEM's sample (64, 40): 100 + 300·e^(−(0² + 24²)/800), as f32.
+    let expect = f64::from(100.0f32 + 300.0 * (-(24.0f32 * 24.0) / 800.0).exp());
+    let heights: Vec<f64> = answers
+        .iter()
+        .filter_map(|r| match r {
+            TerrainReply::HeightOfTerrain(Answer::Ready(s)) => Some(s.height_m),
+            _ => None,
+        })
+        .collect();
+    assert!(!heights.is_empty(), "answers: {answers:?}");
+    for h in heights {
+        assert!((h - expect).abs() < 1e-4, "HOT {h} vs the sample {expect}");
+    }
+}
