@@ -8,7 +8,7 @@ use crate::stats::DropReason;
 pub enum Protocol {
     /// aerie native v1 (little-endian, CRC-32).
     Aerie,
-    /// CIGI 3.3, host → IG subset.
+    /// CIGI 3.0–3.3 (the IG side: host messages read, answers written in the host's version).
     Cigi,
     /// X-Plane `RPOS` position output.
     XPlane,
