@@ -44,6 +44,17 @@ pub(crate) fn ig_driver(
         .and_then(Path::parent)
         .map(Path::to_path_buf)
         .unwrap_or_default();
+    // A typo in the table is told now, not when a host first asks for that database.
+    for (n, p) in plan.config.databases.iter() {
+        let path = dir.join(p);
+        if !path.exists() {
+            eprintln!(
+                "warning: {}: databases.{n}: {} does not exist (a host asking for database {n} will be told it failed to load)",
+                plan.source,
+                path.display()
+            );
+        }
+    }
     Some(IgDriver::new(
         link,
         ds,
