@@ -108,12 +108,15 @@ impl DatabaseChoice {
         }
     }
 
-    /// The load of database n finished: drawn now when `ok`, else the old one stays.
+    /// The load of database n finished: drawn now when `ok`; else the old one stays drawn and
+    /// Start of Frame says the request is unavailable until the host asks for another.
     pub fn finished(&mut self, n: i8, ok: bool) {
         if self.loading == Some(n) {
             self.loading = None;
             if ok {
                 self.current = n;
+            } else {
+                self.unavailable = true;
             }
         }
     }
@@ -214,9 +217,13 @@ mod tests {
         assert_eq!(c.request(2), DatabaseAction::None);
         c.finished(2, true);
         assert_eq!(c.report(), DatabaseReport::Ready(2));
-        // Back to 1, and a failed load keeps 2.
+        // Back to 1, and a failed load keeps 2 drawn, reported unavailable (−128) until the
+        // host asks for another number.
         assert!(matches!(c.request(1), DatabaseAction::Load(1, _)));
         c.finished(1, false);
+        assert_eq!(c.report(), DatabaseReport::Unavailable);
+        assert_eq!(c.request(1), DatabaseAction::None, "not retried every frame");
+        assert_eq!(c.request(2), DatabaseAction::None, "2 is drawn");
         assert_eq!(c.report(), DatabaseReport::Ready(2));
     }
 

@@ -49,7 +49,7 @@ pub(crate) fn ig_driver(
         let path = dir.join(p);
         if !path.exists() {
             eprintln!(
-                "warning: {}: databases.{n}: {} does not exist (a host asking for database {n} will be told it failed to load)",
+                "warning: {}: databases.{n}: {} does not exist (a host asking for database {n} will get Start of Frame database −128, unavailable)",
                 plan.source,
                 path.display()
             );
