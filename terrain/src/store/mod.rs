@@ -1,0 +1,76 @@
+//! The tile store (`<name>.aerie`): a dataset imported once into pages of every clipmap
+//! level, each with its tiles' baked ε and min/max, coded losslessly, compressed and
+//! checksummed, so that terrain larger than memory can be read page by page.
+//!
+//! **Levels and pages.** Level `L` is the exact power-of-two subsampling of level 0 (sample
+//! (c, r) of level L = level-0 sample (c·2^L, r·2^L)), cut like the bake's tiles (`m = 2^j + 1`
+//! vertices, `q = m − 1` quads, neighbours share edges) into pages of `P × P` tiles (P a power
+//! of two, default 8): page (px, py) of level L holds tiles `px·P ..` (fewer at the level's
+//! east/north edge) and their `(ntx·q + 1) × (nty·q + 1)` samples, edges included, so a page
+//! stands alone. Per tile it carries ε, min and max exactly as [`crate::bake::bake`] computes
+//! them (the import bakes in memory and copies the tables; one implementation). Level-0 page
+//! (px, py) lies in level-L page (px >> L, py >> L).
+//!
+//! **File** (little-endian):
+//!
+//! ```text
+//! offset size  field
+//!      0    8  magic "AERIESTO"
+//!      8    4  u32 format version (1; a newer one is refused)
+//!     12    4  u32 header size H (= the index's offset)
+//!     16   36  u32 tile size m, page tiles P, levels, width, height (padded), valid width,
+//!              valid height, page count
+//!     48   16  f64 spacing x, spacing y (metres)
+//!     64    4  u32 source checksum (CRC-32 of the padded level-0 samples, Dataset::checksum)
+//!     68    4  u32 flags (0)
+//!     72    8  u64 voids filled
+//!     80    8  u64 index offset (= H)
+//!     88    8  u64 data offset (= H + 32·pages + 4)
+//!     96    8  u64 file size
+//!    104    8  u64 bytes of the pages' samples as f32 (for the ratio)
+//!    112   12  reserved (0)
+//!    124    4  u32 CRC-32 of bytes 0..124
+//!    128       geo-reference: u32 kind (0 none; 1 geographic: f64 south lat, west lon,
+//!              dlat, dlon in degrees; 2 projected: string CRS, f64 easting, northing),
+//!              string spacing note, u32 source count, strings (u32 length + UTF-8)
+//!  H − 4    4  u32 CRC-32 of bytes 0..H−4
+//!      H       index, one 32-byte entry per page, level 0 first, pages row-major:
+//!              u32 level, px, py, coding; u64 offset; u32 stored length; u32 CRC-32 of
+//!              the stored bytes — then u32 CRC-32 of the entries
+//!   data       pages back to back, in index order, each one zstd frame of:
+//!              u32 level, px, py, coding; f32 ε[n], min[n], max[n] (n tiles, row-major);
+//!              samples, south row first: coding 0 = i16 residuals of the gradient predictor
+//!              (west + south − south-west, wrapping), zigzag, u16 each (only when every
+//!              sample is an exact i16, -0.0 excluded); coding 1 = f32 bits XOR the west
+//!              neighbour's (south for column 0), as 4 byte planes. Lossless either way.
+//! ```
+//!
+//! **Reading.** [`Store::open`] reads the header and index only and refuses (naming the byte
+//! offset and the reason) a bad magic, a newer version, a corrupt header or index, a header
+//! whose sizes disagree with the index, a truncated index or file. [`Store::read_page`] reads
+//! one page with a positioned read and verifies its CRC and content; a bad page is a
+//! [`PageError`] naming it, never a panic. [`StoreSource`] serves the host's queries from the
+//! resident pages.
+//!
+//! Files: `format` (bytes of header and index, the page layout), `pages` (cutting and coding
+//! a page), `write` (the import writer), `read` (open, page reads), `source` (queries).
+
+mod error;
+mod format;
+mod pages;
+mod read;
+mod source;
+mod write;
+
+pub use error::{PageError, PageId, StoreError};
+pub use format::{
+    Coding, Layout, LevelLayout, PageEntry, PageRect, StoreHeader, DEFAULT_PAGE_TILES,
+    FIXED_HEADER, INDEX_ENTRY, STORE_EXTENSION, STORE_MAGIC, STORE_VERSION,
+};
+pub use pages::Page;
+pub use read::Store;
+pub use source::StoreSource;
+pub use write::{write_store, write_store_in, ImportParams, StoreSummary};
+
+#[cfg(test)]
+mod tests;
