@@ -32,7 +32,8 @@
 //!    124    4  u32 CRC-32 of bytes 0..124
 //!    128       geo-reference: u32 kind (0 none; 1 geographic: f64 south lat, west lon,
 //!              dlat, dlon in degrees; 2 projected: string CRS, f64 easting, northing),
-//!              string spacing note, u32 source count, strings (u32 length + UTF-8)
+//!              string spacing note, u32 source count, strings (u32 length + UTF-8),
+//!              u32 levels, f32 max ε per level (terrain tiles)
 //!  H − 4    4  u32 CRC-32 of bytes 0..H−4
 //!      H       index, one 32-byte entry per page, level 0 first, pages row-major:
 //!              u32 level, px, py, coding; u64 offset; u32 stored length; u32 CRC-32 of
@@ -52,11 +53,12 @@
 //! [`PageError`] naming it, never a panic. [`StoreSource`] serves the host's queries from the
 //! resident pages.
 //!
-//! Files: `format` (bytes of header and index, the page layout), `pages` (cutting and coding
+//! Files: `format` (bytes of the header, the page layout), `index` (the index entries), `pages` (cutting and coding
 //! a page), `write` (the import writer), `read` (open, page reads), `source` (queries).
 
 mod error;
 mod format;
+mod index;
 mod pages;
 mod read;
 mod source;

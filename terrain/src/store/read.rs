@@ -12,9 +12,10 @@ use aerie_io::{FileSystem, InFile};
 
 use super::error::{PageError, PageId, StoreError};
 use super::format::{
-    check_fixed, check_layout, decode_header, decode_index, FieldError, Layout, PageEntry,
-    StoreHeader, FIXED_HEADER, INDEX_ENTRY,
+    check_fixed, check_layout, decode_header, FieldError, Layout, PageEntry, StoreHeader,
+    FIXED_HEADER, INDEX_ENTRY,
 };
+use super::index::decode_index;
 use super::pages::{decode_payload, Page};
 
 /// An opened store: its header, layout and index in memory, the file open for page reads.

@@ -393,17 +393,37 @@ fn damaged_headers_and_indexes_are_refused_with_offset_and_reason() {
         fix_index_crc(b, &h);
     });
     assert!(e.contains("entry 2 names level 0 page (7, 0)"), "{e}");
-    // A header whose levels disagree with its index (both header CRCs made valid).
-    let e = case(&|b| {
-        b[24..28].copy_from_slice(&(h.levels - 1).to_le_bytes());
+    // A header whose sizes disagree with the rest (both header CRCs made valid).
+    let fix_header = |b: &mut Vec<u8>| {
         let c = crc32fast::hash(&b[..124]);
         b[124..128].copy_from_slice(&c.to_le_bytes());
         let n = h.header_size as usize;
         let c = crc32fast::hash(&b[..n - 4]);
         b[n - 4..n].copy_from_slice(&c.to_le_bytes());
+    };
+    let e = case(&|b| {
+        b[44..48].copy_from_slice(&(h.page_count + 1).to_le_bytes());
+        fix_header(b);
     });
     assert!(
         e.contains("byte 44 (page count)") && e.contains("the grid and levels make"),
+        "{e}"
+    );
+    let e = case(&|b| {
+        b[24..28].copy_from_slice(&(h.levels - 1).to_le_bytes());
+        fix_header(b);
+    });
+    assert!(
+        e.contains("(max ε count)")
+            && e.contains(&format!("{} values for {} levels", h.levels, h.levels - 1)),
+        "{e}"
+    );
+    let e = case(&|b| {
+        b[28..32].copy_from_slice(&(h.width + 2).to_le_bytes());
+        fix_header(b);
+    });
+    assert!(
+        e.contains("byte 24 (levels)") && e.contains("do not tile"),
         "{e}"
     );
     // The untouched file still opens.
@@ -579,5 +599,30 @@ fn queries_on_a_store_answer_as_in_memory() {
     for _ in 0..300 {
         let (x, y) = (next() * ex, next() * ny_m);
         assert_eq!(height_of_terrain(&src, x, y), height_of_terrain(&mem, x, y));
+    }
+}
+
+#[test]
+fn a_projected_geo_reference_and_no_geo_reference_round_trip_through_the_header() {
+    use super::format::{check_fixed, decode_header, encode_header, header_len};
+    let dir = tempfile::tempdir().unwrap();
+    let (p, _, _) = small_store(dir.path());
+    let base = Store::open(&p).unwrap().header().clone();
+    for geo in [
+        None,
+        Some(crate::GeoReference::Projected {
+            crs: "EPSG:32611".into(),
+            easting: 500_000.5,
+            northing: 4_100_000.25,
+        }),
+    ] {
+        let mut h = StoreHeader {
+            geo,
+            ..base.clone()
+        };
+        h.header_size = header_len(&h) as u32;
+        let b = encode_header(&h);
+        assert_eq!(check_fixed(&b).unwrap() as usize, b.len());
+        assert_eq!(decode_header(&b).unwrap(), h);
     }
 }

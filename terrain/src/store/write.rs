@@ -17,9 +17,9 @@ use crate::dataset::Dataset;
 
 use super::error::{PageId, StoreError};
 use super::format::{
-    encode_entry, encode_header, header_len, Coding, Layout, PageEntry, StoreHeader, INDEX_ENTRY,
-    STORE_VERSION,
+    encode_header, header_len, Coding, Layout, PageEntry, StoreHeader, INDEX_ENTRY, STORE_VERSION,
 };
+use super::index::encode_entry;
 use super::pages::{cut_samples, cut_tables, encode_payload};
 
 /// What an import is asked for beyond the data.
@@ -96,6 +96,17 @@ pub fn write_store_in(
         ))
     })?;
     let n = layout.page_count() as usize;
+    let max_eps: Vec<f32> = bake
+        .levels
+        .iter()
+        .map(|t| {
+            t.eps
+                .iter()
+                .zip(&t.terrain)
+                .filter(|(_, &k)| k)
+                .fold(0f32, |a, (&e, _)| a.max(e))
+        })
+        .collect();
     let pages = compress_all(ds, bake, &layout, params.zstd_level, progress)?;
     let raw_sample_bytes: u64 = (0..n)
         .map(|i| {
@@ -124,6 +135,7 @@ pub fn write_store_in(
         geo: ds.hf.geo.clone(),
         spacing_note: ds.hf.spacing_note.clone(),
         sources: params.sources.clone(),
+        max_eps: max_eps.clone(),
     };
     header.header_size = header_len(&header) as u32;
     header.data_offset = u64::from(header.header_size) + (INDEX_ENTRY * n) as u64 + 4;
@@ -173,17 +185,7 @@ pub fn write_store_in(
         i16_pages,
         f32_pages: n as u32 - i16_pages,
         page_bytes,
-        max_eps: bake
-            .levels
-            .iter()
-            .map(|t| {
-                t.eps
-                    .iter()
-                    .zip(&t.terrain)
-                    .filter(|(_, &k)| k)
-                    .fold(0f32, |a, (&e, _)| a.max(e))
-            })
-            .collect(),
+        max_eps,
         header,
     })
 }
