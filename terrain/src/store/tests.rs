@@ -626,3 +626,51 @@ fn a_projected_geo_reference_and_no_geo_reference_round_trip_through_the_header(
         assert_eq!(decode_header(&b).unwrap(), h);
     }
 }
+
+/// Every page of the store read back, or the first error (as text).
+fn read_all(p: &Path) -> Result<Vec<Page>, String> {
+    let store = Store::open(p).map_err(|e| e.to_string())?;
+    store
+        .pages()
+        .iter()
+        .map(|e| {
+            store
+                .read_page(PageId {
+                    level: e.level,
+                    px: e.px,
+                    py: e.py,
+                })
+                .map_err(|e| e.to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn every_byte_is_checked_a_flip_anywhere_is_an_error_never_a_panic_or_other_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = dataset(33, 33, srtm_like);
+    let (p, _) = import(dir.path(), &ds, &baked(&ds, 5), 2);
+    let good = std::fs::read(&p).unwrap();
+    assert!(read_all(&p).is_ok());
+    let q = dir.path().join("flipped.aerie");
+    for at in 0..good.len() {
+        let mut b = good.clone();
+        b[at] ^= 0x10;
+        std::fs::write(&q, &b).unwrap();
+        assert!(read_all(&q).is_err(), "a flip at byte {at} of {} went unnoticed", good.len());
+    }
+}
+
+#[test]
+fn a_store_cut_at_any_length_does_not_open() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = dataset(33, 33, srtm_like);
+    let (p, _) = import(dir.path(), &ds, &baked(&ds, 5), 2);
+    let good = std::fs::read(&p).unwrap();
+    let q = dir.path().join("cut.aerie");
+    for len in 0..good.len() {
+        std::fs::write(&q, &good[..len]).unwrap();
+        let e = Store::open(&q).unwrap_err().to_string();
+        assert!(e.contains("cut.aerie: "), "{e}");
+    }
+}
