@@ -28,6 +28,10 @@ pub enum Coding {
     I16Gradient,
     /// Any f32: the bits XOR the west neighbour's (south for column 0), as 4 byte planes.
     F32Xor,
+    /// Mostly integers (SRTM with filled voids): every sample rounded to i16 and coded as
+    /// [`Coding::I16Gradient`], then u32 k and k exceptions (u32 sample index, increasing;
+    /// u32 f32 bits) that restore the exact value of each sample that is not an exact i16.
+    I16Exceptions,
 }
 
 impl Coding {
@@ -35,6 +39,7 @@ impl Coding {
         match self {
             Coding::I16Gradient => 0,
             Coding::F32Xor => 1,
+            Coding::I16Exceptions => 2,
         }
     }
 
@@ -42,13 +47,15 @@ impl Coding {
         match c {
             0 => Some(Coding::I16Gradient),
             1 => Some(Coding::F32Xor),
+            2 => Some(Coding::I16Exceptions),
             _ => None,
         }
     }
 
+    /// Bytes per sample of the coded samples (the exceptions of `I16Exceptions` aside).
     pub fn bytes_per_sample(self) -> usize {
         match self {
-            Coding::I16Gradient => 2,
+            Coding::I16Gradient | Coding::I16Exceptions => 2,
             Coding::F32Xor => 4,
         }
     }
@@ -57,6 +64,7 @@ impl Coding {
         match self {
             Coding::I16Gradient => "i16 gradient",
             Coding::F32Xor => "f32 xor",
+            Coding::I16Exceptions => "i16 + exceptions",
         }
     }
 }
@@ -230,11 +238,16 @@ impl Layout {
         }
     }
 
-    /// Bytes a page's payload has before compression: 16 (level, px, py, coding) + 12 per
-    /// tile (ε, min, max) + the coded samples.
+    /// Largest payload a page can have before compression: 16 (level, px, py, coding) + 12
+    /// per tile (ε, min, max) + the coded samples (+ for `I16Exceptions`, 4 + 8 per
+    /// exception, at most one per sample). The other codings have exactly this length.
     pub fn raw_len(&self, level: u32, px: u32, py: u32, coding: Coding) -> usize {
         let r = self.rect(level, px, py);
-        PAYLOAD_PREFIX + 12 * r.tiles() + coding.bytes_per_sample() * r.samples()
+        let extra = match coding {
+            Coding::I16Exceptions => 4 + 8 * r.samples(),
+            _ => 0,
+        };
+        PAYLOAD_PREFIX + 12 * r.tiles() + coding.bytes_per_sample() * r.samples() + extra
     }
 }
 

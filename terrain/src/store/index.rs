@@ -57,7 +57,10 @@ pub fn decode_index(
             field_err(
                 off + 12,
                 "page coding",
-                format!("entry {i}: coding {} is not 0 (i16) or 1 (f32)", u(12)),
+                format!(
+                    "entry {i}: coding {} is not 0 (i16), 1 (f32) or 2 (i16 + exceptions)",
+                    u(12)
+                ),
             )
         })?;
         let offset = u64::from_le_bytes(e[16..24].try_into().expect("8"));

@@ -91,8 +91,18 @@ fn predict(s: &[i16], cols: usize, i: usize, j: usize) -> i16 {
     }
 }
 
-/// The payload (before compression): prefix, tables, coded samples; the coding is i16 when
-/// every sample is an exact i16.
+/// Pages with more exceptions than one sample in this many are coded as f32 (8 bytes an
+/// exception against ≈ 2 more bytes a sample).
+const MAX_EXCEPTION_SHARE: usize = 8;
+
+/// `h` rounded into i16 (the value the predictor sees for an exception).
+#[inline]
+fn rounded_i16(h: f32) -> i16 {
+    h.round().clamp(-32768.0, 32767.0) as i16
+}
+
+/// The payload (before compression): prefix, tables, coded samples. The coding is i16 when
+/// every sample is an exact i16, i16 with exceptions when few are not, else f32.
 pub fn encode_payload(
     id: PageId,
     rect: PageRect,
@@ -100,12 +110,16 @@ pub fn encode_payload(
     tables: &[Vec<f32>; 3],
 ) -> (Coding, Vec<u8>) {
     debug_assert_eq!(samples.len(), rect.samples());
-    let ints: Option<Vec<i16>> = samples.iter().map(|&h| as_i16(h)).collect();
-    let coding = if ints.is_some() {
-        Coding::I16Gradient
-    } else {
-        Coding::F32Xor
+    let exceptions: Vec<usize> = (0..samples.len())
+        .filter(|&k| as_i16(samples[k]).is_none())
+        .collect();
+    let coding = match exceptions.len() {
+        0 => Coding::I16Gradient,
+        n if n * MAX_EXCEPTION_SHARE <= samples.len() => Coding::I16Exceptions,
+        _ => Coding::F32Xor,
     };
+    let ints: Option<Vec<i16>> =
+        (coding != Coding::F32Xor).then(|| samples.iter().map(|&h| rounded_i16(h)).collect());
     let mut out = Vec::with_capacity(
         PAYLOAD_PREFIX + 12 * rect.tiles() + coding.bytes_per_sample() * samples.len(),
     );
@@ -125,6 +139,13 @@ pub fn encode_payload(
                 for i in 0..cols {
                     let r = s[j * cols + i].wrapping_sub(predict(&s, cols, i, j));
                     out.extend_from_slice(&zigzag(r).to_le_bytes());
+                }
+            }
+            if coding == Coding::I16Exceptions {
+                out.extend_from_slice(&(exceptions.len() as u32).to_le_bytes());
+                for &k in &exceptions {
+                    out.extend_from_slice(&(k as u32).to_le_bytes());
+                    out.extend_from_slice(&samples[k].to_bits().to_le_bytes());
                 }
             }
         }
@@ -157,7 +178,20 @@ pub fn decode_payload(
     coding: Coding,
 ) -> Result<Page, String> {
     let rect = layout.rect(id.level, id.px, id.py);
-    let want = layout.raw_len(id.level, id.px, id.py, coding);
+    let count = rect.samples();
+    let base = PAYLOAD_PREFIX + 12 * rect.tiles();
+    let fixed = base + coding.bytes_per_sample() * count;
+    let want = match coding {
+        Coding::I16Exceptions if b.len() >= fixed + 4 => {
+            let k = u32::from_le_bytes(b[fixed..fixed + 4].try_into().expect("4")) as usize;
+            if k > count {
+                return Err(format!("{k} exceptions for {count} samples"));
+            }
+            fixed + 4 + 8 * k
+        }
+        Coding::I16Exceptions => fixed + 4,
+        _ => fixed,
+    };
     if b.len() != want {
         return Err(format!(
             "decompressed to {} bytes, the layout says {want}",
@@ -187,18 +221,30 @@ pub fn decode_payload(
             .collect()
     };
     let (eps, min, max) = (table(0), table(1), table(2));
-    let base = PAYLOAD_PREFIX + 12 * n;
     let cols = rect.cols as usize;
-    let count = rect.samples();
     let samples = match coding {
-        Coding::I16Gradient => {
+        Coding::I16Gradient | Coding::I16Exceptions => {
             let mut s = vec![0i16; count];
             for k in 0..count {
                 let (i, j) = (k % cols, k / cols);
                 let r = unzigzag(u16::from_le_bytes([b[base + 2 * k], b[base + 2 * k + 1]]));
                 s[k] = predict(&s, cols, i, j).wrapping_add(r);
             }
-            s.into_iter().map(f32::from).collect()
+            let mut s: Vec<f32> = s.into_iter().map(f32::from).collect();
+            if coding == Coding::I16Exceptions {
+                let mut prev = None;
+                for e in b[fixed + 4..].chunks_exact(8) {
+                    let k = u32::from_le_bytes(e[..4].try_into().expect("4")) as usize;
+                    if k >= count || prev.is_some_and(|p| k <= p) {
+                        return Err(format!(
+                            "exception at sample {k}: not increasing within 0..{count}"
+                        ));
+                    }
+                    prev = Some(k);
+                    s[k] = f32::from_bits(u32::from_le_bytes(e[4..].try_into().expect("4")));
+                }
+            }
+            s
         }
         Coding::F32Xor => {
             let mut s: Vec<f32> = Vec::with_capacity(count);

@@ -42,7 +42,9 @@ pub struct StoreSummary {
     /// Samples over all pages of all levels (edges shared between pages counted per page).
     pub page_samples: u64,
     pub pages: u32,
+    /// Pages per coding: all exact i16, i16 with exceptions, f32.
     pub i16_pages: u32,
+    pub exception_pages: u32,
     pub f32_pages: u32,
     /// Bytes of the pages as stored (compressed).
     pub page_bytes: u64,
@@ -177,13 +179,14 @@ pub fn write_store_in(
     }
     f.commit()?;
 
-    let i16_pages = pages.iter().filter(|p| p.0 == Coding::I16Gradient).count() as u32;
+    let count = |c: Coding| pages.iter().filter(|p| p.0 == c).count() as u32;
     Ok(StoreSummary {
         real_samples: (ds.valid_width * ds.valid_height) as u64,
         page_samples: raw_sample_bytes / 4,
         pages: n as u32,
-        i16_pages,
-        f32_pages: n as u32 - i16_pages,
+        i16_pages: count(Coding::I16Gradient),
+        exception_pages: count(Coding::I16Exceptions),
+        f32_pages: count(Coding::F32Xor),
         page_bytes,
         max_eps,
         header,

@@ -215,7 +215,7 @@ fn summary_line(
 ) -> String {
     let h = &s.header;
     format!(
-        "imported {}: {}×{} samples ({} real), m = {}, {} levels, {} pages ({} i16, {} f32) of {}×{} tiles; {} ({} of samples as f32, ratio {:.2}); load {load_s:.2} s, bake {bake_s:.2} s, pages {write_s:.2} s: {:.1} M real samples/s overall; max ε per level (m): {}",
+        "imported {}: {}×{} samples ({} real), m = {}, {} levels, {} pages ({} i16, {} i16 + exceptions, {} f32) of {}×{} tiles; {} ({} of samples as f32, ratio {:.2}); load {load_s:.2} s, bake {bake_s:.2} s, pages {write_s:.2} s: {:.1} M real samples/s overall; max ε per level (m): {}",
         out.display(),
         h.width,
         h.height,
@@ -224,6 +224,7 @@ fn summary_line(
         h.levels,
         s.pages,
         s.i16_pages,
+        s.exception_pages,
         s.f32_pages,
         h.page_tiles,
         h.page_tiles,
@@ -258,6 +259,7 @@ fn summary_json(
         "levels": h.levels,
         "pages": s.pages,
         "i16_pages": s.i16_pages,
+        "i16_exception_pages": s.exception_pages,
         "f32_pages": s.f32_pages,
         "file_bytes": h.file_size,
         "page_bytes": s.page_bytes,

@@ -19,13 +19,14 @@ pub struct InfoArgs {
     pub json: bool,
 }
 
-/// Per level, from the index: tiles, pages, stored bytes, pages coded as i16.
+/// Per level, from the index: tiles, pages, stored bytes, pages coded as integers.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LevelInfo {
     pub level: u32,
     pub tiles: [u32; 2],
     pub pages: [u32; 2],
     pub bytes: u64,
+    /// Pages coded as integers (exactly, or with exceptions).
     pub i16_pages: u32,
     pub max_eps: f32,
 }
@@ -43,7 +44,7 @@ pub fn levels(store: &Store) -> Vec<LevelInfo> {
             let (bytes, i16_pages) = entries.fold((0u64, 0u32), |(b, n), e| {
                 (
                     b + u64::from(e.len),
-                    n + u32::from(e.coding == Coding::I16Gradient),
+                    n + u32::from(e.coding != Coding::F32Xor),
                 )
             });
             LevelInfo {
