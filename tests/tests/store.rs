@@ -210,6 +210,26 @@ fn import_and_info_on_the_demo_dem() {
         "{}",
         text(&o)
     );
+    // --verify reads every page; a flipped byte in one is found, named, and exits 2.
+    let o = aerie(&["info", out_s, "--verify"]);
+    let pages = j["pages"].as_u64().unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains(&format!("verified {pages} of {pages} pages")),
+        "{}",
+        text(&o)
+    );
+    let mut bytes = std::fs::read(&out).unwrap();
+    let at = bytes.len() - 100;
+    bytes[at] ^= 1;
+    let bad = tmp.path().join("bad.aerie");
+    std::fs::write(&bad, &bytes).unwrap();
+    let o = aerie(&["info", bad.to_str().unwrap(), "--verify", "--json"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["verify"]["checksum_errors"], 1, "{v}");
+    assert_eq!(v["verify"]["pages_ok"].as_u64().unwrap(), pages - 1);
+    assert!(text(&o).contains("checksum mismatch"), "{}", text(&o));
     // An existing store is kept without --overwrite, replaced with it.
     let before = std::fs::read(&out).unwrap();
     let o = aerie(&["import", dem_s, "--out", out_s]);

@@ -696,3 +696,41 @@ fn a_store_cut_at_any_length_does_not_open() {
         assert!(e.contains("cut.aerie: "), "{e}");
     }
 }
+
+#[test]
+fn a_bad_sector_fails_only_its_page_and_short_reads_change_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let (p, ds, b) = small_store(dir.path());
+    let e = Store::open(&p).unwrap().pages()[5];
+    let fs = FaultyFs::new(Faults {
+        eio_at_read_offset: Some(e.offset + 1),
+        ..Faults::default()
+    });
+    let store = Store::open_in(fs.shared(), &p).unwrap();
+    let id = PageId {
+        level: e.level,
+        px: e.px,
+        py: e.py,
+    };
+    let err = store.read_page(id).unwrap_err();
+    assert!(matches!(err, PageError::Read { .. }), "{err}");
+    let msg = err.to_string();
+    assert!(
+        msg.contains(&id.to_string()) && msg.contains("Input/output error"),
+        "{msg}"
+    );
+    for o in store.pages().iter().filter(|o| o.offset != e.offset) {
+        store
+            .read_page(PageId {
+                level: o.level,
+                px: o.px,
+                py: o.py,
+            })
+            .unwrap();
+    }
+    let short = FaultyFs::new(Faults {
+        max_read: Some(7),
+        ..Faults::default()
+    });
+    check_round_trip(&ds, &b, &Store::open_in(short.shared(), &p).unwrap());
+}

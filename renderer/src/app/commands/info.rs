@@ -1,5 +1,7 @@
 //! `aerie info <store>`: what a tile store holds — header, levels, pages, bytes, compression
 //! ratio — from its header and index alone (no page is read); `--json` prints it as JSON.
+//! `--verify` also reads every page (CRC-32, decompression, content) and reports the bad ones
+//! by reason and the read throughput; a bad page makes the exit code 2.
 
 use std::path::PathBuf;
 
@@ -7,7 +9,7 @@ use clap::Args;
 
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::progress::human_bytes;
-use aerie_terrain::store::{Coding, Store, StoreError};
+use aerie_terrain::store::{Coding, PageError, PageId, Store, StoreError};
 use aerie_terrain::GeoReference;
 
 #[derive(Debug, Args)]
@@ -17,6 +19,90 @@ pub struct InfoArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Read and check every page (CRC-32, decompression, content) and time it.
+    #[arg(long)]
+    pub verify: bool,
+}
+
+/// What `--verify` found.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Verify {
+    pub pages: u64,
+    pub samples: u64,
+    pub stored_bytes: u64,
+    /// Bad pages by reason: unreadable, checksum, content.
+    pub read_errors: u64,
+    pub checksum_errors: u64,
+    pub content_errors: u64,
+    /// The first error of each reason, as its message.
+    pub first_errors: Vec<String>,
+    pub seconds: f64,
+}
+
+impl Verify {
+    pub fn bad(&self) -> u64 {
+        self.read_errors + self.checksum_errors + self.content_errors
+    }
+}
+
+/// Reads every page of `store` once, counting what fails by reason.
+pub fn verify(store: &Store) -> Verify {
+    let t = std::time::Instant::now();
+    let mut v = Verify::default();
+    for e in store.pages() {
+        let id = PageId {
+            level: e.level,
+            px: e.px,
+            py: e.py,
+        };
+        v.stored_bytes += u64::from(e.len);
+        match store.read_page(id) {
+            Ok(p) => {
+                v.pages += 1;
+                v.samples += p.samples.len() as u64;
+            }
+            Err(err) => {
+                let n = match err {
+                    PageError::Checksum { .. } => &mut v.checksum_errors,
+                    PageError::Content { .. } => &mut v.content_errors,
+                    PageError::Read { .. } | PageError::NoSuchPage { .. } => &mut v.read_errors,
+                };
+                if *n == 0 {
+                    v.first_errors.push(err.to_string());
+                }
+                *n += 1;
+            }
+        }
+    }
+    v.seconds = t.elapsed().as_secs_f64();
+    v
+}
+
+fn verify_json(v: &Verify) -> serde_json::Value {
+    serde_json::json!({
+        "pages_ok": v.pages,
+        "read_errors": v.read_errors,
+        "checksum_errors": v.checksum_errors,
+        "content_errors": v.content_errors,
+        "first_errors": v.first_errors,
+        "seconds": v.seconds,
+        "stored_mb_per_s": v.stored_bytes as f64 / v.seconds.max(1e-9) / 1e6,
+        "samples_per_s": v.samples as f64 / v.seconds.max(1e-9),
+    })
+}
+
+fn verdict(v: Option<&Verify>) -> Result<(), Failure> {
+    match v {
+        Some(v) if v.bad() > 0 => Err(bad_input(format!(
+            "{} bad pages ({} unreadable, {} checksum, {} content); first: {}",
+            v.bad(),
+            v.read_errors,
+            v.checksum_errors,
+            v.content_errors,
+            v.first_errors.join("; ")
+        ))),
+        _ => Ok(()),
+    }
 }
 
 /// Per level, from the index: tiles, pages, stored bytes, pages coded as integers.
@@ -89,6 +175,7 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
     let lv = levels(&store);
     let page_bytes = h.file_size - h.data_offset;
     let ratio = h.raw_sample_bytes as f64 / page_bytes.max(1) as f64;
+    let checked = a.verify.then(|| verify(&store));
     if a.json {
         let v = serde_json::json!({
             "store": a.store.display().to_string(),
@@ -120,9 +207,10 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
                 "i16_pages": l.i16_pages,
                 "max_eps_m": l.max_eps,
             })).collect::<Vec<_>>(),
+            "verify": checked.as_ref().map(verify_json),
         });
         println!("{v:#}");
-        return Ok(());
+        return verdict(checked.as_ref());
     }
     println!(
         "{}: aerie tile store, format version {}",
@@ -166,5 +254,18 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
             l.max_eps
         );
     }
-    Ok(())
+    if let Some(v) = &checked {
+        println!(
+            "  verified {} of {} pages in {:.3} s: {:.0} MB/s stored, {:.1} M samples/s decoded; {} unreadable, {} checksum, {} content errors",
+            v.pages,
+            h.page_count,
+            v.seconds,
+            v.stored_bytes as f64 / v.seconds.max(1e-9) / 1e6,
+            v.samples as f64 / v.seconds.max(1e-9) / 1e6,
+            v.read_errors,
+            v.checksum_errors,
+            v.content_errors
+        );
+    }
+    verdict(checked.as_ref())
 }
