@@ -734,3 +734,76 @@ fn a_bad_sector_fails_only_its_page_and_short_reads_change_nothing() {
     });
     check_round_trip(&ds, &b, &Store::open_in(short.shared(), &p).unwrap());
 }
+
+/// One value of a page: integers (the i16 extremes among them), -0.0, fractions, values past
+/// i16, subnormals, huge magnitudes.
+fn any_height() -> impl proptest::strategy::Strategy<Value = f32> {
+    use proptest::prelude::*;
+    prop_oneof![
+        6 => (-32768i32..=32767).prop_map(|v| v as f32),
+        1 => Just(-0.0f32),
+        1 => -1e4f32..1e4,
+        1 => (32768i32..1_000_000).prop_map(|v| v as f32),
+        1 => any::<f32>().prop_filter("finite", |v| v.is_finite()),
+    ]
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+
+    /// Whatever the samples, the page decodes to the same bits (every coding is lossless).
+    #[test]
+    fn any_finite_samples_code_and_decode_bit_for_bit(
+        ntx in 1u32..4,
+        nty in 1u32..4,
+        seed in proptest::collection::vec(any_height(), 1..64),
+        tables in proptest::collection::vec(-1e4f32..1e4, 1..8),
+        mix in 0usize..3,
+    ) {
+        let q = 4u32;
+        let layout = Layout::new(ntx * q + 1, nty * q + 1, q, 1, 4).unwrap();
+        let id = PageId { level: 0, px: 0, py: 0 };
+        let rect = layout.rect(0, 0, 0);
+        // mix 0: as drawn (mostly f32 pages); 1: integers but one sample in 16 (i16 with
+        // exceptions); 2: all integers (plain i16). `+ 0.0` turns -0.0 into 0.0.
+        let samples: Vec<f32> = (0..rect.samples())
+            .map(|k| {
+                let v = seed[(k * 7 + k / 3) % seed.len()];
+                match mix {
+                    1 if k % 16 != 5 => v.round().clamp(-32768.0, 32767.0) + 0.0,
+                    2 => v.round().clamp(-32768.0, 32767.0) + 0.0,
+                    _ => v,
+                }
+            })
+            .collect();
+        let t: Vec<f32> = (0..rect.tiles()).map(|k| tables[k % tables.len()]).collect();
+        let tabs = [t.clone(), t.clone(), t];
+        let (coding, raw) = super::pages::encode_payload(id, rect, &samples, &tabs);
+        if mix == 2 {
+            proptest::prop_assert_eq!(coding, Coding::I16Gradient);
+        }
+        if mix == 1 {
+            proptest::prop_assert!(coding != Coding::F32Xor);
+        }
+        proptest::prop_assert!(raw.len() <= layout.raw_len(0, 0, 0, coding));
+        let page = super::pages::decode_payload(&raw, &layout, id, coding).unwrap();
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        proptest::prop_assert_eq!(bits(&page.samples), bits(&samples));
+        proptest::prop_assert_eq!(bits(&page.eps), bits(&tabs[0]));
+        proptest::prop_assert_eq!(bits(&page.max), bits(&tabs[2]));
+    }
+}
+
+#[test]
+fn a_store_can_be_shared_by_reader_threads() {
+    fn shared<T: Send + Sync>() {}
+    shared::<Store>();
+    let dir = tempfile::tempdir().unwrap();
+    let (p, ds, b) = small_store(dir.path());
+    let store = Store::open(&p).unwrap();
+    std::thread::scope(|s| {
+        for _ in 0..2 {
+            s.spawn(|| check_round_trip(&ds, &b, &store));
+        }
+    });
+}
