@@ -54,7 +54,8 @@
 //! resident pages.
 //!
 //! Files: `format` (bytes of the header, the page layout), `index` (the index entries), `pages` (cutting and coding
-//! a page), `write` (the import writer), `read` (open, page reads), `source` (queries).
+//! a page), `write` (the import writer), `read` (open, page reads), `source` (queries);
+//! tests in `tests` (round trips, queries) and `damage_tests` (damaged files, failed writes).
 
 mod error;
 mod format;
@@ -74,5 +75,7 @@ pub use read::Store;
 pub use source::StoreSource;
 pub use write::{write_store, write_store_in, ImportParams, StoreSummary};
 
+#[cfg(test)]
+mod damage_tests;
 #[cfg(test)]
 mod tests;
