@@ -14,12 +14,21 @@ fn open_err(p: &Path) -> String {
     Store::open(p).unwrap_err().to_string()
 }
 
-/// Rewrites the index CRC after an index entry was changed, so the entry check is reached.
+/// Byte offset of the index, from the trailer.
+fn index_at(bytes: &[u8]) -> usize {
+    let t = bytes.len() - 32;
+    u64::from_le_bytes(bytes[t + 8..t + 16].try_into().unwrap()) as usize
+}
+
+/// Rewrites the trailer's index CRC (and the trailer's own) after an index entry was
+/// changed, so the entry check is reached.
 fn fix_index_crc(bytes: &mut [u8], h: &StoreHeader) {
-    let at = h.header_size as usize;
+    let at = index_at(bytes);
     let end = at + INDEX_ENTRY * h.page_count as usize;
     let crc = crc32fast::hash(&bytes[at..end]);
-    bytes[end..end + 4].copy_from_slice(&crc.to_le_bytes());
+    bytes[end + 20..end + 24].copy_from_slice(&crc.to_le_bytes());
+    let c = crc32fast::hash(&bytes[end..end + 28]);
+    bytes[end + 28..end + 32].copy_from_slice(&c.to_le_bytes());
 }
 
 #[test]
@@ -73,27 +82,25 @@ fn a_corrupt_page_is_an_error_naming_it_and_the_others_still_read() {
 }
 
 /// The file with its pages replaced by `pages` (in index order): offsets, lengths, CRCs,
-/// file size and both header CRCs rewritten, so only the pages' content is wrong.
+/// index and trailer rewritten, so only the pages' content is wrong.
 fn with_pages(bytes: &[u8], h: &StoreHeader, pages: &[Vec<u8>]) -> Vec<u8> {
+    let ix = index_at(bytes);
+    let mut index = bytes[ix..bytes.len() - 32].to_vec();
     let mut out = bytes[..h.data_offset as usize].to_vec();
-    let mut offset = h.data_offset;
     for (i, p) in pages.iter().enumerate() {
-        let at = h.header_size as usize + INDEX_ENTRY * i;
-        out[at + 16..at + 24].copy_from_slice(&offset.to_le_bytes());
-        out[at + 24..at + 28].copy_from_slice(&(p.len() as u32).to_le_bytes());
-        out[at + 28..at + 32].copy_from_slice(&crc32fast::hash(p).to_le_bytes());
-        offset += p.len() as u64;
-    }
-    fix_index_crc(&mut out, h);
-    out[96..104].copy_from_slice(&offset.to_le_bytes());
-    let c = crc32fast::hash(&out[..124]);
-    out[124..128].copy_from_slice(&c.to_le_bytes());
-    let n = h.header_size as usize;
-    let c = crc32fast::hash(&out[..n - 4]);
-    out[n - 4..n].copy_from_slice(&c.to_le_bytes());
-    for p in pages {
+        let at = INDEX_ENTRY * i;
+        index[at + 16..at + 24].copy_from_slice(&(out.len() as u64).to_le_bytes());
+        index[at + 24..at + 28].copy_from_slice(&(p.len() as u32).to_le_bytes());
+        index[at + 28..at + 32].copy_from_slice(&crc32fast::hash(p).to_le_bytes());
         out.extend_from_slice(p);
     }
+    let index_offset = out.len() as u64;
+    out.extend_from_slice(&index);
+    out.extend_from_slice(&super::index::encode_trailer(
+        index_offset,
+        h.page_count,
+        crc32fast::hash(&index),
+    ));
     out
 }
 
@@ -176,34 +183,58 @@ fn damaged_headers_and_indexes_are_refused_with_offset_and_reason() {
     );
     let e = case(&|b| b.truncate(100));
     assert!(e.contains("shorter than the 128-byte header"), "{e}");
-    // Truncated inside the index.
-    let e = case(&|b| b.truncate(h.header_size as usize + 40));
-    assert!(
-        e.contains(&format!("byte {} (index)", h.header_size)) && e.contains("truncated index"),
-        "{e}"
-    );
-    // Truncated inside the pages: refused at open (the file size says so).
-    let e = case(&|b| b.truncate(b.len() - 10));
-    assert!(
-        e.contains("byte 96 (file size)") && e.contains("truncated"),
-        "{e}"
-    );
-    // A corrupt index entry (CRC).
-    let e = case(&|b| b[h.header_size as usize + 5] ^= 1);
-    assert!(e.contains("index CRC-32") && e.contains("corrupt"), "{e}");
-    // An entry whose page runs past the end of the file.
+    // Cut right after the header, inside the index, inside the pages: no trailer at the end.
+    let e = case(&|b| b.truncate(h.header_size as usize + 10));
+    assert!(e.contains("(trailer)") && e.contains("no index"), "{e}");
+    let ix = index_at(&good);
+    for cut in [ix + 40, ix - 10, good.len() - 10] {
+        let e = case(&|b| b.truncate(cut));
+        assert!(
+            e.contains(&format!("byte {} (trailer)", cut - 32))
+                && e.contains("truncated or was not completely written"),
+            "cut at {cut}: {e}"
+        );
+    }
+    // Trailing bytes after the trailer: the end is not a trailer either.
+    let e = case(&|b| b.extend_from_slice(&[0; 7]));
+    assert!(e.contains("(trailer)"), "{e}");
+    // A trailer whose index does not end at the trailer, or whose page count disagrees.
+    let t = good.len() - 32;
     let e = case(&|b| {
-        let at = h.header_size as usize + INDEX_ENTRY * (h.page_count as usize - 1) + 24;
+        b[t + 8..t + 16].copy_from_slice(&(ix as u64 - 32).to_le_bytes());
+        let c = crc32fast::hash(&b[t..t + 28]);
+        b[t + 28..t + 32].copy_from_slice(&c.to_le_bytes());
+    });
+    assert!(
+        e.contains(&format!("byte {} (index offset)", t + 8))
+            && e.contains("does not end at the trailer"),
+        "{e}"
+    );
+    let e = case(&|b| {
+        b[t + 16..t + 20].copy_from_slice(&(h.page_count - 1).to_le_bytes());
+        let c = crc32fast::hash(&b[t..t + 28]);
+        b[t + 28..t + 32].copy_from_slice(&c.to_le_bytes());
+    });
+    assert!(e.contains("(trailer page count)"), "{e}");
+    // A corrupt index entry (CRC).
+    let e = case(&|b| b[ix + 5] ^= 1);
+    assert!(
+        e.contains(&format!("byte {ix} (index CRC-32)")) && e.contains("corrupt"),
+        "{e}"
+    );
+    // An entry whose page runs into the index.
+    let e = case(&|b| {
+        let at = ix + INDEX_ENTRY * (h.page_count as usize - 1) + 24;
         b[at..at + 4].copy_from_slice(&1_000_000u32.to_le_bytes());
         fix_index_crc(b, &h);
     });
     assert!(
-        e.contains("(page length)") && e.contains("past the header's file size"),
+        e.contains("(page length)") && e.contains("past the start of the index"),
         "{e}"
     );
     // An entry naming another page than its position.
     let e = case(&|b| {
-        let at = h.header_size as usize + INDEX_ENTRY * 2;
+        let at = ix + INDEX_ENTRY * 2;
         b[at + 4..at + 8].copy_from_slice(&7u32.to_le_bytes());
         fix_index_crc(b, &h);
     });
@@ -279,8 +310,7 @@ fn a_failed_write_leaves_no_store_and_no_temporary() {
     let p = dir.path().join("t.aerie");
     let full = write_store(&p, &ds, &b, &params(2), &|_, _| {})
         .unwrap()
-        .header
-        .file_size;
+        .file_bytes;
     std::fs::remove_file(&p).unwrap();
     for faults in [
         Faults::full_after(full / 2),

@@ -74,7 +74,7 @@ impl Coding {
 #[derive(Debug, Clone, PartialEq)]
 pub struct StoreHeader {
     pub version: u32,
-    /// Bytes of the whole header (fixed part, variable part, its CRC) = the index's offset.
+    /// Bytes of the whole header (fixed part, variable part, its CRC) = the first page's offset.
     pub header_size: u32,
     /// Tile side in vertices, `m = 2^j + 1`.
     pub tile_size: u32,
@@ -91,10 +91,8 @@ pub struct StoreHeader {
     /// CRC-32 of the padded level-0 samples as f32 LE ([`crate::dataset::Dataset::checksum`]).
     pub source_checksum: u32,
     pub voids_filled: u64,
-    /// First byte of the pages (right after the index and its CRC).
+    /// First byte of the pages (= `header_size`).
     pub data_offset: u64,
-    /// Size of the whole file.
-    pub file_size: u64,
     /// Bytes the pages' samples take as f32 (the compression ratio's numerator).
     pub raw_sample_bytes: u64,
     pub geo: Option<GeoReference>,
@@ -300,9 +298,7 @@ pub fn encode_header(h: &StoreHeader) -> Vec<u8> {
     p.u32(h.source_checksum);
     p.u32(0); // flags
     p.u64(h.voids_filled);
-    p.u64(u64::from(h.header_size)); // index offset
     p.u64(h.data_offset);
-    p.u64(h.file_size);
     p.u64(h.raw_sample_bytes);
     p.0.resize(FIXED_HEADER - 4, 0);
     let crc = crc32fast::hash(&p.0);
@@ -498,15 +494,13 @@ pub fn decode_header(b: &[u8]) -> Result<StoreHeader, FieldError> {
     let source_checksum = g.u32("source checksum")?;
     let _flags = g.u32("flags")?;
     let voids_filled = g.u64("voids filled")?;
-    let index_offset = g.u64("index offset")?;
     let data_offset = g.u64("data offset")?;
-    let file_size = g.u64("file size")?;
     let raw_sample_bytes = g.u64("raw sample bytes")?;
-    if index_offset != u64::from(header_size) {
+    if data_offset != u64::from(header_size) {
         return Err(field_err(
             80,
-            "index offset",
-            format!("{index_offset} is not the header size {header_size}"),
+            "data offset",
+            format!("{data_offset} is not the header size {header_size}"),
         ));
     }
     g.at = FIXED_HEADER;
@@ -586,7 +580,6 @@ pub fn decode_header(b: &[u8]) -> Result<StoreHeader, FieldError> {
         source_checksum,
         voids_filled,
         data_offset,
-        file_size,
         raw_sample_bytes,
         geo,
         spacing_note,
@@ -658,27 +651,6 @@ pub fn check_layout(h: &StoreHeader) -> Result<Layout, FieldError> {
                 "{} pages, but the grid and levels make {}",
                 h.page_count,
                 layout.page_count()
-            ),
-        ));
-    }
-    let index_end = u64::from(h.header_size) + INDEX_ENTRY as u64 * u64::from(h.page_count) + 4;
-    if h.data_offset != index_end {
-        return Err(field_err(
-            88,
-            "data offset",
-            format!(
-                "{} is not the end of the index ({index_end})",
-                h.data_offset
-            ),
-        ));
-    }
-    if h.file_size < h.data_offset {
-        return Err(field_err(
-            96,
-            "file size",
-            format!(
-                "{} is before the first page ({})",
-                h.file_size, h.data_offset
             ),
         ));
     }

@@ -15,7 +15,7 @@ use super::format::{
     check_fixed, check_layout, decode_header, FieldError, Layout, PageEntry, StoreHeader,
     FIXED_HEADER, INDEX_ENTRY,
 };
-use super::index::decode_index;
+use super::index::{decode_index, decode_trailer, TRAILER};
 use super::pages::{decode_payload, Page};
 
 /// An opened store: its header, layout and index in memory, the file open for page reads.
@@ -26,6 +26,7 @@ pub struct Store {
     layout: Layout,
     index: Vec<PageEntry>,
     open_bytes: u64,
+    file_len: u64,
 }
 
 impl std::fmt::Debug for Store {
@@ -38,10 +39,10 @@ impl std::fmt::Debug for Store {
 }
 
 impl Store {
-    /// Opens `path`: reads and checks the header and the index, nothing else (see
+    /// Opens `path`: reads and checks the header, the trailer and the index, nothing else (see
     /// [`Store::open_bytes`]). Refuses, naming the byte offset and the reason: not a store, a
-    /// newer format version, a corrupt header or index, a truncated index or file, a header
-    /// whose sizes disagree with its index.
+    /// newer format version, a corrupt header, trailer or index, a truncated file (no
+    /// trailer at its end), a header whose sizes disagree with its index.
     pub fn open(path: &Path) -> Result<Store, StoreError> {
         Self::open_in(aerie_io::real(), path)
     }
@@ -74,43 +75,31 @@ impl Store {
         file.read_exact_at(&mut hb, 0).map_err(io)?;
         let header = decode_header(&hb).map_err(fmt)?;
         let layout = check_layout(&header).map_err(fmt)?;
-        let index_len = INDEX_ENTRY as u64 * u64::from(header.page_count) + 4;
-        if len < size + index_len {
+        if len < size + TRAILER as u64 {
             return Err(fmt(FieldError {
-                offset: size,
-                field: "index",
+                offset: len,
+                field: "trailer",
                 reason: format!(
-                    "the index of {} pages takes bytes {size}..{}, the file ends at {len}: truncated index",
-                    header.page_count,
-                    size + index_len
+                    "the file ends at byte {len}, right after its {size}-byte header: truncated, no index"
                 ),
             }));
         }
+        let mut tb = [0u8; TRAILER];
+        file.read_exact_at(&mut tb, len - TRAILER as u64)
+            .map_err(io)?;
+        let (index_at, index_crc) = decode_trailer(&tb, len, &header).map_err(fmt)?;
+        let index_len = INDEX_ENTRY as u64 * u64::from(header.page_count);
         let mut ib = vec![0u8; index_len as usize];
-        file.read_exact_at(&mut ib, size).map_err(io)?;
-        let index = decode_index(&ib, size, &header, &layout).map_err(fmt)?;
-        if len != header.file_size {
-            return Err(fmt(FieldError {
-                offset: 96,
-                field: "file size",
-                reason: format!(
-                    "the header says {} bytes, the file has {len}: {}",
-                    header.file_size,
-                    if len < header.file_size {
-                        "truncated (an interrupted copy?)"
-                    } else {
-                        "trailing bytes"
-                    }
-                ),
-            }));
-        }
+        file.read_exact_at(&mut ib, index_at).map_err(io)?;
+        let index = decode_index(&ib, index_at, index_crc, &header, &layout).map_err(fmt)?;
         Ok(Store {
             path: path.to_path_buf(),
             file,
             header,
             layout,
             index,
-            open_bytes: size + index_len,
+            open_bytes: size + index_len + TRAILER as u64,
+            file_len: len,
         })
     }
 
@@ -131,8 +120,13 @@ impl Store {
         &self.index
     }
 
-    /// Bytes `open` read: the header and the index (32 bytes a page: ≈ 1/2000 of the f32
-    /// samples at m = 17 with 8 × 8-tile pages), never a page.
+    /// Size of the file at open.
+    pub fn file_len(&self) -> u64 {
+        self.file_len
+    }
+
+    /// Bytes `open` read: the header, the index (32 bytes a page: ≈ 1/2000 of the f32
+    /// samples at m = 17 with 8 × 8-tile pages) and the trailer, never a page.
     pub fn open_bytes(&self) -> u64 {
         self.open_bytes
     }

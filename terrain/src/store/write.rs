@@ -1,9 +1,11 @@
 //! The import writer: every page of every level cut from a dataset and its bake, coded,
-//! compressed on all cores, then header + index + pages written atomically (temporary file
-//! + rename: an interrupted import leaves nothing under the store's name).
+//! compressed on all cores a batch at a time, and written as they come — header, pages,
+//! index, trailer — atomically (temporary file + rename: an interrupted import leaves
+//! nothing under the store's name, and a cut file has no trailer, so it never opens).
 //!
-//! For now the dataset and its bake are in memory and the compressed pages are held until
-//! they are written (≈ the file's size); a streamed import (bounded memory) is a later step.
+//! For now the dataset and its bake are in memory (a streamed import that loads the source
+//! a region at a time is a later step; the format needs no change for it: the index is
+//! written last).
 
 use std::io::Write;
 use std::path::Path;
@@ -19,7 +21,7 @@ use super::error::{PageId, StoreError};
 use super::format::{
     encode_header, header_len, Coding, Layout, PageEntry, StoreHeader, INDEX_ENTRY, STORE_VERSION,
 };
-use super::index::encode_entry;
+use super::index::{encode_entry, encode_trailer, TRAILER};
 use super::pages::{cut_samples, cut_tables, encode_payload};
 
 /// What an import is asked for beyond the data.
@@ -48,6 +50,8 @@ pub struct StoreSummary {
     pub f32_pages: u32,
     /// Bytes of the pages as stored (compressed).
     pub page_bytes: u64,
+    /// Bytes of the whole file.
+    pub file_bytes: u64,
     /// Max ε over the terrain tiles of each level, metres.
     pub max_eps: Vec<f32>,
 }
@@ -109,7 +113,6 @@ pub fn write_store_in(
                 .fold(0f32, |a, (&e, _)| a.max(e))
         })
         .collect();
-    let pages = compress_all(ds, bake, &layout, params.zstd_level, progress)?;
     let raw_sample_bytes: u64 = (0..n)
         .map(|i| {
             let (l, x, y) = layout.page_at(i).expect("in layout");
@@ -132,7 +135,6 @@ pub fn write_store_in(
         source_checksum: bake.source_checksum,
         voids_filled: ds.hf.voids_filled as u64,
         data_offset: 0,
-        file_size: 0,
         raw_sample_bytes,
         geo: ds.hf.geo.clone(),
         spacing_note: ds.hf.spacing_note.clone(),
@@ -140,27 +142,7 @@ pub fn write_store_in(
         max_eps: max_eps.clone(),
     };
     header.header_size = header_len(&header) as u32;
-    header.data_offset = u64::from(header.header_size) + (INDEX_ENTRY * n) as u64 + 4;
-    let page_bytes: u64 = pages.iter().map(|p| p.1.len() as u64).sum();
-    header.file_size = header.data_offset + page_bytes;
-    let mut index = Vec::with_capacity(INDEX_ENTRY * n + 4);
-    let mut offset = header.data_offset;
-    for (i, (coding, bytes)) in pages.iter().enumerate() {
-        let (level, px, py) = layout.page_at(i).expect("in layout");
-        let e = PageEntry {
-            level,
-            px,
-            py,
-            coding: *coding,
-            offset,
-            len: bytes.len() as u32,
-            crc: crc32fast::hash(bytes),
-        };
-        encode_entry(&e, &mut index);
-        offset += bytes.len() as u64;
-    }
-    let crc = crc32fast::hash(&index);
-    index.extend_from_slice(&crc.to_le_bytes());
+    header.data_offset = u64::from(header.header_size);
 
     let mut f = AtomicFile::create_in(fs, path)?;
     let write = |f: &mut AtomicFile, b: &[u8]| -> Result<(), StoreError> {
@@ -173,41 +155,74 @@ pub fn write_store_in(
         })
     };
     write(&mut f, &encode_header(&header))?;
-    write(&mut f, &index)?;
-    for (_, bytes) in &pages {
-        write(&mut f, bytes)?;
+    // Pages are compressed a batch at a time on all cores and written in index order as
+    // each batch completes: memory holds one batch, not the file.
+    let mut index = Vec::with_capacity(INDEX_ENTRY * n);
+    let mut offset = header.data_offset;
+    let mut counts = [0u32; 3];
+    let done = AtomicU64::new(0);
+    for start in (0..n).step_by(BATCH_PAGES) {
+        let batch = start..(start + BATCH_PAGES).min(n);
+        let pages = compress_batch(ds, bake, &layout, batch.clone(), params.zstd_level, &|| {
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1, n as u64)
+        })?;
+        for (i, (coding, bytes)) in batch.zip(&pages) {
+            let (level, px, py) = layout.page_at(i).expect("in layout");
+            let e = PageEntry {
+                level,
+                px,
+                py,
+                coding: *coding,
+                offset,
+                len: bytes.len() as u32,
+                crc: crc32fast::hash(bytes),
+            };
+            encode_entry(&e, &mut index);
+            offset += bytes.len() as u64;
+            counts[coding.code() as usize] += 1;
+            write(&mut f, bytes)?;
+        }
     }
+    let page_bytes = offset - header.data_offset;
+    write(&mut f, &index)?;
+    write(
+        &mut f,
+        &encode_trailer(offset, n as u32, crc32fast::hash(&index)),
+    )?;
     f.commit()?;
 
-    let count = |c: Coding| pages.iter().filter(|p| p.0 == c).count() as u32;
     Ok(StoreSummary {
         real_samples: (ds.valid_width * ds.valid_height) as u64,
         page_samples: raw_sample_bytes / 4,
         pages: n as u32,
-        i16_pages: count(Coding::I16Gradient),
-        exception_pages: count(Coding::I16Exceptions),
-        f32_pages: count(Coding::F32Xor),
+        i16_pages: counts[Coding::I16Gradient.code() as usize],
+        exception_pages: counts[Coding::I16Exceptions.code() as usize],
+        f32_pages: counts[Coding::F32Xor.code() as usize],
         page_bytes,
+        file_bytes: offset + (INDEX_ENTRY * n + TRAILER) as u64,
         max_eps,
         header,
     })
 }
 
-/// Every page coded and compressed, in index order, on all cores.
-fn compress_all(
+/// Pages compressed per batch (≈ 256 × 25 kB held at m = 17 on SRTM).
+const BATCH_PAGES: usize = 256;
+
+/// Pages `batch` coded and compressed, in index order, on all cores; `tick` after each.
+fn compress_batch(
     ds: &Dataset,
     bake: &ErrorBake,
     layout: &Layout,
+    batch: std::ops::Range<usize>,
     level: i32,
-    progress: &(dyn Fn(u64, u64) + Sync),
+    tick: &(dyn Fn() + Sync),
 ) -> Result<Vec<(Coding, Vec<u8>)>, StoreError> {
-    let n = layout.page_count() as usize;
+    let n = batch.len();
     let threads = std::thread::available_parallelism()
         .map(|t| t.get())
         .unwrap_or(1)
         .clamp(1, n.max(1));
-    let next = AtomicUsize::new(0);
-    let done = AtomicU64::new(0);
+    let next = AtomicUsize::new(batch.start);
     type Part = Vec<(usize, Coding, Vec<u8>)>;
     let parts: Vec<Result<Part, String>> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads)
@@ -217,7 +232,7 @@ fn compress_all(
                     let mut z = zstd::bulk::Compressor::new(level).map_err(|e| e.to_string())?;
                     loop {
                         let i = next.fetch_add(1, Ordering::Relaxed);
-                        if i >= n {
+                        if i >= batch.end {
                             return Ok(out);
                         }
                         let (level, px, py) = layout.page_at(i).expect("in layout");
@@ -227,8 +242,8 @@ fn compress_all(
                         let rect = layout.rect(level, px, py);
                         let (coding, raw) = encode_payload(id, rect, &samples, &tables);
                         let c = z.compress(&raw).map_err(|e| format!("{id}: zstd: {e}"))?;
-                        out.push((i, coding, c));
-                        progress(done.fetch_add(1, Ordering::Relaxed) + 1, n as u64);
+                        out.push((i - batch.start, coding, c));
+                        tick();
                     }
                 })
             })

@@ -173,7 +173,7 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
     })?;
     let h = store.header();
     let lv = levels(&store);
-    let page_bytes = h.file_size - h.data_offset;
+    let page_bytes: u64 = store.pages().iter().map(|e| u64::from(e.len)).sum();
     let ratio = h.raw_sample_bytes as f64 / page_bytes.max(1) as f64;
     let checked = a.verify.then(|| verify(&store));
     if a.json {
@@ -191,7 +191,7 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
             "page_tiles": h.page_tiles,
             "levels": h.levels,
             "pages": h.page_count,
-            "file_bytes": h.file_size,
+            "file_bytes": store.file_len(),
             "page_bytes": page_bytes,
             "raw_sample_bytes": h.raw_sample_bytes,
             "compression_ratio": ratio,
@@ -228,7 +228,7 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
     );
     println!(
         "  {} ({} of samples as f32, ratio {ratio:.2}); source checksum {:#010x}, {} voids filled; {} read to open",
-        human_bytes(h.file_size),
+        human_bytes(store.file_len()),
         human_bytes(h.raw_sample_bytes),
         h.source_checksum,
         h.voids_filled,
