@@ -1,4 +1,5 @@
-//! The index: one 32-byte entry per page, in layout order, checked against the header.
+//! The index (one 32-byte entry per page, in layout order, checked against the header) and
+//! the trailer at the end of the file that locates it.
 
 use super::error::PageId;
 use super::format::{
