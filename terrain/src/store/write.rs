@@ -31,7 +31,8 @@ pub struct ImportParams {
     pub sources: Vec<String>,
     /// Page side in tiles (power of two).
     pub page_tiles: u32,
-    /// zstd level (1 = fastest … 19); 9 is within 3 % of 19's ratio on SRTM at ~5× its speed.
+    /// zstd level (1 = fastest … 19). On the Sierra Nevada SRTM3 mosaic: 3 → 6.62 MB in
+    /// 0.16 s, 9 → 6.56 MB in 0.34 s, 19 → 6.28 MB in 2.48 s (2 cores).
     pub zstd_level: i32,
 }
 

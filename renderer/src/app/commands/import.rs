@@ -36,8 +36,9 @@ pub struct ImportArgs {
     /// Page side in tiles (a power of two).
     #[arg(long, default_value_t = DEFAULT_PAGE_TILES)]
     pub page_tiles: u32,
-    /// zstd level, 1 (fastest) ..= 19 (smallest).
-    #[arg(long, default_value_t = 9)]
+    /// zstd level, 1 (fastest) ..= 19 (smallest). 3 is within 1 % of 9's size at half its
+    /// time on SRTM; 19 saves 5 % more at 15× the time.
+    #[arg(long, default_value_t = 3)]
     pub zstd_level: i32,
     /// Replace an existing store at --out.
     #[arg(long)]
