@@ -14,6 +14,7 @@ pub mod mesh;
 pub mod pool;
 pub mod query;
 pub mod select;
+pub mod store;
 pub mod tiles;
 
 pub use heightfield::{GeoReference, Heightfield};

@@ -4,7 +4,9 @@
 
 use clap::{Parser, Subcommand};
 
-use crate::app::commands::{bake, bench, fly, gen_dem, listen, render, replay, run as run_cmd};
+use crate::app::commands::{
+    bake, bench, fly, gen_dem, import, info, listen, render, replay, run as run_cmd,
+};
 use crate::app::failure::Failure;
 
 #[derive(Debug, Parser)]
@@ -30,6 +32,11 @@ pub enum Command {
     GenDem(gen_dem::GenDemArgs),
     /// Bake the per-tile error table of a dataset (file or folder of SRTM tiles).
     Bake(bake::BakeArgs),
+    /// Import DEM files or folders of SRTM tiles into a tile store (`<name>.aerie`): every
+    /// level in checksummed, compressed pages with their baked error.
+    Import(import::ImportArgs),
+    /// Print what a tile store holds: header, levels, pages, bytes, compression ratio.
+    Info(info::InfoArgs),
     /// Time against measured image-space error: every LOD mode (× τ) on the same frames,
     /// results.csv, summary.csv/.md, time_vs_error.png in an empty --out (or --overwrite).
     Bench(bench::BenchArgs),
@@ -50,6 +57,8 @@ pub fn run(cli: Cli) -> Result<(), Failure> {
         Command::Fly(a) => fly::run(a),
         Command::GenDem(a) => gen_dem::run(a),
         Command::Bake(a) => bake::run(a),
+        Command::Import(a) => import::run(a),
+        Command::Info(a) => info::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Listen(a) => listen::run(a),
         Command::Replay(a) => replay::run(a),

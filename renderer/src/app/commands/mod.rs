@@ -5,6 +5,8 @@ pub mod bake;
 pub mod bench;
 pub mod fly;
 pub mod gen_dem;
+pub mod import;
+pub mod info;
 pub mod input_args;
 pub mod listen;
 pub mod render;

@@ -1,0 +1,271 @@
+//! `aerie info <store>`: what a tile store holds — header, levels, pages, bytes, compression
+//! ratio — from its header and index alone (no page is read); `--json` prints it as JSON.
+//! `--verify` also reads every page (CRC-32, decompression, content) and reports the bad ones
+//! by reason and the read throughput; a bad page makes the exit code 2.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::progress::human_bytes;
+use aerie_terrain::store::{Coding, PageError, PageId, Store, StoreError};
+use aerie_terrain::GeoReference;
+
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// The store (`<name>.aerie`).
+    pub store: PathBuf,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Read and check every page (CRC-32, decompression, content) and time it.
+    #[arg(long)]
+    pub verify: bool,
+}
+
+/// What `--verify` found.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Verify {
+    pub pages: u64,
+    pub samples: u64,
+    pub stored_bytes: u64,
+    /// Bad pages by reason: unreadable, checksum, content.
+    pub read_errors: u64,
+    pub checksum_errors: u64,
+    pub content_errors: u64,
+    /// The first error of each reason, as its message.
+    pub first_errors: Vec<String>,
+    pub seconds: f64,
+}
+
+impl Verify {
+    pub fn bad(&self) -> u64 {
+        self.read_errors + self.checksum_errors + self.content_errors
+    }
+}
+
+/// Reads every page of `store` once, counting what fails by reason.
+pub fn verify(store: &Store) -> Verify {
+    let t = std::time::Instant::now();
+    let mut v = Verify::default();
+    for e in store.pages() {
+        let id = PageId {
+            level: e.level,
+            px: e.px,
+            py: e.py,
+        };
+        v.stored_bytes += u64::from(e.len);
+        match store.read_page(id) {
+            Ok(p) => {
+                v.pages += 1;
+                v.samples += p.samples.len() as u64;
+            }
+            Err(err) => {
+                let n = match err {
+                    PageError::Checksum { .. } => &mut v.checksum_errors,
+                    PageError::Content { .. } => &mut v.content_errors,
+                    PageError::Read { .. } | PageError::NoSuchPage { .. } => &mut v.read_errors,
+                };
+                if *n == 0 {
+                    v.first_errors.push(err.to_string());
+                }
+                *n += 1;
+            }
+        }
+    }
+    v.seconds = t.elapsed().as_secs_f64();
+    v
+}
+
+fn verify_json(v: &Verify) -> serde_json::Value {
+    serde_json::json!({
+        "pages_ok": v.pages,
+        "read_errors": v.read_errors,
+        "checksum_errors": v.checksum_errors,
+        "content_errors": v.content_errors,
+        "first_errors": v.first_errors,
+        "seconds": v.seconds,
+        "stored_mb_per_s": v.stored_bytes as f64 / v.seconds.max(1e-9) / 1e6,
+        "samples_per_s": v.samples as f64 / v.seconds.max(1e-9),
+    })
+}
+
+fn verdict(v: Option<&Verify>) -> Result<(), Failure> {
+    match v {
+        Some(v) if v.bad() > 0 => Err(bad_input(format!(
+            "{} bad pages ({} unreadable, {} checksum, {} content); first: {}",
+            v.bad(),
+            v.read_errors,
+            v.checksum_errors,
+            v.content_errors,
+            v.first_errors.join("; ")
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// Per level, from the index: tiles, pages, stored bytes, pages coded as integers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LevelInfo {
+    pub level: u32,
+    pub tiles: [u32; 2],
+    pub pages: [u32; 2],
+    pub bytes: u64,
+    /// Pages coded as integers (exactly, or with exceptions).
+    pub i16_pages: u32,
+    pub max_eps: f32,
+}
+
+/// The per-level table of an opened store.
+pub fn levels(store: &Store) -> Vec<LevelInfo> {
+    let h = store.header();
+    store
+        .layout()
+        .levels
+        .iter()
+        .enumerate()
+        .map(|(l, g)| {
+            let entries = store.pages().iter().filter(|e| e.level == l as u32);
+            let (bytes, i16_pages) = entries.fold((0u64, 0u32), |(b, n), e| {
+                (
+                    b + u64::from(e.len),
+                    n + u32::from(e.coding != Coding::F32Xor),
+                )
+            });
+            LevelInfo {
+                level: l as u32,
+                tiles: [g.tiles_x, g.tiles_y],
+                pages: [g.pages_x, g.pages_y],
+                bytes,
+                i16_pages,
+                max_eps: h.max_eps[l],
+            }
+        })
+        .collect()
+}
+
+fn geo_text(g: &Option<GeoReference>) -> String {
+    match g {
+        None => "none".into(),
+        Some(GeoReference::Geographic {
+            south_lat_deg,
+            west_lon_deg,
+            dlat_deg,
+            dlon_deg,
+        }) => format!(
+            "geographic, south-west sample {south_lat_deg}°, {west_lon_deg}°, steps {:.3}″ × {:.3}″",
+            dlat_deg * 3600.0,
+            dlon_deg * 3600.0
+        ),
+        Some(GeoReference::Projected {
+            crs,
+            easting,
+            northing,
+        }) => format!("{crs}, south-west sample E {easting} N {northing}"),
+    }
+}
+
+pub fn run(a: InfoArgs) -> Result<(), Failure> {
+    let store = Store::open(&a.store).map_err(|e| match e {
+        StoreError::Io { .. } => runtime(e),
+        _ => bad_input(e),
+    })?;
+    let h = store.header();
+    let lv = levels(&store);
+    let page_bytes: u64 = store.pages().iter().map(|e| u64::from(e.len)).sum();
+    let ratio = h.raw_sample_bytes as f64 / page_bytes.max(1) as f64;
+    let checked = a.verify.then(|| verify(&store));
+    if a.json {
+        let v = serde_json::json!({
+            "store": a.store.display().to_string(),
+            "format_version": h.version,
+            "width": h.width,
+            "height": h.height,
+            "valid_width": h.valid_width,
+            "valid_height": h.valid_height,
+            "spacing_m": [h.spacing_x, h.spacing_y],
+            "spacing_note": h.spacing_note,
+            "geo": geo_text(&h.geo),
+            "tile_size": h.tile_size,
+            "page_tiles": h.page_tiles,
+            "levels": h.levels,
+            "pages": h.page_count,
+            "file_bytes": store.file_len(),
+            "page_bytes": page_bytes,
+            "raw_sample_bytes": h.raw_sample_bytes,
+            "compression_ratio": ratio,
+            "source_checksum": format!("{:#010x}", h.source_checksum),
+            "voids_filled": h.voids_filled,
+            "sources": h.sources,
+            "open_bytes": store.open_bytes(),
+            "per_level": lv.iter().map(|l| serde_json::json!({
+                "level": l.level,
+                "tiles": l.tiles,
+                "pages": l.pages,
+                "bytes": l.bytes,
+                "i16_pages": l.i16_pages,
+                "max_eps_m": l.max_eps,
+            })).collect::<Vec<_>>(),
+            "verify": checked.as_ref().map(verify_json),
+        });
+        println!("{v:#}");
+        return verdict(checked.as_ref());
+    }
+    println!(
+        "{}: aerie tile store, format version {}",
+        a.store.display(),
+        h.version
+    );
+    println!(
+        "  grid {}×{} samples ({}×{} real), spacing {} m × {} m ({})",
+        h.width, h.height, h.valid_width, h.valid_height, h.spacing_x, h.spacing_y, h.spacing_note
+    );
+    println!("  geo-reference: {}", geo_text(&h.geo));
+    println!(
+        "  tiles of {} vertices, pages of {}×{} tiles, {} levels, {} pages",
+        h.tile_size, h.page_tiles, h.page_tiles, h.levels, h.page_count
+    );
+    println!(
+        "  {} ({} of samples as f32, ratio {ratio:.2}); source checksum {:#010x}, {} voids filled; {} read to open",
+        human_bytes(store.file_len()),
+        human_bytes(h.raw_sample_bytes),
+        h.source_checksum,
+        h.voids_filled,
+        human_bytes(store.open_bytes())
+    );
+    let n = h.sources.len();
+    match h.sources.as_slice() {
+        [] => {}
+        [one] => println!("  source: {one}"),
+        [first, .., last] => println!("  sources: {n} files, {first} … {last}"),
+    }
+    println!("  level  tiles        pages      bytes      i16 pages  max ε (m)");
+    for l in &lv {
+        println!(
+            "  {:>5}  {:>5}×{:<5}  {:>4}×{:<4}  {:>9}  {:>9}  {}",
+            l.level,
+            l.tiles[0],
+            l.tiles[1],
+            l.pages[0],
+            l.pages[1],
+            human_bytes(l.bytes),
+            l.i16_pages,
+            l.max_eps
+        );
+    }
+    if let Some(v) = &checked {
+        println!(
+            "  verified {} of {} pages in {:.3} s: {:.0} MB/s stored, {:.1} M samples/s decoded; {} unreadable, {} checksum, {} content errors",
+            v.pages,
+            h.page_count,
+            v.seconds,
+            v.stored_bytes as f64 / v.seconds.max(1e-9) / 1e6,
+            v.samples as f64 / v.seconds.max(1e-9) / 1e6,
+            v.read_errors,
+            v.checksum_errors,
+            v.content_errors
+        );
+    }
+    verdict(checked.as_ref())
+}

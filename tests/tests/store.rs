@@ -1,0 +1,295 @@
+//! The tile store end to end: real SRTM mosaics imported and read back page by page reproduce
+//! the SHA-256 sums in `../shared/data/dem/SOURCES.md` (skipped without `../shared`); `aerie
+//! import` and `aerie info` on the committed demo DEM (summary, JSON, refusals with exit 2
+//! naming the file and the reason).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use aerie::terrain::bake::{bake, BakeParams};
+use aerie::terrain::dataset::{load_dataset, load_dataset_tiles, Dataset};
+use aerie::terrain::store::{write_store, ImportParams, PageId, Store};
+use sha2::{Digest, Sha256};
+
+fn aerie_bin() -> PathBuf {
+    let status = Command::new(env!("CARGO"))
+        .args(["build", "-p", "aerie", "--bin", "aerie"])
+        .current_dir(aerie_tests::repo_root())
+        .status()
+        .expect("run cargo build");
+    assert!(status.success(), "cargo build of aerie failed");
+    let exe = std::env::current_exe().expect("test executable path");
+    exe.parent()
+        .and_then(Path::parent)
+        .expect("target/<profile>/deps/<test>")
+        .join("aerie")
+}
+
+fn aerie(args: &[&str]) -> Output {
+    Command::new(aerie_bin())
+        .args(args)
+        .output()
+        .expect("run aerie")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// The store's level-0 real samples, read back page by page, as SOURCES.md hashes a mosaic:
+/// north row first, big-endian i16.
+fn mosaic_sha256_through_store(store: &Store) -> String {
+    let h = store.header();
+    let (w, vh) = (h.valid_width as usize, h.valid_height as usize);
+    let mut grid = vec![i16::MIN; w * vh];
+    let mut filled = 0usize;
+    let l0 = store.layout().levels[0];
+    let q = store.layout().q as usize;
+    for py in 0..l0.pages_y {
+        for px in 0..l0.pages_x {
+            let page = store.read_page(PageId { level: 0, px, py }).unwrap();
+            let r = page.rect;
+            for j in 0..r.rows {
+                for i in 0..r.cols {
+                    let (c, row) = (
+                        r.tx0 as usize * q + i as usize,
+                        r.ty0 as usize * q + j as usize,
+                    );
+                    if c >= w || row >= vh {
+                        continue;
+                    }
+                    let v = page.at(i, j);
+                    assert_eq!(v, v.round(), "sample ({c}, {row}) = {v} is not an integer");
+                    let k = row * w + c;
+                    if grid[k] == i16::MIN {
+                        filled += 1;
+                    }
+                    grid[k] = v as i16;
+                }
+            }
+        }
+    }
+    assert_eq!(filled, w * vh, "every real sample is in a page");
+    let mut bytes = Vec::with_capacity(w * vh * 2);
+    for row in (0..vh).rev() {
+        for c in 0..w {
+            bytes.extend_from_slice(&grid[row * w + c].to_be_bytes());
+        }
+    }
+    Sha256::digest(&bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+fn import(ds: &Dataset, out: &Path) -> Store {
+    let p = BakeParams::default();
+    let p = BakeParams {
+        levels: p.resolve_levels(ds).unwrap(),
+        ..p
+    };
+    let b = bake(ds, p, &|_, _| {});
+    let params = ImportParams {
+        sources: vec![ds.source.clone()],
+        page_tiles: 8,
+        zstd_level: 3,
+    };
+    write_store(out, ds, &b, &params, &|_, _| {}).unwrap();
+    Store::open(out).unwrap()
+}
+
+#[test]
+fn stitched_srtm_mosaics_reproduce_their_sources_checksums_through_the_store() {
+    let Some(dir) = aerie_tests::shared_dem_dir() else {
+        eprintln!("skipping: ../shared/data/dem not found (fresh clone without ../shared)");
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    for (folder, sha) in [
+        (
+            "srtm3_sierra_nevada_es",
+            "f402db54d14754df29d7183e88d8351ff9d581faa1925049ffa6b42d9a61c28c",
+        ),
+        (
+            "srtm3_northern_england",
+            "c897cb1f5b3f792a54c5ff32e2246138581e37a086b10213e5f5ab8dfd798db2",
+        ),
+    ] {
+        let ds = load_dataset(&dir.join(folder)).unwrap();
+        let store = import(&ds, &tmp.path().join(format!("{folder}.aerie")));
+        assert_eq!(
+            (store.header().valid_width, store.header().valid_height),
+            (3601, 2401)
+        );
+        assert_eq!(mosaic_sha256_through_store(&store), sha, "{folder}");
+        assert_eq!(store.header().source_checksum, ds.checksum());
+    }
+    // A list of tiles (the 2×2 east block) as well as a folder.
+    let list: Vec<PathBuf> = ["N36W004", "N37W003", "N36W003", "N37W004"]
+        .iter()
+        .map(|n| dir.join("srtm3_sierra_nevada_es").join(format!("{n}.hgt")))
+        .collect();
+    let ds = load_dataset_tiles(&list).unwrap();
+    let store = import(&ds, &tmp.path().join("east.aerie"));
+    assert_eq!(
+        mosaic_sha256_through_store(&store),
+        "3ac41719ab28db8e11e0dd3237b921907fbc28b8406314f9a25b645ae6d23a8b"
+    );
+}
+
+/// A flat SRTM tile of side `n` (1201 = SRTM3, 3601 = SRTM1) named `name`.
+fn write_tile(dir: &Path, name: &str, n: usize) -> PathBuf {
+    let p = dir.join(name);
+    let bytes: Vec<u8> = (0..n * n).flat_map(|_| 100i16.to_be_bytes()).collect();
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+#[test]
+fn import_and_info_on_the_demo_dem() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dem = tmp.path().join("N47E011.hgt.zip");
+    std::fs::copy(aerie_tests::demo_dem(), &dem).unwrap();
+    let out = tmp.path().join("stores/demo.aerie");
+    let json = tmp.path().join("demo.json");
+    let (dem_s, out_s, json_s) = (
+        dem.to_str().unwrap(),
+        out.to_str().unwrap(),
+        json.to_str().unwrap(),
+    );
+    let o = aerie(&["import", dem_s, "--out", out_s, "--json", json_s]);
+    assert!(o.status.success(), "{}", text(&o));
+    let t = text(&o);
+    assert!(
+        t.contains("imported") && t.contains("8 levels") && t.contains("ratio"),
+        "{t}"
+    );
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(j["levels"], 8);
+    assert_eq!(
+        j["file_bytes"].as_u64().unwrap(),
+        std::fs::metadata(&out).unwrap().len()
+    );
+    assert_eq!(j["max_eps_m"].as_array().unwrap().len(), 8);
+    assert!(j["compression_ratio"].as_f64().unwrap() > 1.0);
+    // What import says is what info reads back from the file.
+    let o = aerie(&["info", out_s, "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let i: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for k in [
+        "pages",
+        "file_bytes",
+        "raw_sample_bytes",
+        "levels",
+        "width",
+        "valid_width",
+    ] {
+        assert_eq!(i[k], j[k], "{k}");
+    }
+    let eps: Vec<f64> = i["per_level"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["max_eps_m"].as_f64().unwrap())
+        .collect();
+    let want: Vec<f64> = j["max_eps_m"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(eps, want);
+    let o = aerie(&["info", out_s]);
+    assert!(
+        o.status.success() && text(&o).contains("format version 1"),
+        "{}",
+        text(&o)
+    );
+    // --verify reads every page; a flipped byte in one is found, named, and exits 2.
+    let o = aerie(&["info", out_s, "--verify"]);
+    let pages = j["pages"].as_u64().unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains(&format!("verified {pages} of {pages} pages")),
+        "{}",
+        text(&o)
+    );
+    let mut bytes = std::fs::read(&out).unwrap();
+    let at = bytes.len() / 2; // inside the pages (the index and trailer are the last 11 kB)
+    bytes[at] ^= 1;
+    let bad = tmp.path().join("bad.aerie");
+    std::fs::write(&bad, &bytes).unwrap();
+    let o = aerie(&["info", bad.to_str().unwrap(), "--verify", "--json"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["verify"]["checksum_errors"], 1, "{v}");
+    assert_eq!(v["verify"]["pages_ok"].as_u64().unwrap(), pages - 1);
+    assert!(text(&o).contains("checksum mismatch"), "{}", text(&o));
+    // An existing store is kept without --overwrite, replaced with it.
+    let before = std::fs::read(&out).unwrap();
+    let o = aerie(&["import", dem_s, "--out", out_s]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("--overwrite"), "{}", text(&o));
+    assert_eq!(std::fs::read(&out).unwrap(), before);
+    let o = aerie(&[
+        "import",
+        dem_s,
+        "--out",
+        out_s,
+        "--overwrite",
+        "--zstd-level",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    // info on a file that is not a store names the byte and the reason.
+    let o = aerie(&["info", dem_s]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("byte 0 (magic)"), "{}", text(&o));
+}
+
+#[test]
+fn import_refuses_inputs_that_do_not_make_one_grid_naming_files_and_reason() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let out = d.join("x.aerie");
+    let out_s = out.to_str().unwrap();
+    let a = write_tile(d, "N10E010.hgt", 1201);
+    let b = write_tile(d, "N10E011.hgt", 3601);
+    let c = write_tile(d, "N12E010.hgt", 1201);
+    let tif = d.join("other.tif");
+    std::fs::write(&tif, b"II*\0").unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let cases: [(Vec<String>, &[&str]); 4] = [
+        (
+            vec![s(&a), s(&b)],
+            &["N10E011.hgt", "mixed resolutions", "N10E010.hgt"],
+        ),
+        (
+            vec![s(&a), s(&c)],
+            &["N10E010.hgt", "do not form a full rectangle", "N11E010"],
+        ),
+        (vec![s(&a), s(&tif)], &["other.tif", "only SRTM tiles"]),
+        (vec![s(&a), s(&a)], &["N10E010.hgt", "given twice"]),
+    ];
+    for (inputs, words) in cases {
+        let mut args = vec!["import".to_string()];
+        args.extend(inputs);
+        args.extend(["--out".to_string(), out_s.to_string()]);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = aerie(&args);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{t}");
+        for w in words {
+            assert!(t.contains(w), "{w:?} not in {t}");
+        }
+        assert!(!out.exists());
+    }
+    let o = aerie(&["import", &s(&a), "--out", &s(&d.join("x.bin"))]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o).contains("ends in .aerie"), "{}", text(&o));
+}
