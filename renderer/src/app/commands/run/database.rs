@@ -222,7 +222,11 @@ mod tests {
         assert!(matches!(c.request(1), DatabaseAction::Load(1, _)));
         c.finished(1, false);
         assert_eq!(c.report(), DatabaseReport::Unavailable);
-        assert_eq!(c.request(1), DatabaseAction::None, "not retried every frame");
+        assert_eq!(
+            c.request(1),
+            DatabaseAction::None,
+            "not retried every frame"
+        );
         assert_eq!(c.request(2), DatabaseAction::None, "2 is drawn");
         assert_eq!(c.report(), DatabaseReport::Ready(2));
     }
