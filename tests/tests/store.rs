@@ -293,3 +293,57 @@ fn import_refuses_inputs_that_do_not_make_one_grid_naming_files_and_reason() {
     assert_eq!(o.status.code(), Some(2));
     assert!(text(&o).contains("ends in .aerie"), "{}", text(&o));
 }
+
+/// `--dem region.aerie`: a store draws exactly what its source draws (the store is read whole
+/// into the renderer's in-memory path, checked against its checksum), and a store imported with
+/// another tile size is refused naming both sizes.
+#[test]
+fn render_from_a_store_draws_the_same_image_as_its_source() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = dir.path().join("N47E011.hgt.zip");
+    std::fs::copy(aerie_tests::demo_dem(), &dem).unwrap();
+    let store = dir.path().join("inn.aerie");
+    let s = |p: &Path| p.display().to_string();
+    let o = aerie(&["import", &s(&dem), "--out", &s(&store)]);
+    assert!(o.status.success(), "{}", text(&o));
+    let render = |input: &Path, out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "render".to_string(),
+            "--dem".into(),
+            s(input),
+            "--camera".into(),
+            "30500,12000,4500,0,-15,0".into(),
+            "--size".into(),
+            "96x54".into(),
+            "--out".into(),
+            s(out),
+        ];
+        args.extend(extra.iter().map(|a| a.to_string()));
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        aerie(&refs)
+    };
+    let (a, b) = (dir.path().join("src.png"), dir.path().join("store.png"));
+    let o = render(&dem, &a, &[]);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = render(&store, &b, &[]);
+    assert!(o.status.success(), "{}", text(&o));
+    let (ia, ib) = (
+        image::open(&a).unwrap().to_rgba8(),
+        image::open(&b).unwrap().to_rgba8(),
+    );
+    assert_eq!(ia.dimensions(), ib.dimensions());
+    assert!(ia == ib, "the store's frame differs from its source's");
+    let sky = ia.pixels().filter(|p| p.0 == ia.get_pixel(0, 0).0).count();
+    assert!(sky < ia.pixels().len(), "the frame shows terrain");
+    // The renderer's tile size (17 by default) must be the store's.
+    let other = dir.path().join("inn33.aerie");
+    let o = aerie(&["import", &s(&dem), "--out", &s(&other), "--tile-size", "33"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let c = render(&other, &dir.path().join("x.png"), &[]);
+    assert_eq!(c.status.code(), Some(2), "{}", text(&c));
+    let msg = text(&c);
+    assert!(
+        msg.contains("inn33.aerie") && msg.contains("17") && msg.contains("33"),
+        "{msg}"
+    );
+}

@@ -17,6 +17,9 @@ pub fn prepare_terrain(
     tile_size: u32,
 ) -> Result<(Arc<Dataset>, Arc<ErrorBake>), Failure> {
     let t = Instant::now();
+    if path.extension().is_some_and(|e| e == "aerie") {
+        return prepare_store(path, tile_size);
+    }
     let ds = load_dataset(path).map_err(bad_input)?;
     let hf = &ds.hf;
     let (lo, hi) = hf.min_max();
@@ -68,5 +71,32 @@ pub fn prepare_terrain(
             b
         }
     };
+    Ok((Arc::new(ds), Arc::new(b)))
+}
+
+/// A tile store (`aerie import`) read whole: its level-0 samples and its bake, checked against
+/// the header's checksum (streaming pages to the clipmap is issue 13's next step).
+fn prepare_store(path: &Path, tile_size: u32) -> Result<(Arc<Dataset>, Arc<ErrorBake>), Failure> {
+    let t = Instant::now();
+    let (ds, b) = aerie_terrain::store::load_store(path).map_err(bad_input)?;
+    if b.params.tile_size != tile_size {
+        return Err(bad_input(format!(
+            "{}: the store was imported with tiles of {} vertices, the renderer uses {tile_size}: re-import with --tile-size {tile_size}, or set render.tile_size = {}",
+            path.display(),
+            b.params.tile_size,
+            b.params.tile_size
+        )));
+    }
+    eprintln!(
+        "read store {}: {}x{} samples (padded to {}x{}), {} levels, {} ({:.2} s)",
+        path.display(),
+        ds.valid_width,
+        ds.valid_height,
+        ds.hf.width,
+        ds.hf.height,
+        b.levels.len(),
+        ds.hf.spacing_note,
+        t.elapsed().as_secs_f64()
+    );
     Ok((Arc::new(ds), Arc::new(b)))
 }

@@ -12,7 +12,7 @@ use super::exact::bake;
 use super::format::{
     file_layout, section_size, BAKE_EXTENSION, BAKE_MAGIC, BAKE_VERSION, HEADER_SIZE,
 };
-use super::table::{build_tables, level_geoms, BakeParams, ErrorBake};
+use super::table::{BakeParams, ErrorBake, MeasuredBake};
 
 /// Where the bake of a dataset lives: `<name>.aerie-bake` next to the file (the full file
 /// name is kept: `N47E011.hgt.zip` → `N47E011.hgt.zip.aerie-bake`); for a folder of tiles,
@@ -313,10 +313,7 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
             eps.push(get_f32s(bytes, o + 16, n));
         }
     }
-    let q = (m - 1) as usize;
-    let geo = level_geoms(q, width as usize, height as usize, levels);
-    let tables = build_tables(&geo, min0, max0, eps, vw as usize, vh as usize);
-    Ok(ErrorBake {
+    Ok(ErrorBake::from_measured(MeasuredBake {
         params,
         width,
         height,
@@ -325,8 +322,10 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
         spacing_x: sx,
         spacing_y: sy,
         source_checksum: get_u32(bytes, 56),
-        levels: tables,
-    })
+        min0,
+        max0,
+        eps,
+    }))
 }
 
 /// Reads a bake file made for `ds`: checks the magic, version, sizes and CRCs, then that it

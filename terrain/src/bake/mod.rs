@@ -82,7 +82,9 @@ pub use file::{
     write_bake_in, BakeOutcome, Existing,
 };
 pub use format::{BAKE_EXTENSION, BAKE_MAGIC, BAKE_VERSION, HEADER_SIZE};
-pub use table::{report_csv, BakeParams, ErrorBake, LevelStats, LevelTable, REPORT_CSV_HEADER};
+pub use table::{
+    report_csv, BakeParams, ErrorBake, LevelStats, LevelTable, MeasuredBake, REPORT_CSV_HEADER,
+};
 
 #[cfg(test)]
 mod tests;

@@ -125,7 +125,53 @@ pub struct ErrorBake {
     pub levels: Vec<LevelTable>,
 }
 
+/// What a bake measures, as a file keeps it: the grid it was made for, level-0 min/max per
+/// tile and ε per tile of every level ≥ 1 (`eps[0]` is ignored). [`ErrorBake::from_measured`]
+/// derives the rest exactly as [`bake`](super::bake) does.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeasuredBake {
+    pub params: BakeParams,
+    pub width: u32,
+    pub height: u32,
+    pub valid_width: u32,
+    pub valid_height: u32,
+    pub spacing_x: f64,
+    pub spacing_y: f64,
+    pub source_checksum: u32,
+    pub min0: Vec<f32>,
+    pub max0: Vec<f32>,
+    pub eps: Vec<Vec<f32>>,
+}
+
 impl ErrorBake {
+    /// The bake of `m`'s measurements (the tables of levels ≥ 1 derived from level 0's min/max
+    /// and the terrain flags from the real size, as [`bake`](super::bake) derives them), for
+    /// readers of files that keep only the measured part (the bake file, the tile store).
+    /// The caller has checked the table sizes against the grid.
+    pub fn from_measured(m: MeasuredBake) -> ErrorBake {
+        let q = (m.params.tile_size - 1) as usize;
+        let geo = level_geoms(q, m.width as usize, m.height as usize, m.params.levels);
+        let levels = build_tables(
+            &geo,
+            m.min0,
+            m.max0,
+            m.eps,
+            m.valid_width as usize,
+            m.valid_height as usize,
+        );
+        ErrorBake {
+            params: m.params,
+            width: m.width,
+            height: m.height,
+            valid_width: m.valid_width,
+            valid_height: m.valid_height,
+            spacing_x: m.spacing_x,
+            spacing_y: m.spacing_y,
+            source_checksum: m.source_checksum,
+            levels,
+        }
+    }
+
     pub fn level(&self, level: u32) -> &LevelTable {
         &self.levels[level as usize]
     }

@@ -63,6 +63,7 @@
 mod error;
 mod format;
 mod index;
+mod load;
 mod pages;
 mod read;
 mod source;
@@ -73,6 +74,7 @@ pub use format::{
     Coding, Layout, LevelLayout, PageEntry, PageRect, StoreHeader, DEFAULT_PAGE_TILES,
     FIXED_HEADER, INDEX_ENTRY, STORE_EXTENSION, STORE_MAGIC, STORE_VERSION,
 };
+pub use load::load_store;
 pub use pages::Page;
 pub use read::Store;
 pub use source::StoreSource;
