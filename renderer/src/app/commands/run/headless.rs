@@ -68,9 +68,11 @@ fn wait_first_pose(
         // A synchronous CIGI host waits for Start of Frame before it sends again: the IG
         // keeps its frame rate while there is nothing to draw yet.
         if let Some(ig) = ig.as_deref_mut() {
-            if Instant::now() >= next_tick {
+            let now = Instant::now();
+            if now >= next_tick {
                 ig.idle_frame();
-                next_tick += period;
+                // After a stall, one Start of Frame, not a burst catching up.
+                next_tick = (next_tick + period).max(now);
             }
         }
         if start.elapsed().as_secs_f64() >= wait_s {
