@@ -18,11 +18,15 @@ demo: setup
 	cargo build -p aerie
 	$(AERIE) render --dem $(DEM) \
 	    --camera 30500,12000,4500,0,-15,0 --size 1280x720 --out $(DEMO_OUT)-still.png
+	$(AERIE) render --dem $(DEM) --look plain \
+	    --camera 30500,12000,4500,0,-15,0 --size 1280x720 --out $(DEMO_OUT)-plain.png
+	$(AERIE) render --dem $(DEM) --sun 290,4 \
+	    --camera 30500,12000,4500,300,-5,0 --size 1280x720 --out $(DEMO_OUT)-sunset.png
 	$(AERIE) render --dem $(DEM) --debug-tiles \
 	    --camera 30500,12000,4500,0,-15,0 --size 1280x720 --out $(DEMO_OUT)-tiles.png
 	$(AERIE) fly --dem $(DEM) \
 	    --frames 24 --every 4 --size 640x360 --out $(DEMO_OUT) --overwrite
-	@echo "demo: $(DEMO_OUT)-still.png, $(DEMO_OUT)-tiles.png, $(DEMO_OUT)/frame_*.png, $(DEMO_OUT)/frames.csv, $(DEMO_OUT)/summary.json"
+	@echo "demo: $(DEMO_OUT)-still.png (the full look), $(DEMO_OUT)-plain.png (the plain look), $(DEMO_OUT)-sunset.png, $(DEMO_OUT)-tiles.png, $(DEMO_OUT)/frame_*.png, $(DEMO_OUT)/frames.csv, $(DEMO_OUT)/summary.json"
 
 # `make test` is CI's second command (after `make demo`): formatting, then every test. Clippy is
 # `make lint` (a second full compilation would double the CI time on 2 cores); run it before

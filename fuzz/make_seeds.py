@@ -2,8 +2,9 @@
 """Writes the seed inputs of the file-parser fuzz targets into corpus/<target>/ (checked in;
 `run-all.sh` grows and minimises the corpora from them). A DEM input is one byte choosing the
 file name (src/bodies.rs DEM_NAMES), one byte of sidecar length, the sidecar, then the file.
-The bake seed is a real bake of a 33 x 33 grid, made with `aerie bake` (AERIE names the
-binary, default target/debug/aerie)."""
+The bake seed is a real bake of a 33 x 33 grid, made with `aerie bake`, the store seeds a
+store of the same grid made with `aerie import` (AERIE names the binary, default
+target/debug/aerie)."""
 import io, json, os, struct, subprocess, sys, tempfile, zipfile, zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -99,6 +100,22 @@ def write(target, name, data):
         f.write(data)
 
 
+def write_store_seeds(store):
+    """A valid store, and the same cut, bare of its trailer, with a flipped page byte and with a
+    flipped bake-section byte (the trailer says where: u64 at trailer + 24)."""
+    write("store", "valid", store)
+    write("store", "cut", store[:len(store) // 2])
+    write("store", "header_only", store[:200])
+    header = struct.unpack_from("<I", store, 12)[0]
+    flipped = bytearray(store)
+    flipped[header + 10] ^= 0x10
+    write("store", "page_flipped", bytes(flipped))
+    bake_at = struct.unpack_from("<Q", store, len(store) - 48 + 24)[0]
+    flipped = bytearray(store)
+    flipped[bake_at + 5] ^= 0x10
+    write("store", "bake_flipped", bytes(flipped))
+
+
 def main():
     hgt_small = b"".join(struct.pack(">h", int(v)) for v in grid(9, 9))
     f32 = b"".join(struct.pack("<f", v) for v in grid(9, 7))
@@ -144,6 +161,12 @@ def main():
                        stdout=subprocess.DEVNULL)
         with open(out, "rb") as f:
             bake = f.read()
+        store_path = os.path.join(tmp, "dem.aerie")
+        subprocess.run([aerie, "import", dem, "--tile-size", "9", "--page-tiles", "2",
+                        "--out", store_path], check=True, stdout=subprocess.DEVNULL)
+        with open(store_path, "rb") as f:
+            store = f.read()
+    write_store_seeds(store)
     write("bake", "valid", bake)
     write("bake", "cut", bake[:len(bake) // 2])
     write("bake", "header_only", bake[:64])

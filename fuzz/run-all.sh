@@ -21,7 +21,7 @@ LOGS=$(cd "$LOGS" && pwd)
 # project folder : targets, fastest first
 PROJECTS=(
   "sim-bridge/fuzz:native xplane fgfs cigi shm recording auto"
-  "fuzz:config bake dem"
+  "fuzz:config bake store dem"
 )
 for entry in "${PROJECTS[@]}"; do
   dir=${entry%%:*}

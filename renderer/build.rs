@@ -28,6 +28,8 @@ fn main() {
         let kind = match ext {
             "vert" => shaderc::ShaderKind::Vertex,
             "frag" => shaderc::ShaderKind::Fragment,
+            "tesc" => shaderc::ShaderKind::TessControl,
+            "tese" => shaderc::ShaderKind::TessEvaluation,
             "comp" => shaderc::ShaderKind::Compute,
             _ => continue, // .glsl files are includes
         };

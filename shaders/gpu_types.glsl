@@ -7,8 +7,19 @@ struct FrameUniforms {
     vec4 sun_dir;                // xyz: unit vector towards the sun (world ENU); w: ambient term
     vec4 sky_colour;             // rgb: linear sky/haze colour; w: haze distance scale (m)
     vec4 grid_spacing;           // x: spacing E-W (m); y: spacing N-S (m); z: eye height (m); w: curvature 1/(2R) or 0
-    ivec4 grid_size;             // x, y: valid samples E-W, N-S; z: quads per tile side (m-1); w: flags (1 = debug tiles)
+    ivec4 grid_size;             // x, y: valid samples E-W, N-S; z: quads per tile side (m-1); w: flags (1 debug tiles, 2 full look, 4 class view, 8 geographic)
     ivec4 clipmap;               // x: level texture side (texels); y: level count; z, w: unused
+    // The look (render/atmosphere.rs, render/uniforms.rs): sky, sun, fog, noise anchor.
+    vec4 eye_world;              // xy: eye E, N modulo the noise period (m); z: eye height above sea level (m; on the ellipsoid, above it in the data's datum); w: fog scale height (m)
+    vec4 sun_colour;             // rgb: direct sunlight, linear (1 = overhead, clear air); w: cos of the sun disc radius
+    vec4 ambient_colour;         // rgb: sky light on the ground, linear; w: sky exposure
+    vec4 sky_sun;                // xyz: the sun the sky model sees (elevation >= 0); w: day factor (1 day, 0 night)
+    vec4 perez_a;                // Perez coefficient A for (Y, x, y); w: turbidity
+    vec4 perez_b;                // B; w: twilight tint strength (0 sun above 10 deg, 1 at the horizon)
+    vec4 perez_c;                // C
+    vec4 perez_d;                // D
+    vec4 perez_e;                // E
+    vec4 sky_zenith;             // xyz: zenith (Y, x, y) / F(0, sun zenith angle); w: fog extinction at sea level (1/m)
 };
 
 // std430, one per drawn tile instance.
@@ -23,4 +34,37 @@ struct TileInstance {
     uint slot_x;         // pool texel of this node's south-west vertex (r > 0)
     uint slot_y;
     uint slot_stride;    // pool texels between adjacent vertices: 2^(node level - (L - r))
+    // Geographic grids on the WGS84 ellipsoid (render/geo_instances.rs); all zero on the flat path.
+    vec4 geo_origin;     // xyz: node's centre vertex at h = 0 relative to the eye, world metres (f64 -> f32); w: latitude step per sample (rad), or on a projected grid samples -> u; 0 = flat
+    vec4 geo_axis_r;     // xyz: world axis of the centre's meridian frame pointing away from the polar axis; w: sin(lat0)
+    vec4 geo_axis_t;     // xyz: world axis of that frame pointing east; w: cos(lat0)
+    vec4 geo_axis_z;     // xyz: world axis of that frame along the polar axis; w: W0 = sqrt(1 - e2 sin2(lat0))
+    vec4 geo_radius;     // x: longitude step per sample (rad); y, z: N(lat0) cos(lat0) as f32 hi + lo; w: 1 = projected grid (below), 0 = geographic
+    // Projected (UTM) grids (geodesy/projected.rs NodePolynomial): a vertex at (u, v) = offset from
+    // the centre in samples times geo_origin.w, height h, is drawn at geo_origin.xyz + S(u, v) +
+    // h N(u, v), S and N cubic in (u, v) on the basis [u, v, uu, uv, vv, uuu, uuv, uvv, vvv].
+    vec4 geo_s[9];       // xyz: S's coefficients, world axes, metres; w of [0..2]: the centre's north (world axes)
+    vec4 geo_n[10];      // xyz: N's constant term, then its coefficients; w: unused
+};
+
+// Entity models (render/models.rs): one vertex of a model, in the model's body axes
+// (x forward, y right, z down), metres. Read as vertex attributes 0 and 1.
+struct EntityVertex {
+    vec4 position;       // xyz: metres; w: 1
+    vec4 normal;         // xyz: unit normal; w: 0
+};
+
+// One drawn entity (render/entity_pass.rs), read as per-instance vertex attributes 2..5.
+struct EntityInstance {
+    vec4 offset_scale;   // xyz: model origin relative to the eye, metres (f64 on CPU -> f32); w: scale
+    vec4 axis_x;         // xyz: body x (forward) in world ENU; w: tint red (linear)
+    vec4 axis_y;         // xyz: body y (right) in world ENU; w: tint green
+    vec4 axis_z;         // xyz: body z (down) in world ENU; w: tint blue
+};
+
+// Push constants of the entity pipeline.
+struct EntityPush {
+    mat4 relative_world_to_clip; // as FrameUniforms
+    vec4 sun_dir;                // as FrameUniforms
+    vec4 sky_colour;             // as FrameUniforms
 };

@@ -26,6 +26,7 @@ fn selection(c: &mut Criterion) {
         ("bounded_tau5_1080p", LodMode::Bounded, 5.0, (1920, 1080)),
         ("clipmap_1080p", LodMode::Clipmap, 1.0, (1920, 1080)),
         ("distance_1080p", LodMode::Distance, 1.0, (1920, 1080)),
+        ("cdlod_1080p", LodMode::Cdlod, 1.0, (1920, 1080)),
     ] {
         let cams = flight(side_m, 600, viewport.0, viewport.1);
         let params = SelectParams {

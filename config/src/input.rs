@@ -14,6 +14,7 @@
 //! sync_frames = 1               # frame-locked: draw host frame newest − K, 0..=63
 //! wait_pose_s = 10.0            # headless: wait this long for the first pose, s, > 0
 //! world_bound_m = 1.0e7         # local poses beyond ±this (any axis) are dropped, m, (0, 1e9]
+//! host_heights = "msl"          # the host's geodetic altitudes: msl | ellipsoidal (WGS84)
 //! ```
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
@@ -76,6 +77,43 @@ impl Serialize for InputProtocolName {
     }
 }
 
+/// The vertical datum of a host's geodetic altitudes (`[input] host_heights`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum HostHeightsName {
+    /// Above mean sea level (orthometric), as CIGI specifies: the data's own datum.
+    #[default]
+    Msl,
+    /// Above the WGS84 ellipsoid (a GNSS height).
+    Ellipsoidal,
+}
+
+impl HostHeightsName {
+    /// Every accepted spelling, for error messages.
+    pub const NAMES: &'static str = "msl, ellipsoidal";
+
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            HostHeightsName::Msl => "msl",
+            HostHeightsName::Ellipsoidal => "ellipsoidal",
+        }
+    }
+
+    /// `msl` or `ellipsoidal` (any case).
+    pub fn parse(s: &str) -> Option<Self> {
+        Some(match s.trim().to_ascii_lowercase().as_str() {
+            "msl" => HostHeightsName::Msl,
+            "ellipsoidal" => HostHeightsName::Ellipsoidal,
+            _ => return None,
+        })
+    }
+}
+
+impl Serialize for HostHeightsName {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
+}
+
 /// The `[input]` table, validated; `None` / empty: not given in the file.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct InputSettings {
@@ -103,6 +141,9 @@ pub struct InputSettings {
     /// Metres, finite, in (0, [`MAX_WORLD_BOUND_M`]]: local poses beyond ±this are dropped.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub world_bound_m: Option<f64>,
+    /// The datum of the host's geodetic altitudes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub host_heights: Option<HostHeightsName>,
 }
 
 impl InputSettings {
@@ -133,6 +174,7 @@ pub(crate) struct RawInput {
     sync_frames: Option<i64>,
     wait_pose_s: Option<f64>,
     world_bound_m: Option<f64>,
+    host_heights: Option<String>,
 }
 
 type Invalid = (&'static str, String);
@@ -165,6 +207,18 @@ impl RawInput {
                     format!(
                         "unknown protocol {p:?} (expected {})",
                         InputProtocolName::NAMES
+                    ),
+                )
+            })?),
+        };
+        let host_heights = match self.host_heights.as_deref() {
+            None => None,
+            Some(h) => Some(HostHeightsName::parse(h).ok_or_else(|| {
+                (
+                    "input.host_heights",
+                    format!(
+                        "unknown height datum {h:?} (expected {})",
+                        HostHeightsName::NAMES
                     ),
                 )
             })?),
@@ -292,6 +346,7 @@ impl RawInput {
             sync_frames,
             wait_pose_s: self.wait_pose_s,
             world_bound_m: self.world_bound_m,
+            host_heights,
         })
     }
 }

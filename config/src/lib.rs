@@ -35,8 +35,10 @@
 
 mod channels;
 mod databases;
+pub mod entities;
 mod error;
 mod input;
+pub mod landcover;
 mod limits;
 mod locate;
 mod path_de;
@@ -52,8 +54,11 @@ pub use channels::{
     PresentMode, ViewOffset,
 };
 pub use databases::{Databases, MAX_DATABASE};
+pub use entities::EntitySettings;
 pub use error::{ConfigError, Location};
-pub use input::{InputProtocolName, InputSettings, MAX_SYNC_FRAMES, MAX_WORLD_BOUND_M};
+pub use input::{
+    HostHeightsName, InputProtocolName, InputSettings, MAX_SYNC_FRAMES, MAX_WORLD_BOUND_M,
+};
 pub use limits::{MAX_CHANNELS, MAX_CONFIG_BYTES};
 pub use locate::key_location;
 pub use settings::{
@@ -77,6 +82,9 @@ pub struct RenderConfig {
     /// The `[databases]` table: CIGI database number → dataset.
     #[serde(skip_serializing_if = "Databases::is_empty")]
     pub databases: Databases,
+    /// The `[entities]` table: models of the host's other entities and their LOD.
+    #[serde(skip_serializing_if = "EntitySettings::is_default")]
+    pub entities: EntitySettings,
 }
 
 impl RenderConfig {
@@ -167,6 +175,7 @@ pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError>
     let mut raw = raw;
     let raw_channels = std::mem::take(&mut raw.channel);
     let raw_databases = std::mem::take(&mut raw.databases);
+    let raw_entities = std::mem::take(&mut raw.entities);
     if raw_channels.len() > MAX_CHANNELS {
         return Err(ConfigError::Invalid {
             source_name: source_name.to_owned(),
@@ -200,6 +209,14 @@ pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError>
             key,
             message,
         })?;
+    cfg.entities = raw_entities
+        .validate()
+        .map_err(|(key, message)| ConfigError::Invalid {
+            source_name: source_name.to_owned(),
+            location: locate::key_location(text, &key),
+            key,
+            message,
+        })?;
     Ok(cfg)
 }
 
@@ -216,6 +233,8 @@ struct RawConfig {
     channel: Vec<channels::RawChannel>,
     #[serde(default)]
     databases: std::collections::BTreeMap<String, PathBuf>,
+    #[serde(default)]
+    entities: entities::RawEntities,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -360,6 +379,7 @@ impl RawConfig {
             input,
             channels: Vec::new(),
             databases: Databases::default(),
+            entities: EntitySettings::default(),
         })
     }
 }

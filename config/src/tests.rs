@@ -304,9 +304,11 @@ fn input_table_parses_and_round_trips() {
         sync_frames = 2
         wait_pose_s = 2.5
         world_bound_m = 5e7
+        host_heights = "Ellipsoidal"
     "#;
     let cfg = parse(text, FILE).unwrap();
     let i = &cfg.input;
+    assert_eq!(i.host_heights, Some(HostHeightsName::Ellipsoidal));
     assert_eq!(i.protocol, Some(InputProtocolName::Cigi));
     assert_eq!(i.listen, Some("0.0.0.0:47900".parse().unwrap()));
     assert_eq!(i.multicast, Some("239.1.2.3".parse().unwrap()));
@@ -383,6 +385,11 @@ fn input_errors_name_the_key_line_and_reason() {
             "[input]\nworld_bound_m = 1e300\n",
             "input.world_bound_m",
             "at most 1e9, got 1e300",
+        ),
+        (
+            "[input]\nhost_heights = \"wgs84\"\n",
+            "input.host_heights",
+            "expected msl, ellipsoidal",
         ),
         (
             "[input]\nworld_bound_m = 0\n",
@@ -474,6 +481,7 @@ fn arb_config() -> impl Strategy<Value = RenderConfig> {
                     input: InputSettings::default(),
                     channels: Vec::new(),
                     databases: Default::default(),
+                    entities: Default::default(),
                 }
             },
         )

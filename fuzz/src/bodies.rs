@@ -1,5 +1,5 @@
-//! Fuzz target bodies for aerie's file parsers: the DEM loaders (`dem`), bake files (`bake`)
-//! and TOML configs (`config`). Each takes arbitrary bytes, must not panic, checks what must
+//! Fuzz target bodies for aerie's file parsers: the DEM loaders (`dem`), bake files (`bake`),
+//! tile stores (`store`) and TOML configs (`config`). Each takes arbitrary bytes, must not panic, checks what must
 //! hold for any input (a loaded grid is consistent, an error names its file on one line) and
 //! returns whether the input was accepted, so the replay test can check that the corpus gets
 //! past the first checks.
@@ -13,6 +13,7 @@ use std::sync::OnceLock;
 
 use aerie_terrain::bake::read_bake_file;
 use aerie_terrain::load_dem;
+use aerie_terrain::store::{PageId, Store};
 
 /// The file names the DEM input's first byte chooses between: one per loader (`load_dem`
 /// dispatches on the name; HGT tiles also need a tile name for their placement).
@@ -146,6 +147,66 @@ pub fn bake(b: &[u8]) -> bool {
             false
         }
     }
+}
+
+/// Pages a `store` input reads at most (a fuzzed index may claim millions).
+const STORE_PAGES: usize = 64;
+
+/// A tile store: it opens (header, trailer, index), its bake section reads into tables of the
+/// grid's sizes, and its first pages read into samples of their layout's sizes — or each
+/// error is one line naming the file. Never a panic, whatever the bytes.
+pub fn store(b: &[u8]) -> bool {
+    let path = scratch().join("dem.aerie");
+    std::fs::write(&path, b).expect("scratch write");
+    let one_line = |msg: String| {
+        assert!(!msg.contains('\n'), "multi-line error: {msg:?}");
+        assert!(
+            msg.contains("dem.aerie"),
+            "error does not name the file: {msg}"
+        );
+    };
+    let store = match Store::open(&path) {
+        Ok(s) => s,
+        Err(e) => {
+            one_line(e.to_string());
+            return false;
+        }
+    };
+    let h = store.header().clone();
+    assert!(h.valid_width <= h.width && h.valid_height <= h.height);
+    match store.read_bake() {
+        Ok(bake) => {
+            assert_eq!((bake.width, bake.height), (h.width, h.height));
+            assert_eq!(bake.levels.len() as u32, h.levels);
+            for (l, t) in bake.levels.iter().enumerate() {
+                let g = store.layout().levels[l];
+                assert_eq!((t.tiles_x, t.tiles_y), (g.tiles_x, g.tiles_y));
+                assert_eq!(t.eps.len(), (g.tiles_x * g.tiles_y) as usize);
+            }
+        }
+        Err(e) => one_line(e.to_string()),
+    }
+    let mut ok = true;
+    for e in store.pages().iter().take(STORE_PAGES) {
+        let id = PageId {
+            level: e.level,
+            px: e.px,
+            py: e.py,
+        };
+        match store.read_page(id) {
+            Ok(p) => {
+                let r = store.layout().rect(id.level, id.px, id.py);
+                assert_eq!(p.rect, r);
+                assert_eq!(p.samples.len(), r.samples());
+                assert!(p.samples.iter().all(|v| v.is_finite()), "non-finite sample");
+            }
+            Err(err) => {
+                one_line(err.to_string());
+                ok = false;
+            }
+        }
+    }
+    ok
 }
 
 /// A config file (UTF-8 or not): it parses and writes back TOML that parses to an equal value,

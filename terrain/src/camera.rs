@@ -64,6 +64,35 @@ impl Attitude {
         let down = DVec3::new(cr * st * sp - sr * cp, cr * st * cp + sr * sp, -cr * ct);
         DMat3::from_cols(forward, right, down)
     }
+
+    /// The attitude whose [`Attitude::body_to_world`] is `m` (a proper rotation, columns
+    /// forward, right, down). At ±90° pitch heading and roll turn about the same axis: the
+    /// roll is then 0 and the heading carries the whole turn.
+    pub fn from_body_to_world(m: DMat3) -> Self {
+        let (f, r, d) = (m.x_axis, m.y_axis, m.z_axis);
+        let pitch = f.z.clamp(-1.0, 1.0).asin();
+        let ct = f.x.hypot(f.y);
+        if ct < 1e-12 {
+            // roll = 0: right = (cos ψ, −sin ψ, 0).
+            return Self {
+                heading: (-r.y).atan2(r.x),
+                pitch,
+                roll: 0.0,
+            };
+        }
+        Self {
+            heading: f.x.atan2(f.y),
+            pitch,
+            roll: (-r.z).atan2(-d.z),
+        }
+    }
+
+    /// This attitude taken in a local east-north-up frame whose axes, in world coordinates,
+    /// are `frame`'s columns (e.g. the ENU frame at the aircraft's own position on the
+    /// ellipsoid), expressed in the world frame.
+    pub fn in_frame(&self, frame: DMat3) -> Self {
+        Self::from_body_to_world(frame * self.body_to_world())
+    }
 }
 
 /// A frustum as tangents of the half angles (CIGI View Definition style): left < right,

@@ -459,3 +459,42 @@ fn parse_camera_arg_errors_name_the_bad_field() {
         assert!(!msg.contains('\n'));
     }
 }
+
+#[test]
+fn attitude_back_from_its_rotation_matrix() {
+    let cases = [
+        (10.0, 20.0, 30.0),
+        (359.0, -89.0, -179.0),
+        (180.0, 45.0, 90.0),
+        (-30.0, 0.0, 0.0),
+        (77.0, 90.0, 0.0),
+        (77.0, -90.0, 0.0),
+    ];
+    for (h, p, r) in cases {
+        let a = Attitude::from_degrees(h, p, r);
+        let back = Attitude::from_body_to_world(a.body_to_world());
+        let diff = (back.body_to_world() - a.body_to_world())
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(diff < 1e-12, "({h}, {p}, {r}) -> {back:?}: {diff}");
+    }
+    // At ±90° pitch the turn is all heading.
+    let a = Attitude::from_degrees(20.0, 90.0, 30.0);
+    let back = Attitude::from_body_to_world(a.body_to_world());
+    assert_eq!(back.roll, 0.0);
+    assert!(back.body_to_world().abs_diff_eq(a.body_to_world(), 1e-9));
+}
+
+#[test]
+fn attitude_in_a_rotated_local_frame() {
+    let a = Attitude::from_degrees(30.0, 5.0, -10.0);
+    let same = a.in_frame(DMat3::IDENTITY);
+    assert!(same.body_to_world().abs_diff_eq(a.body_to_world(), 1e-12));
+    // A local frame tilted 10° about world east: level flight there has its down axis along
+    // that frame's −up, not world −z.
+    let tilt = DMat3::from_rotation_x(10f64.to_radians());
+    let level = Attitude::from_degrees(90.0, 0.0, 0.0).in_frame(tilt);
+    let down = level.body_to_world().z_axis;
+    assert!((down + tilt.z_axis).length() < 1e-12, "{down:?}");
+}

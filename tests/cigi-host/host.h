@@ -71,6 +71,8 @@ struct Options {
   int operate_frames = 10, reset_frames = 10;
   // Host frame (from the first Start of Frame) at which requests are sent.
   int request_frame = 2;
+  // traffic: host frames of entity 1's Standby window and of its destruction.
+  int standby_from = 20, standby_to = 30, destroy_frame = 60;
 };
 
 // What a host has seen, for the closing summary line.
@@ -140,3 +142,6 @@ class Link {
 // The commands (scripts.cpp).
 int run_async(Link& link);
 int run_sync(Link& link);
+
+// The `traffic` script's packets for host frame `k` (traffic.cpp).
+void traffic(Link& link, CigiOutgoingMsg& out, long k);

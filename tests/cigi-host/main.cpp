@@ -20,6 +20,7 @@ const char* const kUsage =
     "  hot     HAT/HOT requests of every type at --at points and --entity-at offsets\n"
     "  los     LOS segment and vector requests (--segment, --vector), basic and extended\n"
     "  modes   Operate, then Reset for --reset-frames host frames, then Operate again\n"
+    "  traffic other entities: created, moved, attached, clamped, in Standby, destroyed\n"
     "  sync    a synchronous host: each message only after the IG's Start of Frame\n"
     "options (every command takes the request options, so one run can serve several checks):\n"
     "  --version 3.0|3.1|3.2|3.3      CIGI version of the host session (default 3.3)\n"
@@ -37,7 +38,8 @@ const char* const kUsage =
     "  --segment LAT,LON,ALT,LAT,LON,ALT            LOS segment (repeatable)\n"
     "  --vector LAT,LON,ALT,AZ,EL,MIN,MAX           LOS vector (repeatable)\n"
     "  --operate-frames N --reset-frames M          modes: the Reset window\n"
-    "  --request-frame K              host frame after the first Start of Frame for requests\n";
+    "  --request-frame K              host frame after the first Start of Frame for requests\n"
+    "  --standby FROM,TO --destroy-frame K         traffic: entity 1's Standby window, its end\n";
 
 [[noreturn]] void bad(const std::string& why) {
   std::fprintf(stderr, "cigi-host: %s\n%s", why.c_str(), kUsage);
@@ -77,7 +79,8 @@ Options parse(int argc, char** argv) {
     std::fputs(kUsage, stdout);
     std::exit(0);
   }
-  const std::vector<std::string> commands = {"poses", "hot", "los", "modes", "sync"};
+  const std::vector<std::string> commands = {"poses", "hot", "los", "modes", "sync",
+                                                "traffic"};
   bool known = false;
   for (auto& c : commands) known |= c == o.command;
   if (!known) bad("unknown command '" + o.command + "'");
@@ -143,6 +146,12 @@ Options parse(int argc, char** argv) {
       o.operate_frames = static_cast<int>(number(f, v));
     } else if (f == "--reset-frames") {
       o.reset_frames = static_cast<int>(number(f, v));
+    } else if (f == "--destroy-frame") {
+      o.destroy_frame = static_cast<int>(number(f, v));
+    } else if (f == "--standby") {
+      auto n = numbers(f, v, 2, 2);
+      o.standby_from = static_cast<int>(n[0]);
+      o.standby_to = static_cast<int>(n[1]);
     } else if (f == "--request-frame") {
       o.request_frame = static_cast<int>(number(f, v));
     } else {

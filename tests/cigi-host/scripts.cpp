@@ -1,5 +1,5 @@
 // What the host sends, frame by frame: the asynchronous script (poses, HAT/HOT and LOS
-// requests, IG modes) and the synchronous host that sends only when a Start of Frame arrives.
+// requests, IG modes, other traffic) and the synchronous host that sends only when a Start of Frame arrives.
 #include <cmath>
 #include <cstdio>
 
@@ -192,6 +192,7 @@ int run_async(Link& link) {
                        k < o.operate_frames + o.reset_frames;
     CigiOutgoingMsg& out = link.begin(reset ? CigiBaseIGCtrl::Reset : CigiBaseIGCtrl::Operate);
     if (k >= 0) requests(link, out, k);
+    if (o.command == "traffic") traffic(link, out, k);
     link.send();
     move(link);
     next += period;

@@ -241,6 +241,35 @@ pub fn synthetic(
     }
 }
 
+/// Renders each (camera, light) of `shots` with one renderer on `ds`; validation must stay clean
+/// through teardown.
+pub fn render_lit(
+    desc: &RendererDesc,
+    ds: &Arc<Dataset>,
+    b: &Arc<ErrorBake>,
+    shots: &[(Camera, aerie::render::frame::Lighting)],
+) -> Vec<Rendered> {
+    let mut r = TerrainRenderer::new(desc).expect("create renderer");
+    r.load_terrain(Arc::clone(ds), Arc::clone(b), shots[0].0.position)
+        .expect("upload terrain");
+    let mut out = Vec::new();
+    for (cam, light) in shots {
+        r.set_lighting(*light);
+        let stats = r.render(cam).expect("render");
+        out.push(Rendered {
+            width: desc.width,
+            height: desc.height,
+            rgba: r.colour_rgba(),
+            depth: r.depth(),
+            stats,
+        });
+    }
+    let counters = r.validation_counters();
+    r.destroy();
+    assert_validation_clean(&counters);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -3,14 +3,21 @@
 //! terrains, every drawn tile's true full-resolution samples and the surface actually drawn
 //! (level L−r, the GPU's diagonal, per-vertex curvature drop interpolated linearly) project
 //! within τ pixels of each other. Also: the drawn tiles cover the visible ground exactly once.
+//! The same on geographic data drawn on the WGS84 ellipsoid (issue 14): true samples at their
+//! exact positions, the drawn surface the linear interpolation of the vertices' exact positions,
+//! at 47°N, 70°N and over a 10° region at 60°N.
 
 use aerie::camera::{Attitude, Camera, Frustum};
 use aerie::terrain::bake::{bake, BakeParams, ErrorBake};
 use aerie::terrain::clipmap::{place_levels, ClipmapDesc};
 use aerie::terrain::dataset::Dataset;
 use aerie::terrain::gen::{generate, DemKind, GenParams};
+use aerie::terrain::geodesy::wgs84::{WGS84_A, WGS84_E2};
+use aerie::terrain::geodesy::{GeoGrid, Geodetic};
+use aerie::terrain::load::geographic_spacing_m;
 use aerie::terrain::load_dem;
 use aerie::terrain::select::{select_tiles, SelectParams, Selection, EARTH_RADIUS_M};
+use aerie::terrain::GeoReference;
 use aerie::terrain::Heightfield;
 use aerie_tests::demo_dem;
 use glam::{DVec2, DVec3};
@@ -313,4 +320,368 @@ fn drawn_tiles_cover_the_visible_ground_exactly_once() {
         }
         assert!(visible > 0 || k > 0);
     }
+}
+
+/// A scene on the ellipsoid with the per-row and per-column trigonometry of its samples, so
+/// that the oracle's exact positions cost a few products each.
+struct GeoScene {
+    s: Scene,
+    grid: GeoGrid,
+    /// Per row: (N + 0)·cos φ, N·(1 − e²)·sin φ, cos φ, sin φ.
+    rows: Vec<[f64; 4]>,
+    /// Per column: cos λ, sin λ.
+    cols: Vec<[f64; 2]>,
+    /// A projected grid's samples instead: ECEF at height 0 and the unit normal, row-major.
+    samples: Vec<[DVec3; 2]>,
+}
+
+fn geo_scene(name: &'static str, mut hf: Heightfield, lat: f64, lon: f64, d: f64) -> GeoScene {
+    let (sx, sy) = geographic_spacing_m(lat + d * (hf.height - 1) as f64 / 2.0, d, d);
+    hf.spacing_x = sx;
+    hf.spacing_y = sy;
+    hf.geo = Some(GeoReference::Geographic {
+        south_lat_deg: lat,
+        west_lon_deg: lon,
+        dlat_deg: d,
+        dlon_deg: d,
+    });
+    let grid = GeoGrid::of(hf.geo.as_ref(), sx, sy).unwrap();
+    let rows = (0..hf.height)
+        .map(|r| {
+            let (sp, cp) = (lat + r as f64 * d).to_radians().sin_cos();
+            let n = WGS84_A / (1.0 - WGS84_E2 * sp * sp).sqrt();
+            [n * cp, n * (1.0 - WGS84_E2) * sp, cp, sp]
+        })
+        .collect();
+    let cols = (0..hf.width)
+        .map(|c| {
+            let (sl, cl) = (lon + c as f64 * d).to_radians().sin_cos();
+            [cl, sl]
+        })
+        .collect();
+    GeoScene {
+        s: scene(name, hf),
+        grid,
+        rows,
+        cols,
+        samples: Vec::new(),
+    }
+}
+
+/// A UTM scene: `hf` placed with its south-west sample at (easting, northing) in `crs`.
+fn utm_geo_scene(
+    name: &'static str,
+    mut hf: Heightfield,
+    crs: &str,
+    easting: f64,
+    northing: f64,
+) -> GeoScene {
+    hf.geo = Some(GeoReference::Projected {
+        crs: crs.into(),
+        easting,
+        northing,
+    });
+    let extent = DVec2::from(hf.extent_m());
+    let grid = GeoGrid::of_projected(hf.geo.as_ref(), hf.spacing_x, hf.spacing_y, extent)
+        .unwrap()
+        .unwrap();
+    let mut samples = Vec::with_capacity(hf.width * hf.height);
+    for row in 0..hf.height {
+        for c in 0..hf.width {
+            let g = DVec2::new(c as f64 * hf.spacing_x, row as f64 * hf.spacing_y);
+            let (lat, lon) = grid.lat_lon_of_grid(g);
+            let p0 = aerie::terrain::geodesy::geodetic_to_ecef(Geodetic::new(lat, lon, 0.0));
+            let p1 = aerie::terrain::geodesy::geodetic_to_ecef(Geodetic::new(lat, lon, 1.0));
+            samples.push([p0, p1 - p0]);
+        }
+    }
+    GeoScene {
+        s: scene(name, hf),
+        grid,
+        rows: Vec::new(),
+        cols: Vec::new(),
+        samples,
+    }
+}
+
+impl GeoScene {
+    /// World position of sample (col, row) at height h, exact (f64 ECEF into the world frame).
+    fn world(&self, col: usize, row: usize, h: f64) -> DVec3 {
+        if !self.samples.is_empty() {
+            let [p0, n] = self.samples[row * self.s.ds.hf.width + col];
+            return self.grid.world.ecef_to_enu(p0 + n * h);
+        }
+        let [ncp, nsp, cp, sp] = self.rows[row];
+        let [cl, sl] = self.cols[col];
+        let r = ncp + h * cp;
+        let ecef = DVec3::new(r * cl, r * sl, nsp + h * sp);
+        self.grid.world.ecef_to_enu(ecef)
+    }
+}
+
+fn random_geo_camera(rng: &mut Rng, g: &GeoScene) -> Camera {
+    let hf = &g.s.ds.hf;
+    let (ex, ey) = hf.extent_m();
+    let (x, y) = (rng.range(0.0, ex), rng.range(0.0, ey));
+    let ground = hf.height_at_m(x, y);
+    let agl = if rng.next() < 0.3 {
+        rng.range(2.0, 50.0)
+    } else {
+        rng.range(50.0, 8000.0)
+    };
+    let (lat, lon) = g.grid.lat_lon_of_grid(DVec2::new(x, y));
+    let attitude = Attitude::from_degrees(
+        rng.range(0.0, 360.0),
+        rng.range(-70.0, 10.0),
+        rng.range(-30.0, 30.0),
+    )
+    .in_frame(g.grid.local_enu_axes(lat, lon));
+    let fov = rng.range(40.0, 110.0);
+    Camera::new(
+        g.grid
+            .world_of_geodetic(Geodetic::new(lat, lon, ground + agl)),
+        attitude,
+        Frustum::symmetric(fov.to_radians(), W, H),
+    )
+}
+
+fn select_geo(g: &GeoScene, cam: &Camera, tau: f64) -> Selection {
+    let hf = &g.s.ds.hf;
+    let eye = g.grid.grid_of_world(cam.position);
+    let placements = place_levels(&g.s.clip, [eye.x / hf.spacing_x, eye.y / hf.spacing_y]);
+    let params = SelectParams {
+        tau_px: tau,
+        max_refinement: 6,
+        earth: Some(g.grid),
+        ..SelectParams::default()
+    };
+    let mut sel = Selection::default();
+    select_tiles(
+        &g.s.bake,
+        &g.s.clip,
+        &placements,
+        cam,
+        (W, H),
+        &params,
+        &mut sel,
+    );
+    sel
+}
+
+/// [`tile_error_px`] on the ellipsoid: each true sample at its exact position; the drawn
+/// point at that sample is the GPU's interpolation (SW–NE diagonal) of the level's vertices,
+/// each at its exact position.
+fn geo_tile_error_px(g: &GeoScene, cam: &Camera, level: u32, tx: u32, ty: u32) -> f64 {
+    let hf = &g.s.ds.hf;
+    let q = (M - 1) as usize;
+    let side = q << level;
+    let step = 1usize << level;
+    let (c0, r0) = (tx as usize * side, ty as usize * side);
+    let vertex = |c: usize, row: usize| g.world(c, row, hf.at(c, row) as f64);
+    let on_screen = |p: DVec2| p.x >= 0.0 && p.x <= W as f64 && p.y >= 0.0 && p.y <= H as f64;
+    let mut worst: f64 = 0.0;
+    for row in r0..=(r0 + side).min(hf.height - 1) {
+        for c in c0..=(c0 + side).min(hf.width - 1) {
+            let truth = vertex(c, row);
+            let (ci, ri) = (
+                ((c - c0) / step).min(side / step - 1),
+                ((row - r0) / step).min(side / step - 1),
+            );
+            let (vc, vr) = (c0 + ci * step, r0 + ri * step);
+            let u = (c - vc) as f64 / step as f64;
+            let v = (row - vr) as f64 / step as f64;
+            let sw = vertex(vc, vr);
+            let se = vertex(vc + step, vr);
+            let nw = vertex(vc, vr + step);
+            let ne = vertex(vc + step, vr + step);
+            let drawn = if u >= v {
+                sw * (1.0 - u) + se * (u - v) + ne * v
+            } else {
+                sw * (1.0 - v) + nw * (v - u) + ne * u
+            };
+            let a = cam.project_px(truth, W, H);
+            let b = cam.project_px(drawn, W, H);
+            if let (Some((pa, _)), Some((pb, _))) = (a, b) {
+                if on_screen(pa) || on_screen(pb) {
+                    worst = worst.max((pa - pb).length());
+                }
+            }
+        }
+    }
+    worst
+}
+
+/// The oracle over `cameras` random cameras on `scenes`: returns (tiles, refined) checked.
+fn geodetic_oracle(scenes: &[GeoScene], cameras: usize, seed: u64, what: &str) -> (u64, u64) {
+    let tau = 1.0;
+    let mut rng = Rng(seed);
+    let (mut tiles_checked, mut refined_checked) = (0u64, 0u64);
+    let mut worst_ratio: f64 = 0.0;
+    for k in 0..cameras {
+        let g = &scenes[k % scenes.len()];
+        let cam = random_geo_camera(&mut rng, g);
+        let sel = select_geo(g, &cam, tau);
+        assert_eq!(
+            sel.unbounded, 0,
+            "{}: camera {k} has unbounded tiles",
+            g.s.name
+        );
+        let n = sel.items.len();
+        for _ in 0..n.min(6) {
+            let item = sel.items[(rng.next() * n as f64) as usize % n];
+            let err = geo_tile_error_px(g, &cam, item.node_level, item.node_tx, item.node_ty);
+            assert!(
+                err <= tau + 1e-6,
+                "{}: camera {k} {:?}: node L{} ({}, {}) of tile L{} r{} projects {err:.4} px > τ (bound said {:.4})",
+                g.s.name,
+                cam.position,
+                item.node_level,
+                item.node_tx,
+                item.node_ty,
+                item.level,
+                item.refinement,
+                item.rho_px
+            );
+            assert!(
+                err <= item.rho_px as f64 + 1e-6,
+                "measured {err} > bound {}",
+                item.rho_px
+            );
+            if item.rho_px > 0.0 {
+                worst_ratio = worst_ratio.max(err / item.rho_px as f64);
+            }
+            tiles_checked += 1;
+            refined_checked += (item.refinement > 0) as u64;
+        }
+    }
+    eprintln!(
+        "{what} bound oracle: {tiles_checked} tiles ({refined_checked} refined) within τ; tightest measured/bound = {worst_ratio:.3}"
+    );
+    (tiles_checked, refined_checked)
+}
+
+#[test]
+fn every_drawn_geodetic_tile_is_within_tau_for_a_thousand_random_cameras() {
+    let scenes = [
+        // The Inn valley crop where SRTM has it (its south-west sample 88 rows and columns in).
+        geo_scene(
+            "alpine 47°N",
+            alpine(),
+            47.0 + 88.0 / 1200.0,
+            11.0 + 88.0 / 1200.0,
+            1.0 / 1200.0,
+        ),
+        // High latitude: a longitude step is a third of a latitude step.
+        geo_scene(
+            "cliffs 70°N",
+            generated(DemKind::Cliffs, 7),
+            70.0,
+            -20.0,
+            1.0 / 1200.0,
+        ),
+        // A 10° region across the seam at 60°S: nodes of degrees, the normal turning 10°.
+        geo_scene(
+            "ridged 10° 60°S seam",
+            generated(DemKind::Ridged, 3),
+            -65.0,
+            175.0,
+            0.01,
+        ),
+    ];
+    let (tiles, refined) = geodetic_oracle(&scenes, 1002, 1414, "geodetic");
+    assert!(tiles > 3000 && refined > 300, "{tiles} / {refined}");
+}
+
+/// The same on UTM grids: one straddling zone 32's western edge at 46.5° N (30 m), one of
+/// 123 km at 120 m near 70° N, one in a southern zone.
+#[test]
+fn every_drawn_utm_tile_is_within_tau_for_random_cameras() {
+    let mut wide = generated(DemKind::Ridged, 3);
+    wide.spacing_x = 120.0;
+    wide.spacing_y = 120.0;
+    let scenes = [
+        utm_geo_scene(
+            "alpine UTM 32N zone edge",
+            alpine_utm(),
+            "EPSG:32632",
+            255_000.0,
+            5_150_000.0,
+        ),
+        utm_geo_scene(
+            "ridged UTM 33N 70°N",
+            wide,
+            "EPSG:32633",
+            420_000.0,
+            7_760_000.0,
+        ),
+        utm_geo_scene(
+            "cliffs UTM 19S",
+            generated(DemKind::Cliffs, 7),
+            "EPSG:32719",
+            600_000.0,
+            6_200_000.0,
+        ),
+    ];
+    let (tiles, refined) = geodetic_oracle(&scenes, 501, 3232, "UTM");
+    assert!(tiles > 1500 && refined > 150, "{tiles} / {refined}");
+}
+
+/// The alpine crop on a 30 m grid (a UTM GeoTIFF's spacing).
+fn alpine_utm() -> Heightfield {
+    let mut hf = alpine();
+    hf.spacing_x = 30.0;
+    hf.spacing_y = 30.0;
+    hf
+}
+
+/// The drawn tiles of a geographic selection cover the visible ground exactly once, also on a
+/// 10° region where the ground bends away by kilometres.
+#[test]
+fn geodetic_tiles_cover_the_visible_ground_exactly_once() {
+    let g = geo_scene(
+        "ridged 10° 60°N",
+        generated(DemKind::Ridged, 3),
+        55.0,
+        10.0,
+        0.01,
+    );
+    let hf = &g.s.ds.hf;
+    let q = (M - 1) as usize;
+    let mut rng = Rng(9);
+    let mut visible_total = 0;
+    for k in 0..12 {
+        let cam = random_geo_camera(&mut rng, &g);
+        let sel = select_geo(&g, &cam, 1.0);
+        let mut count = vec![0u8; (hf.width - 1) * (hf.height - 1)];
+        for item in &sel.items {
+            let side = q << item.node_level;
+            let (c0, r0) = (item.node_tx as usize * side, item.node_ty as usize * side);
+            for row in r0..(r0 + side).min(hf.height - 1) {
+                for c in c0..(c0 + side).min(hf.width - 1) {
+                    count[row * (hf.width - 1) + c] += 1;
+                }
+            }
+        }
+        assert!(
+            count.iter().all(|&n| n <= 1),
+            "camera {k}: overlapping tiles"
+        );
+        for row in 0..hf.height - 1 {
+            for c in 0..hf.width - 1 {
+                let p = g.world(c, row, hf.at(c, row) as f64);
+                let Some((px, _)) = cam.project_px(p, W, H) else {
+                    continue;
+                };
+                if px.x >= 0.0 && px.x <= W as f64 && px.y >= 0.0 && px.y <= H as f64 {
+                    visible_total += 1;
+                    assert_eq!(
+                        count[row * (hf.width - 1) + c],
+                        1,
+                        "camera {k}: visible cell ({c}, {row}) is not drawn"
+                    );
+                }
+            }
+        }
+    }
+    assert!(visible_total > 1000, "{visible_total}");
 }

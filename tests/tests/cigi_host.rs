@@ -256,19 +256,21 @@ fn check_poses(r: &IgRun, moving: bool, p: &mut Problems) {
         p.check(row["extrapolated"] == "0", || {
             format!("row {row:?} extrapolated")
         });
-        let want = t.local(f(&m["lat"]), f(&m["lon"]), f(&m["alt"]));
+        // The eye at exactly the sent point, the attitude taken there (issue 14).
+        let (lat, lon) = (f(&m["lat"]), f(&m["lon"]));
+        let want = t.world(lat, lon, f(&m["alt"]));
         for (k, w) in ["x_m", "y_m", "z_m"].into_iter().zip(want.to_array()) {
             p.check((num(k) - w).abs() <= 1e-3, || {
                 format!("host frame {hf}: {k} {} vs sent {w}", num(k))
             });
         }
-        for (k, s) in [
-            ("heading_deg", "yaw"),
-            ("pitch_deg", "pitch"),
-            ("roll_deg", "roll"),
-        ] {
-            p.check(angle_diff(num(k), f(&m[s])) <= 1e-3, || {
-                format!("host frame {hf}: {k} {} vs sent {}", num(k), m[s])
+        let att = t.world_attitude(lat, lon, ["yaw", "pitch", "roll"].map(|s| f(&m[s])));
+        for (k, w) in ["heading_deg", "pitch_deg", "roll_deg"]
+            .into_iter()
+            .zip(att)
+        {
+            p.check(angle_diff(num(k), w) <= 1e-3, || {
+                format!("host frame {hf}: {k} {} vs sent (world) {w}", num(k))
             });
         }
         for (k, s) in [("lat_deg", "lat"), ("lon_deg", "lon")] {

@@ -12,9 +12,10 @@ use std::path::{Path, PathBuf};
 type Body = fn(&[u8]) -> bool;
 
 /// Target name (= `fuzz/fuzz_targets/<name>.rs`, `fuzz/corpus/<name>/`) and body.
-const TARGETS: [(&str, Body); 3] = [
+const TARGETS: [(&str, Body); 4] = [
     ("dem", bodies::dem),
     ("bake", bodies::bake),
+    ("store", bodies::store),
     ("config", bodies::config),
 ];
 

@@ -3,7 +3,7 @@
 //! and uploads split across submissions by the staging budget.
 
 use aerie::camera::{Attitude, Camera, Frustum};
-use aerie::render::frame::{RendererDesc, TerrainRenderer, SKY_LINEAR};
+use aerie::render::frame::{Look, RendererDesc, TerrainRenderer, SKY_LINEAR};
 use aerie::terrain::load_dem;
 use aerie::terrain::select::{LodMode, SelectParams};
 use aerie_tests::*;
@@ -133,6 +133,8 @@ fn flat_plane_depth_matches_f64_ray_cast() {
     ];
     let mut desc = test_desc(W, H);
     desc.select.curvature = false;
+    // The plain look clears the sky to one colour (the full look's sky: tests/look.rs).
+    desc.look = Look::Plain;
     let frames = render_frames(&desc, &hf, &cams);
     for (cam, f) in cams.iter().zip(&frames) {
         let (ex, ey) = hf.extent_m();

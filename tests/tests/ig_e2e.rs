@@ -302,9 +302,16 @@ fn database_number_switches_datasets_and_the_host_sets_the_light() {
         .iter()
         .map(|v| v.as_f64().unwrap())
         .collect();
+    // The terrain is lit in world axes, ENU at the tile's south-west corner (47°N 11°E): the
+    // sun at the aircraft turned into them.
+    let axes = |lat: f64, lon: f64| {
+        aerie_sim_bridge::LocalTangentPlane::new(aerie_sim_bridge::Geodetic::new(lat, lon, 0.0))
+            .enu_axes()
+    };
+    let world = axes(47.0, 11.0).transpose() * axes(LAT, LON) * glam::DVec3::from_array(expect);
     for k in 0..3 {
         // f32 in the uniforms; the eye is within metres of (LAT, LON).
-        assert!((sun[k] - expect[k]).abs() < 1e-4, "{sun:?} vs {expect:?}");
+        assert!((sun[k] - world[k]).abs() < 1e-4, "{sun:?} vs {world:?}");
     }
     // Midsummer noon-ish at 47°N: high in the south.
     assert!(expect[2] > 0.8 && expect[1] < 0.0, "{expect:?}");

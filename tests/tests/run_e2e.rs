@@ -386,7 +386,7 @@ fn extrapolated_poses_follow_the_flight_to_the_display_time() {
 }
 
 #[test]
-fn cigi_geodetic_poses_land_on_the_dataset_grid() {
+fn cigi_geodetic_poses_land_at_their_exact_point() {
     let dir = tempfile::tempdir().unwrap();
     let dem = demo_dem();
     let port = free_port();
@@ -418,23 +418,23 @@ fn cigi_geodetic_poses_land_on_the_dataset_grid() {
     );
     let w = Waypoints::parse(WAYPOINTS, "flight.csv").unwrap();
     let ltp = LocalTangentPlane::new(Geodetic::new(lat0, lon0, 0.0));
-    // The dataset's grid, restated: x = Δlon / dlon · spacing_x, y = Δlat / dlat · spacing_y.
+    // The dataset is drawn on the ellipsoid in the ENU frame at its south-west sample — the
+    // sender's frame here —, so each pose lands on the waypoint itself, and its attitude (taken
+    // at the aircraft's own position) turns by the local frame's angle to the origin's.
     let ds = aerie::terrain::dataset::load_dataset(&dem).unwrap();
-    let (sx, sy) = (ds.hf.spacing_x, ds.hf.spacing_y);
-    let step = 1.0 / 1200.0; // SRTM3
+    let grid =
+        aerie::terrain::geodesy::GeoGrid::of(ds.hf.geo.as_ref(), ds.hf.spacing_x, ds.hf.spacing_y)
+            .unwrap();
     let geodetic = |t: f64| {
         let (p, _) = w.pose_at(t);
         ltp.enu_to_geodetic(p)
     };
     check_rows(&rows, &summary, |t| {
         let g = geodetic(t);
-        let (_, a) = w.pose_at(t);
+        let (p, a) = w.pose_at(t);
+        let a = a.in_frame(grid.local_enu_axes(g.lat_deg, g.lon_deg));
         Expected {
-            position: [
-                (g.lon_deg - lon0) / step * sx,
-                (g.lat_deg - lat0) / step * sy,
-                g.alt_m,
-            ],
+            position: p.to_array(),
             attitude: [a.heading, a.pitch, a.roll].map(f64::to_degrees),
         }
     });

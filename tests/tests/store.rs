@@ -206,7 +206,7 @@ fn import_and_info_on_the_demo_dem() {
     assert_eq!(eps, want);
     let o = aerie(&["info", out_s]);
     assert!(
-        o.status.success() && text(&o).contains("format version 1"),
+        o.status.success() && text(&o).contains("format version 2"),
         "{}",
         text(&o)
     );
@@ -346,4 +346,102 @@ fn render_from_a_store_draws_the_same_image_as_its_source() {
         msg.contains("inn33.aerie") && msg.contains("17") && msg.contains("33"),
         "{msg}"
     );
+}
+
+/// The store-reader fuzz target's body, replayed on seeded random damage of the valid seed in
+/// the normal test suite (the fuzzer itself needs cargo-fuzz; `fuzz_corpus.rs` replays the
+/// corpus).
+#[path = "../../fuzz/src/bodies.rs"]
+#[allow(dead_code)]
+mod bodies;
+
+#[test]
+fn the_store_reader_survives_random_damage_without_a_panic() {
+    let seed = aerie_tests::repo_root().join("fuzz/corpus/store/seed_valid");
+    let good = std::fs::read(&seed).unwrap();
+    assert!(bodies::store(&good), "the valid seed reads");
+    let mut x = 0x2545_f491_4f6c_dd1du64;
+    let mut next = |n: usize| {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x % n as u64) as usize
+    };
+    let mut refused = 0;
+    for k in 0..3000 {
+        let mut b = good.clone();
+        match k % 4 {
+            // One to four flipped bytes anywhere.
+            0 | 1 => {
+                for _ in 0..1 + next(4) {
+                    let at = next(b.len());
+                    b[at] ^= 1 << next(8);
+                }
+            }
+            // Cut anywhere.
+            2 => b.truncate(next(good.len())),
+            // A run of bytes overwritten with one value (sizes and offsets made huge or zero).
+            _ => {
+                let at = next(b.len());
+                let v = [0u8, 0xff, 0x7f, 0x80][next(4)];
+                for c in b.iter_mut().skip(at).take(1 + next(12)) {
+                    *c = v;
+                }
+            }
+        }
+        let r = std::panic::catch_unwind(|| bodies::store(&b));
+        match r {
+            Ok(ok) => refused += usize::from(!ok),
+            Err(_) => panic!("damage case {k} panics the store reader"),
+        }
+    }
+    assert!(refused > 2500, "{refused} of 3000 damaged stores refused");
+}
+
+/// The demo DEM imported and streamed: every rectangle of every level gathered through a warm
+/// `StreamedStore` equals the in-memory source of the file it was imported from.
+#[test]
+fn the_demo_dem_streamed_from_its_store_gathers_as_in_memory() {
+    use aerie::terrain::source::{InMemoryTerrain, SampleRect, TerrainSource};
+    use aerie::terrain::stream::{StreamParams, StreamedStore};
+    let dir = tempfile::tempdir().unwrap();
+    let ds = load_dataset(&aerie_tests::demo_dem()).unwrap();
+    let out = dir.path().join("inn.aerie");
+    let store = import(&ds, &out);
+    let levels = store.header().levels;
+    drop(store);
+    let mem = InMemoryTerrain::new(std::sync::Arc::new(ds));
+    let (s, bake_back) = StreamedStore::open(&out, StreamParams::default()).unwrap();
+    assert_eq!(bake_back.levels.len() as u32, levels);
+    let (w, h) = (mem.grid().width as i64, mem.grid().height as i64);
+    let mut x = 88172645463325252u64;
+    let mut next = |n: i64| {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x % n as u64) as i64
+    };
+    for k in 0..300 {
+        let level = next(i64::from(levels)) as u32;
+        let step = 1i64 << level;
+        let origin = [
+            (next(w + 64) - 32) & !(step - 1),
+            (next(h + 64) - 32) & !(step - 1),
+        ];
+        let r = SampleRect {
+            level,
+            origin,
+            size: [1 + next(130) as u32, 1 + next(20) as u32],
+        };
+        s.wait_resident(&[r], std::time::Duration::from_secs(30))
+            .unwrap();
+        let (mut a, mut b) = (vec![0f32; r.len()], vec![0f32; r.len()]);
+        s.gather(&r, &mut a).unwrap();
+        mem.gather(&r, &mut b).unwrap();
+        assert!(
+            a.iter().zip(&b).all(|(p, q)| p.to_bits() == q.to_bits()),
+            "rect {k}: {r:?}"
+        );
+    }
+    assert_eq!(s.stats().failed, 0);
 }

@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::app::failure::{bad_input, Failure};
+use crate::render::uniforms::Look;
 use crate::sim::flight::Waypoints;
 use aerie_terrain::select::LodMode;
 
@@ -29,9 +30,14 @@ pub struct GpuArgs {
     #[arg(long, default_value_t = 1.0)]
     pub tau: f64,
     /// Level-of-detail decision: bounded (ours), clipmap (no refinement), full (brute force),
-    /// distance (discrete LOD by distance with 10 % hysteresis).
+    /// distance (discrete LOD by distance with 10 % hysteresis), cdlod (Strugar 2009), tess
+    /// (hardware tessellation by a density map × distance, document 001).
     #[arg(long, value_enum, default_value_t = LodArg::Bounded)]
     pub lod: LodArg,
+    /// `--lod tess`: scale of the global tessellation factor (1: an edge of density 1 at the
+    /// eye gets 32 segments, the full resolution of a 32-sample patch).
+    #[arg(long, default_value_t = 1.0)]
+    pub tess_density: f64,
     /// Clipmap patch side n in vertices (129 or 257; n = P(m−1)+1).
     #[arg(long, default_value_t = 129)]
     pub patch: u32,
@@ -41,6 +47,99 @@ pub struct GpuArgs {
     /// Draw a flat Earth (no curvature drop).
     #[arg(long)]
     pub no_curvature: bool,
+    /// Shading: full (land cover derived from the terrain, sky with the sun, aerial
+    /// perspective), plain (colour ramp, flat sky: the cost baseline) or classes (the land-cover
+    /// classes' flat colours).
+    #[arg(long, value_enum, default_value_t = LookArg::Full)]
+    pub look: LookArg,
+    /// Light level tiles with normal maps computed from the full-resolution heights (on), or
+    /// with the drawn level's per-vertex normals (off: the before/after and the cost).
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub normal_maps: Switch,
+    #[command(flatten)]
+    pub drape: DrapeArgs,
+    /// Bounded: drop tiles hidden behind nearer terrain (a conservative CPU horizon).
+    #[arg(long, value_enum, default_value_t = Switch::Off)]
+    pub horizon_cull: Switch,
+}
+
+/// A feature turned on or off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Switch {
+    On,
+    Off,
+}
+
+impl Switch {
+    pub fn on(self) -> bool {
+        self == Switch::On
+    }
+}
+
+/// Rasters draped on the terrain (issue 17), registered by their geo-reference.
+#[derive(Debug, Clone, Default, Args)]
+pub struct DrapeArgs {
+    /// 8-bit GeoTIFF imagery (RGB, RGBA or grey; geographic WGS84 or UTM) draped on the
+    /// terrain; several files: later ones on top.
+    #[arg(long, num_args = 1..)]
+    pub imagery: Vec<PathBuf>,
+    /// 8-bit GeoTIFF of land-cover class codes replacing the derived classes where it has one.
+    #[arg(long)]
+    pub landcover: Option<PathBuf>,
+    /// The land-cover codes' meaning: worldcover, corine, or a TOML file with a [landcover]
+    /// table (a preset and/or [landcover.codes]).
+    #[arg(long, default_value = "worldcover")]
+    pub landcover_map: String,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum LookArg {
+    Full,
+    Plain,
+    Classes,
+    /// The shading normal as colour (checking the normal maps).
+    Normals,
+}
+
+impl LookArg {
+    pub fn look(self) -> Look {
+        match self {
+            LookArg::Full => Look::Full,
+            LookArg::Plain => Look::Plain,
+            LookArg::Classes => Look::Classes,
+            LookArg::Normals => Look::Normals,
+        }
+    }
+}
+
+/// How a tile store given as `--dem <name>.aerie` is read: streamed page by page within a
+/// page-cache budget (the default), or read whole into memory (for comparisons).
+#[derive(Debug, Clone, Args)]
+pub struct StoreArgs {
+    /// Page cache of a streamed tile store, MiB of decoded pages (never exceeded).
+    #[arg(long, default_value_t = 1024)]
+    pub cache_mb: u64,
+    /// Read a tile store whole into memory instead of streaming it.
+    #[arg(long)]
+    pub load_whole: bool,
+    /// Worker threads reading and decoding a streamed store's pages.
+    #[arg(long, default_value_t = 2)]
+    pub stream_workers: usize,
+    /// Measurement hook: every read of a streamed store sleeps this long first (a slow or
+    /// remote disk), to show that frames keep coming and only late tiles grow.
+    #[arg(long, hide = true, default_value_t = 0)]
+    pub stream_latency_ms: u64,
+}
+
+impl Default for StoreArgs {
+    fn default() -> Self {
+        StoreArgs {
+            cache_mb: 1024,
+            load_whole: false,
+            stream_workers: 2,
+            stream_latency_ms: 0,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -49,6 +148,8 @@ pub enum LodArg {
     Clipmap,
     Full,
     Distance,
+    Cdlod,
+    Tess,
 }
 
 impl LodArg {
@@ -58,6 +159,8 @@ impl LodArg {
             LodArg::Clipmap => LodMode::Clipmap,
             LodArg::Full => LodMode::Full,
             LodArg::Distance => LodMode::Distance,
+            LodArg::Cdlod => LodMode::Cdlod,
+            LodArg::Tess => LodMode::Tessellation,
         }
     }
 }
@@ -208,6 +311,8 @@ mod tests {
         assert_eq!(LodArg::Clipmap.mode(), LodMode::Clipmap);
         assert_eq!(LodArg::Full.mode(), LodMode::Full);
         assert_eq!(LodArg::Distance.mode(), LodMode::Distance);
+        assert_eq!(LodArg::Cdlod.mode(), LodMode::Cdlod);
+        assert_eq!(LodArg::Tess.mode(), LodMode::Tessellation);
     }
 
     #[test]

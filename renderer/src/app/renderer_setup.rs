@@ -2,9 +2,13 @@
 //! every configuration of `bench`), and the checks of the size, field of view and patch side
 //! that come with it.
 
-use crate::app::args::GpuArgs;
+use std::sync::Arc;
+
+use crate::app::args::{DrapeArgs, GpuArgs};
 use crate::app::failure::{bad_input, Failure};
+use crate::render::drape_textures::{DrapeInput, SharedDrapeInput};
 use crate::render::frame::RendererDesc;
+use crate::render::uniforms::Look;
 use crate::vk::DeviceDesc;
 use aerie_config::parse_size;
 use aerie_terrain::camera::Frustum;
@@ -62,6 +66,10 @@ pub struct RendererChoice {
     pub tau_px: f64,
     pub curvature: bool,
     pub debug_tiles: bool,
+    pub look: Look,
+    pub normal_maps: bool,
+    /// Bounded: drop tiles hidden behind nearer terrain.
+    pub horizon_cull: bool,
 }
 
 /// The offscreen renderer for `c`: validation always on in debug builds; `full` gets pools
@@ -84,6 +92,8 @@ pub fn renderer_desc(c: &RendererChoice) -> RendererDesc {
             defaults.pool_capacity
         },
         debug_tiles: c.debug_tiles,
+        look: c.look,
+        normal_maps: c.normal_maps,
         select: SelectParams {
             mode: c.mode,
             tau_px: c.tau_px,
@@ -93,6 +103,7 @@ pub fn renderer_desc(c: &RendererChoice) -> RendererDesc {
             } else {
                 SelectParams::default().max_refinement
             },
+            horizon_cull: c.horizon_cull,
             ..SelectParams::default()
         },
         ..defaults
@@ -116,7 +127,13 @@ pub fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
         )));
     }
     let patch_tiles = patch_tiles(g.patch)?;
-    let desc = renderer_desc(&RendererChoice {
+    if !(g.tess_density.is_finite() && g.tess_density > 0.0) {
+        return Err(bad_input(format!(
+            "--tess-density: {} must be a positive number",
+            g.tess_density
+        )));
+    }
+    let mut desc = renderer_desc(&RendererChoice {
         gpu: g.gpu.clone(),
         validate: g.validate,
         width: view.width,
@@ -126,8 +143,47 @@ pub fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
         tau_px: g.tau,
         curvature: !g.no_curvature,
         debug_tiles: g.debug_tiles,
+        look: g.look.look(),
+        normal_maps: g.normal_maps.on(),
+        horizon_cull: g.horizon_cull.on(),
     });
+    desc.drape = drape_input(&g.drape)?;
+    desc.select.tess_density *= g.tess_density;
     Ok(Setup { view, desc })
+}
+
+/// Reads the rasters `--imagery` and `--landcover` name and the land-cover code table; a bad
+/// file is bad input naming it (its registration onto the terrain comes when it is loaded).
+pub fn drape_input(a: &DrapeArgs) -> Result<Option<SharedDrapeInput>, Failure> {
+    use aerie_config::landcover::{parse_landcover, LandcoverMap, Preset};
+    use aerie_terrain::drape::read_raster;
+    if a.imagery.is_empty() && a.landcover.is_none() {
+        return Ok(None);
+    }
+    let read = |p: &std::path::Path| read_raster(p).map_err(|e| bad_input(e.to_string()));
+    let imagery = a
+        .imagery
+        .iter()
+        .map(|p| read(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let landcover = a.landcover.as_deref().map(read).transpose()?;
+    let map = match Preset::parse(&a.landcover_map) {
+        Some(p) => LandcoverMap::preset(p),
+        None => {
+            let text = std::fs::read_to_string(&a.landcover_map).map_err(|e| {
+                bad_input(format!(
+                    "--landcover-map: {}: {e} (worldcover, corine or a TOML file)",
+                    a.landcover_map
+                ))
+            })?;
+            parse_landcover(&text, &a.landcover_map).map_err(bad_input)?
+        }
+    };
+    Ok(Some(Arc::new(DrapeInput {
+        imagery,
+        landcover,
+        table: map.table(),
+    })))
 }
 
 #[cfg(test)]
@@ -145,6 +201,9 @@ mod tests {
             tau_px: 0.5,
             curvature: false,
             debug_tiles: true,
+            look: Look::Classes,
+            normal_maps: false,
+            horizon_cull: true,
         }
     }
 
@@ -157,9 +216,12 @@ mod tests {
         assert!(!d.device.swapchain);
         assert_eq!((d.width, d.height, d.patch_tiles), (320, 200, 16));
         assert!(d.debug_tiles);
+        assert_eq!(d.look, Look::Classes);
+        assert!(!d.normal_maps && RendererDesc::default().normal_maps);
         assert_eq!(d.select.mode, LodMode::Bounded);
         assert_eq!(d.select.tau_px, 0.5);
         assert!(!d.select.curvature);
+        assert!(d.select.horizon_cull);
         assert_eq!(d.pool_capacity, defaults.pool_capacity);
         assert_eq!(
             d.select.max_refinement,

@@ -1,7 +1,10 @@
 //! What a renderer is made with: size, budgets, tile and clipmap shape, pools, LOD parameters.
 
+use aerie_terrain::clipmap::ClipmapDesc;
 use aerie_terrain::select::{SelectParams, MAX_REFINEMENT};
+use aerie_terrain::source::SampleRect;
 
+use crate::render::uniforms::Look;
 use crate::vk::DeviceDesc;
 
 /// Vertices per tile side (m = 2^j + 1). DESIGN.md default.
@@ -30,6 +33,11 @@ pub struct RendererDesc {
     pub select: SelectParams,
     /// Colour tiles by level and refinement (the seed's figure 3).
     pub debug_tiles: bool,
+    /// Shading: plain, full (land cover, sky, aerial perspective) or the class view.
+    pub look: Look,
+    /// Keep normal maps of the full-resolution heights for the level textures and light level
+    /// tiles with them (`render/normal_map.rs`); off: per-vertex normals of the drawn level.
+    pub normal_maps: bool,
     /// Skirt depth = factor × ½(ε + the largest of ε and its edge neighbours' ε) + minimum
     /// (metres): at the default 2, ε + max(ε, neighbours' ε), which closes the cracks a
     /// neighbour drawn at another level can open (`select::neighbour_eps`). Must be ≥ 1.
@@ -37,6 +45,8 @@ pub struct RendererDesc {
     pub skirt_min_m: f32,
     /// Prefetch looks this many frames ahead along the eye's motion.
     pub prefetch_frames: f64,
+    /// Imagery and a land-cover raster draped on the terrain (registered when it is loaded).
+    pub drape: Option<crate::render::drape_textures::SharedDrapeInput>,
 }
 
 impl Default for RendererDesc {
@@ -51,17 +61,72 @@ impl Default for RendererDesc {
             tile_size: DEFAULT_TILE_SIZE,
             patch_tiles: 8,
             margin_tiles: 2,
-            pool_capacity: [256, 128, 48, 32, 16, 0],
+            // r = 5: a 1,000 km flight 300 m above ridged terrain (1920×1080, τ = 1) draws up
+            // to 32 such ring tiles in one frame; 16 slots left ~7 of them late every frame
+            // (5.8 % of tile-frames there). 40 slots (1 MiB each) keep 8 for prefetch.
+            pool_capacity: [256, 128, 48, 32, 40, 0],
             select: SelectParams::default(),
             debug_tiles: false,
+            look: Look::default(),
+            normal_maps: true,
             skirt_factor: 2.0,
             skirt_min_m: 1.0,
             prefetch_frames: 20.0,
+            drape: None,
         }
     }
 }
 
 impl RendererDesc {
+    /// The clipmap this renderer lays over `grid`.
+    pub fn clipmap(&self, grid: &aerie_terrain::source::SourceGrid) -> ClipmapDesc {
+        ClipmapDesc {
+            tile_quads: self.tile_size - 1,
+            patch_tiles: self.patch_tiles,
+            margin_tiles: self.margin_tiles,
+            width: grid.width,
+            height: grid.height,
+        }
+    }
+
+    /// The sample rectangles the first frame draws from wherever the eye is: the coarsest
+    /// level's whole texture (it never moves). A caller streaming its terrain waits for these
+    /// once before loading it — the only wait — so that the first frame has the whole terrain
+    /// to draw, coarse, and never anything stale; with normal maps, with the level its normal
+    /// texels are computed from. Empty for a clipmap that cannot be laid.
+    pub fn start_up_rects(&self, grid: &aerie_terrain::source::SourceGrid) -> Vec<SampleRect> {
+        let clipmap = self.clipmap(grid);
+        if clipmap.validate().is_err() {
+            return Vec::new();
+        }
+        let coarsest = SampleRect {
+            level: clipmap.level_count() - 1,
+            origin: [0, 0],
+            size: [clipmap.texture_side(); 2],
+        };
+        let mut rects = vec![coarsest];
+        if self.normal_maps {
+            // Its normal texels' footprints (render/normal_map.rs), read with it.
+            let fp = crate::render::normal_map::NormalFootprint::of_level(coarsest.level);
+            rects.push(fp.rect(coarsest.origin, coarsest.size));
+        }
+        rects
+    }
+
+    /// GPU bytes of the level textures (one R32F layer per level) and the refined-tile pools
+    /// this renderer makes over `grid`: DESIGN.md's budget is 64 MiB at the defaults.
+    pub fn terrain_texture_bytes(&self, grid: &aerie_terrain::source::SourceGrid) -> u64 {
+        let clipmap = self.clipmap(grid);
+        let side = clipmap.texture_side() as u64;
+        let levels = clipmap.level_count() as u64 * side * side;
+        let q = (self.tile_size - 1) as u64;
+        let pools: u64 = (1..=MAX_REFINEMENT as u64)
+            .zip(self.pool_capacity)
+            .map(|(r, n)| n as u64 * ((q << r) + 1).pow(2))
+            .sum();
+        (levels + pools) * 4
+    }
+
     /// Refuses a tile size that is not 2^j + 1 in 3..=257 and skirts that cannot close cracks.
     pub fn validate(&self) -> Result<(), String> {
         if !(3..=257).contains(&self.tile_size) || !(self.tile_size - 1).is_power_of_two() {
@@ -83,6 +148,39 @@ impl RendererDesc {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn grid(side: u32) -> aerie_terrain::source::SourceGrid {
+        aerie_terrain::source::SourceGrid {
+            width: side,
+            height: side,
+            valid_width: side,
+            valid_height: side,
+            spacing_x: 30.0,
+            spacing_y: 30.0,
+            geo: None,
+            checksum: 0,
+            description: String::new(),
+        }
+    }
+
+    #[test]
+    fn the_default_textures_fit_the_gpu_budget_and_the_flights_peak_pool_use() {
+        let d = RendererDesc::default();
+        // The largest store shown (32769², 12 levels) and a small grid.
+        for side in [32769, 4097] {
+            let bytes = d.terrain_texture_bytes(&grid(side));
+            assert!(bytes <= 64 << 20, "{side}²: {bytes} bytes over 64 MiB");
+        }
+        // 40 r = 5 slots of 513² f32, 32 of 257², ...: the arithmetic, checked once.
+        let pools =
+            4 * (256 * 33 * 33 + 128 * 65 * 65 + 48 * 129 * 129 + 32 * 257 * 257 + 40 * 513 * 513);
+        // 9 clipmap levels of 192² texels (the coarsest holds the whole 32769² grid).
+        let levels = 4 * 9 * 192 * 192;
+        assert_eq!(d.terrain_texture_bytes(&grid(32769)), pools + levels);
+        // The peak of r = 5 ring tiles one frame drew on the 1,000 km flight, and room to
+        // prefetch beside it.
+        assert!(d.pool_capacity[4] >= 32 + 8, "{:?}", d.pool_capacity);
+    }
 
     #[test]
     fn default_is_valid_and_bad_shapes_are_refused() {

@@ -11,20 +11,28 @@ use gpu_allocator::MemoryLocation;
 
 use aerie_terrain::bake::ErrorBake;
 use aerie_terrain::camera::Camera;
-use aerie_terrain::clipmap::ClipmapDesc;
 use aerie_terrain::dataset::Dataset;
+use aerie_terrain::geodesy::GeoGrid;
 use aerie_terrain::mesh::skirted_tile_indices;
-use aerie_terrain::select::{SelectParams, Selection};
+use aerie_terrain::select::{LodMode, SelectParams, Selection};
+use aerie_terrain::source::{InMemoryTerrain, StreamStats, TerrainSource};
 
-use crate::render::gpu::{FrameUniforms, TileInstance};
-use crate::render::jobs::{split_into_submissions, ImageUpload, PlanError, StagingBudget};
+use crate::render::drape_textures::{register, DrapeTextures, DrapedRasters, MAX_DRAPE_SIDE};
+use crate::render::entity_instances::{EntityDraw, EntityFrameStats};
+use crate::render::entity_lod::{LodParams, LodView};
+use crate::render::entity_pass::EntityPass;
+use crate::render::gathered::SampleCursor;
+use crate::render::gpu::{EntityPush, FrameUniforms, TileInstance};
+use crate::render::jobs::{split_level_uploads, ImageUpload, PlanError, StagingBudget};
+use crate::render::models::{Model, ModelLibrary};
 use crate::render::overlay_pass::{record_panel_copy, Panel};
 use crate::render::plan::{plan_frame, select_frame, FrameInputs, FramePlan};
-use crate::render::resources::GpuTerrain;
+use crate::render::resources::{reserve_instances, GpuTerrain};
 use crate::render::terrain_pass::{
     descriptor_pool_sizes, record_terrain_pass, write_descriptors, DESCRIPTOR_SETS,
 };
-use crate::render::uniforms::frame_uniforms;
+use crate::render::tess_pass::{FragmentImages, TessTerrain};
+use crate::render::uniforms::{frame_uniforms, FLAG_NORMAL_MAP};
 use crate::render::upload::{
     initialise_images, record_image_copies, stage_frame, stream_buffer, stream_image_uploads,
     StagedFrame,
@@ -39,7 +47,7 @@ use crate::vk::{Buffer, Device, Instance, ValidationCounters, VkError, VkResultE
 
 pub use crate::render::desc::{RendererDesc, DEFAULT_TILE_SIZE};
 pub use crate::render::stats::{FrameStats, UploadStats};
-pub use crate::render::uniforms::{Lighting, SKY_LINEAR};
+pub use crate::render::uniforms::{Lighting, Look, SKY_LINEAR};
 
 /// Owns every Vulkan object. Destroyed explicitly in reverse creation order by
 /// [`TerrainRenderer::destroy`] (also called from `Drop`).
@@ -54,6 +62,8 @@ pub struct TerrainRenderer {
     /// Indices of one skirted tile in `tile_index_buffer`: (first, count).
     tile_indices: (u32, u32),
     terrain: Option<GpuTerrain>,
+    /// `--lod tess`: the tessellation baseline's heights, density and pipeline (made at load).
+    tess: Option<TessTerrain>,
     desc: RendererDesc,
     frame_counter: u64,
     selection: Selection,
@@ -66,6 +76,12 @@ pub struct TerrainRenderer {
     overlay: Option<Panel>,
     /// Sun and haze of the next frames.
     lighting: Lighting,
+    /// Other traffic (CIGI entities), drawn after the terrain when set.
+    entities: Option<EntityPass>,
+    /// Draped imagery and land cover (placeholders until a terrain with rasters is loaded).
+    drape: Option<DrapeTextures>,
+    /// What the last load draped (for summaries and the land-cover tests).
+    draped: Option<Arc<DrapedRasters>>,
     destroyed: bool,
 }
 
@@ -125,6 +141,7 @@ impl TerrainRenderer {
             tile_index_buffer,
             tile_indices: (0, indices.len() as u32),
             terrain: None,
+            tess: None,
             desc: desc.clone(),
             frame_counter: 0,
             selection: Selection::default(),
@@ -132,6 +149,9 @@ impl TerrainRenderer {
             channels_generation: 0,
             overlay: None,
             lighting: Lighting::default(),
+            entities: None,
+            drape: None,
+            draped: None,
             destroyed: false,
         };
         let dst = this.tile_index_buffer.raw;
@@ -139,6 +159,13 @@ impl TerrainRenderer {
         if let Err(e) = stream_buffer(&this.device, &mut this.ring, bytes, dst) {
             this.destroy();
             return Err(e);
+        }
+        match DrapeTextures::new(&this.device, &mut this.ring, None) {
+            Ok(t) => this.drape = Some(t),
+            Err(e) => {
+                this.destroy();
+                return Err(e);
+            }
         }
         Ok(this)
     }
@@ -168,6 +195,18 @@ impl TerrainRenderer {
             [target, pipeline, ring]
         );
         Ok((ring, pipeline, target, tile_index_buffer))
+    }
+
+    /// What the last load draped on the terrain (None without rasters), and the textures'
+    /// device bytes.
+    pub fn draped(&self) -> (Option<Arc<DrapedRasters>>, u64) {
+        let bytes = self.drape.as_ref().map_or(0, DrapeTextures::bytes);
+        (self.draped.clone(), bytes)
+    }
+
+    /// `--lod tess`: milliseconds the base mesh's density took at load.
+    pub fn tess_density_ms(&self) -> Option<f64> {
+        self.tess.as_ref().map(|t| t.density_ms)
     }
 
     pub fn device_name(&self) -> &str {
@@ -205,8 +244,64 @@ impl TerrainRenderer {
         self.lighting = lighting;
     }
 
+    /// Draws entities with the models of `library` from now on (their instances come from
+    /// [`Self::set_entities`]).
+    pub fn set_entity_models(
+        &mut self,
+        library: &ModelLibrary,
+        scale: f64,
+        params: LodParams,
+    ) -> Result<(), VkError> {
+        let pass = EntityPass::new(&self.device, library, scale, params)?;
+        if let Some(mut old) = self.entities.replace(pass) {
+            self.wait_all()?;
+            old.destroy(&self.device);
+        }
+        Ok(())
+    }
+
+    /// The entities of the following frames (ignored until models are set).
+    pub fn set_entities(&mut self, entities: Vec<EntityDraw>) {
+        if let Some(p) = self.entities.as_mut() {
+            p.set_entities(entities);
+        }
+    }
+
+    /// What the last frame drew of the entities, when models are set.
+    pub fn entity_stats(&self) -> Option<EntityFrameStats> {
+        self.entities.as_ref().map(EntityPass::last_stats)
+    }
+
+    /// The entity models, when set.
+    pub fn entity_models(&self) -> &[Model] {
+        self.entities.as_ref().map_or(&[], EntityPass::models)
+    }
+
     pub fn set_select_params(&mut self, params: SelectParams) {
         self.desc.select = params;
+    }
+
+    /// The source's running totals (zero for a dataset in memory; none before a load).
+    pub fn stream_stats(&self) -> StreamStats {
+        self.terrain
+            .as_ref()
+            .map(|t| t.plan.feed.gatherer.stream_stats())
+            .unwrap_or_default()
+    }
+
+    /// Asks the source, with the next frame's request, for samples the renderer itself does
+    /// not draw yet (the host's queries over tiles not resident).
+    pub fn want_samples(&mut self, wants: &[aerie_terrain::source::SampleWant]) {
+        if let Some(t) = self.terrain.as_mut() {
+            t.plan.feed.gatherer.want_extra(wants);
+        }
+    }
+
+    /// Level-texture cells still waiting for their samples (0 once every level is filled).
+    pub fn pending_cells(&self) -> u32 {
+        self.terrain
+            .as_ref()
+            .map_or(0, |t| t.plan.feed.pending_cells())
     }
 
     /// Pool counters (hits, misses, evictions, late) per refinement r = 1..=6.
@@ -236,19 +331,41 @@ impl TerrainRenderer {
         Ok(())
     }
 
-    /// Loads a dataset and its bake: creates the level textures and pools and fills every level
-    /// around `eye` (streamed through the ring over as many submissions as the budget needs).
+    /// Loads a dataset held in memory and its bake ([`Self::load_source`] over an
+    /// [`InMemoryTerrain`]: one path for every source).
     pub fn load_terrain(
         &mut self,
         dataset: Arc<Dataset>,
         bake: Arc<ErrorBake>,
         eye: DVec3,
     ) -> Result<UploadStats, VkError> {
-        let hf = &dataset.hf;
-        if bake.width as usize != hf.width || bake.height as usize != hf.height {
+        // The bake was checked against these samples when it was read or made.
+        let source = InMemoryTerrain::with_checksum(dataset, bake.source_checksum);
+        self.load_source(Arc::new(source), bake, eye)
+    }
+
+    /// Loads a terrain source and its bake: creates the level textures and pools and fills
+    /// every level around `eye` with what the source holds (streamed through the ring over as
+    /// many submissions as the budget needs); what it does not hold yet is asked for and
+    /// filled by the following frames, which draw coarser meanwhile. Never waits for the source:
+    /// a caller that wants the coarsest level there for the first frame waits for
+    /// [`RendererDesc::start_up_rects`] on its source first.
+    pub fn load_source(
+        &mut self,
+        source: Arc<dyn TerrainSource>,
+        bake: Arc<ErrorBake>,
+        eye: DVec3,
+    ) -> Result<UploadStats, VkError> {
+        let grid = source.grid().clone();
+        crate::render::geo_instances::check_curvature_choice(
+            self.desc.select.curvature,
+            grid.geo.as_ref(),
+        )
+        .map_err(VkError::Other)?;
+        if bake.width != grid.width || bake.height != grid.height {
             return Err(VkError::Other(format!(
                 "bake is for {}x{} samples, dataset has {}x{}",
-                bake.width, bake.height, hf.width, hf.height
+                bake.width, bake.height, grid.width, grid.height
             )));
         }
         if bake.params.tile_size != self.desc.tile_size {
@@ -257,13 +374,7 @@ impl TerrainRenderer {
                 bake.params.tile_size, self.desc.tile_size, self.desc.tile_size
             )));
         }
-        let clipmap = ClipmapDesc {
-            tile_quads: self.desc.tile_size - 1,
-            patch_tiles: self.desc.patch_tiles,
-            margin_tiles: self.desc.margin_tiles,
-            width: hf.width as u32,
-            height: hf.height as u32,
-        };
+        let clipmap = self.desc.clipmap(&grid);
         clipmap
             .validate()
             .map_err(|e| VkError::Other(format!("clipmap: {e}")))?;
@@ -279,15 +390,58 @@ impl TerrainRenderer {
             self.wait_all()?;
             old.destroy(&self.device);
         }
+        if let Some(input) = self.desc.drape.clone() {
+            let limit = self.device.properties.limits.max_image_dimension2_d;
+            let rasters =
+                register(&input, &grid, limit.min(MAX_DRAPE_SIDE)).map_err(VkError::Other)?;
+            self.wait_all()?;
+            if let Some(mut old) = self.drape.take() {
+                old.destroy(&self.device);
+            }
+            self.drape = Some(DrapeTextures::new(
+                &self.device,
+                &mut self.ring,
+                Some(&rasters),
+            )?);
+            self.draped = Some(Arc::new(rasters));
+        }
+        if let Some(mut old) = self.tess.take() {
+            self.wait_all()?;
+            old.destroy(&self.device);
+        }
         let d = &self.device;
-        let mut t = GpuTerrain::new(d, dataset, bake, clipmap, &self.desc.pool_capacity)?;
+        if self.desc.select.mode == LodMode::Tessellation {
+            let geo = GeoGrid::of(grid.geo.as_ref(), grid.spacing_x, grid.spacing_y);
+            self.tess = Some(TessTerrain::new(d, &mut self.ring, &source, geo.is_some())?);
+        }
+        let normal_maps = self.desc.normal_maps;
+        let mut t = GpuTerrain::new(
+            d,
+            source,
+            bake,
+            clipmap,
+            &self.desc.pool_capacity,
+            normal_maps,
+        )?;
         // First fill of every level around the eye, streamed.
         let strips = t.plan.strips_around(eye);
         let loaded = initialise_images(d, &mut self.ring, t.images()).and_then(|()| {
             let (budget, align) = (self.ring.staging_budget(), self.ring.staging_alignment());
-            let submissions = split_into_submissions(&strips, budget, align).map_err(plan_error)?;
+            let submissions =
+                split_level_uploads(&strips, budget, align, normal_maps).map_err(plan_error)?;
             let image = t.levels.raw;
-            stream_image_uploads(d, &mut self.ring, &t.dataset.hf, image, &submissions)
+            let gatherer = &t.plan.feed.gatherer;
+            let mut samples = SampleCursor::new(gatherer.samples());
+            let mut normals = SampleCursor::new(gatherer.normals());
+            let normals = normal_maps.then_some((t.normals.raw, &mut normals));
+            stream_image_uploads(
+                d,
+                &mut self.ring,
+                &mut samples,
+                image,
+                normals,
+                &submissions,
+            )
         });
         self.terrain = Some(t);
         Ok(UploadStats {
@@ -333,37 +487,100 @@ impl TerrainRenderer {
 
         // Plan: clipmap placement and tile selection, then the budget's decisions (pure CPU).
         let t0 = Instant::now();
-        let strips = select_frame(&mut t.plan, &inputs, &mut self.selection);
-        let cpu_select_us = t0.elapsed().as_secs_f64() * 1e6;
+        // The tessellation baseline draws from its own patches, not the clipmap's tiles.
+        let tess_mode = self.desc.select.mode == LodMode::Tessellation;
+        if tess_mode && self.tess.is_none() {
+            return Err(VkError::Other(
+                "--lod tess: the terrain was loaded for another mode; load it again".into(),
+            ));
+        }
+        let strips = if tess_mode {
+            // Nothing of the clipmap is drawn: no strips, no tiles (the last load's samples,
+            // already staged, are forgotten as a selection would).
+            t.plan.feed.gatherer.begin_frame();
+            self.selection = Selection::default();
+            Vec::new()
+        } else {
+            select_frame(&mut t.plan, &inputs, &mut self.selection)
+        };
+        let mut cpu_select_us = t0.elapsed().as_secs_f64() * 1e6;
         let t1 = Instant::now();
         let plan = plan_frame(&mut t.plan, &inputs, &self.selection, strips).map_err(plan_error)?;
 
-        // Stage: spilled strips in their own submissions, then this frame's region.
+        // Stage: spilled strips in their own submissions, then this frame's region, from the
+        // samples the plan gathered in that order.
         let levels = t.levels.raw;
+        let mut samples = SampleCursor::new(t.plan.feed.gatherer.samples());
+        let mut normals = SampleCursor::new(t.plan.feed.gatherer.normals());
+        let spilled_normals = plan.normal_maps.then_some((t.normals.raw, &mut normals));
         stream_image_uploads(
             d,
             &mut self.ring,
-            &t.dataset.hf,
+            &mut samples,
             levels,
+            spilled_normals,
             &plan.spilled_strips,
         )?;
         let mut frame = self.ring.begin_frame(d)?;
-        t.reserve_instances(d, &mut frame, plan.instances.len())?;
+        reserve_instances(&mut t.frame_buffers, d, &mut frame, plan.instances.len())?;
+        let tess_stats = match self.tess.as_mut() {
+            Some(tess) if tess_mode => {
+                let t3 = Instant::now();
+                let (g, curvature) = (self.desc.select.tess_density, self.desc.select.curvature);
+                let s = tess.prepare(d, &mut frame, camera, g, curvature)?;
+                cpu_select_us += t3.elapsed().as_secs_f64() * 1e6;
+                Some(s)
+            }
+            _ => None,
+        };
         let (curvature, debug_tiles) = (self.desc.select.curvature, self.desc.debug_tiles);
-        let uniforms = frame_uniforms(
+        let mut uniforms = frame_uniforms(
             camera,
-            &t.dataset,
+            &t.grid,
             &t.plan.clipmap,
             curvature,
             debug_tiles,
+            self.desc.look,
             &self.lighting,
         );
+        if plan.normal_maps && !tess_mode {
+            uniforms.grid_size[3] |= FLAG_NORMAL_MAP;
+        }
         let overlay = self.overlay.as_ref();
-        let staged = stage_frame(frame.staging(), &t.dataset.hf, &plan, &uniforms, overlay)?;
+        let staging = frame.staging();
+        let staged = stage_frame(
+            staging,
+            &mut samples,
+            &mut normals,
+            &plan,
+            &uniforms,
+            overlay,
+        )?;
         let mut stats = FrameStats {
             cpu_select_us,
             cpu_upload_us: t1.elapsed().as_secs_f64() * 1e6,
             ..plan.stats
+        };
+        if let Some(s) = tess_stats {
+            stats.tiles_considered = s.cells;
+            stats.tiles_culled = s.culled;
+            stats.tiles_drawn = s.cells - s.culled;
+            stats.instances = s.patches;
+            stats.triangles = s.triangles;
+            stats.draw_calls = self.tess.as_ref().map_or(0, |t| t.draws.len() as u32);
+        }
+        let views: Vec<LodView> = (self.channels.iter())
+            .map(|&(camera, viewport, _)| LodView { camera, viewport })
+            .collect();
+        let viewport = (self.target.width, self.target.height);
+        if let Some(p) = self.entities.as_mut() {
+            let s = p.prepare(d, &mut frame, camera, viewport, &views)?;
+            stats.triangles += s.triangles();
+        }
+        let push = EntityPush {
+            relative_world_to_clip: uniforms.relative_world_to_clip,
+            sun_dir: uniforms.sun_dir,
+            sky_colour: uniforms.sky_colour,
         };
 
         // Record.
@@ -374,6 +591,13 @@ impl TerrainRenderer {
             target: &self.target,
             tile_index_buffer: self.tile_index_buffer.raw,
             overlay,
+            sky: self.desc.look.draws_sky(),
+            entities: self.entities.as_ref().map(|p| (p, push)),
+            drape: self
+                .drape
+                .as_ref()
+                .ok_or_else(|| VkError::Other("draped textures missing".into()))?,
+            tess: self.tess.as_ref().filter(|_| tess_mode),
         };
         let cmd = parts.record(d, &mut frame, &plan, &staged)?;
         let previous_gpu = frame.previous_gpu_ms();
@@ -426,7 +650,16 @@ impl TerrainRenderer {
         self.destroyed = true;
         self.device.wait_idle();
         let d = &self.device;
+        if let Some(mut p) = self.entities.take() {
+            p.destroy(d);
+        }
         if let Some(mut t) = self.terrain.take() {
+            t.destroy(d);
+        }
+        if let Some(mut t) = self.tess.take() {
+            t.destroy(d);
+        }
+        if let Some(mut t) = self.drape.take() {
             t.destroy(d);
         }
         self.tile_index_buffer.destroy(d);
@@ -451,6 +684,12 @@ struct RecordParts<'a> {
     target: &'a OffscreenTarget,
     tile_index_buffer: vk::Buffer,
     overlay: Option<&'a Panel>,
+    /// Draw the sky where no terrain is (the full look).
+    sky: bool,
+    entities: Option<(&'a EntityPass, EntityPush)>,
+    drape: &'a DrapeTextures,
+    /// The tessellation baseline, drawn instead of the tiles.
+    tess: Option<&'a TessTerrain>,
 }
 
 impl RecordParts<'_> {
@@ -467,7 +706,21 @@ impl RecordParts<'_> {
         let t = self.terrain;
         let fb = &t.frame_buffers[frame.index()];
         let set = frame.allocate_set(d, self.pipeline.set_layout)?;
-        write_descriptors(d, set, fb, t, self.pipeline.height_sampler);
+        let samplers = (self.pipeline.height_sampler, self.pipeline.normal_sampler);
+        write_descriptors(d, set, fb, t, samplers.0, samplers.1, self.drape);
+        // The tessellation set shares the fragment shader's textures (normal maps, drape).
+        let fragment_images = FragmentImages {
+            normals: (t.normals.view, self.pipeline.normal_sampler),
+            imagery: (self.drape.imagery_view(), self.drape.linear),
+            classes: (self.drape.classes_view(), self.drape.nearest),
+        };
+        let tess = match self.tess {
+            Some(tess) => Some((
+                tess,
+                tess.write_set(d, frame, fb.uniforms.raw, &fragment_images)?,
+            )),
+            None => None,
+        };
         let src = frame.staging_buffer();
         let cmd = frame.begin_recording(d)?;
         frame.reset_timestamps(d, cmd);
@@ -499,19 +752,20 @@ impl RecordParts<'_> {
             copy(fb.instances.raw, off, size);
         }
         record_image_copies(d, cmd, src, t.levels.raw, &staged.strip_copies);
+        record_image_copies(d, cmd, src, t.normals.raw, &staged.normal_copies);
         for (image, copies) in t.pool_images.iter().zip(&staged.pool_copies) {
             record_image_copies(d, cmd, src, image.raw, copies);
         }
-        memory_barrier(
-            d,
-            cmd,
-            &[Access::TransferWrite],
-            &[
-                Access::IndirectBuffer,
-                Access::AnyShaderReadUniformBuffer,
-                Access::VertexShaderReadStorageBuffer,
-            ],
-        );
+        let mut readers = vec![
+            Access::IndirectBuffer,
+            Access::AnyShaderReadUniformBuffer,
+            Access::VertexShaderReadStorageBuffer,
+        ];
+        if tess.is_some() {
+            // The uniforms and (since the load's upload) the heights, read past the vertex stage.
+            readers.push(Access::TessellationShaderRead);
+        }
+        memory_barrier(d, cmd, &[Access::TransferWrite], &readers);
         frame.time_end(d, cmd, Pass::Upload);
 
         frame.time_begin(d, cmd, Pass::Terrain);
@@ -525,7 +779,16 @@ impl RecordParts<'_> {
             self.tile_index_buffer,
             fb.indirect.raw,
             plan.draw_count,
+            self.sky,
+            &|cmd| {
+                if let Some((tess, set)) = tess {
+                    tess.record_draw(d, cmd, set);
+                }
+            },
         );
+        if let Some((p, push)) = &self.entities {
+            p.record(d, cmd, frame.index(), self.target, push);
+        }
         frame.time_end(d, cmd, Pass::Terrain);
         if let (Some(p), Some(off)) = (self.overlay, staged.overlay) {
             let extent = (self.target.width, self.target.height);

@@ -14,6 +14,16 @@ pub struct FrameUniforms {
     pub grid_spacing: [f32; 4],
     pub grid_size: [i32; 4],
     pub clipmap: [i32; 4],
+    pub eye_world: [f32; 4],
+    pub sun_colour: [f32; 4],
+    pub ambient_colour: [f32; 4],
+    pub sky_sun: [f32; 4],
+    pub perez_a: [f32; 4],
+    pub perez_b: [f32; 4],
+    pub perez_c: [f32; 4],
+    pub perez_d: [f32; 4],
+    pub perez_e: [f32; 4],
+    pub sky_zenith: [f32; 4],
 }
 
 /// Storage buffer element (std430), one per drawn tile.
@@ -30,6 +40,13 @@ pub struct TileInstance {
     pub slot_x: u32,
     pub slot_y: u32,
     pub slot_stride: u32,
+    pub geo_origin: [f32; 4],
+    pub geo_axis_r: [f32; 4],
+    pub geo_axis_t: [f32; 4],
+    pub geo_axis_z: [f32; 4],
+    pub geo_radius: [f32; 4],
+    pub geo_s: [[f32; 4]; 9],
+    pub geo_n: [[f32; 4]; 10],
 }
 
 /// `VkDrawIndexedIndirectCommand`, as the device reads it (a Pod twin of ash's struct).
@@ -41,6 +58,33 @@ pub struct DrawIndexedIndirect {
     pub first_index: u32,
     pub vertex_offset: i32,
     pub first_instance: u32,
+}
+
+/// One model vertex (std430), in the model's body axes: see `shaders/gpu_types.glsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct EntityVertex {
+    pub position: [f32; 4],
+    pub normal: [f32; 4],
+}
+
+/// One drawn entity (std430), read as per-instance vertex attributes.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct EntityInstance {
+    pub offset_scale: [f32; 4],
+    pub axis_x: [f32; 4],
+    pub axis_y: [f32; 4],
+    pub axis_z: [f32; 4],
+}
+
+/// Push constants of the entity pipeline (std430 as push constants are laid out).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct EntityPush {
+    pub relative_world_to_clip: [[f32; 4]; 4],
+    pub sun_dir: [f32; 4],
+    pub sky_colour: [f32; 4],
 }
 
 #[cfg(test)]
@@ -89,6 +133,14 @@ mod tests {
             let mut parts = code.split_whitespace();
             let (ty, field) = (parts.next().unwrap(), parts.next().unwrap());
             let (size, align) = type_layout(ty, rules);
+            // `name[n]`: an array of n elements, each padded to its alignment (vec4 here).
+            let (field, size) = match field.split_once('[') {
+                Some((name, n)) => {
+                    let n: usize = n.trim_end_matches(']').parse().unwrap();
+                    (name, n * size.div_ceil(align) * align)
+                }
+                None => (field, size),
+            };
             offset = offset.div_ceil(align) * align;
             fields.push((field.to_string(), offset));
             offset += size;
@@ -121,7 +173,17 @@ mod tests {
                 sky_colour,
                 grid_spacing,
                 grid_size,
-                clipmap
+                clipmap,
+                eye_world,
+                sun_colour,
+                ambient_colour,
+                sky_sun,
+                perez_a,
+                perez_b,
+                perez_c,
+                perez_d,
+                perez_e,
+                sky_zenith
             ]
         );
     }
@@ -141,7 +203,14 @@ mod tests {
                 skirt_m,
                 slot_x,
                 slot_y,
-                slot_stride
+                slot_stride,
+                geo_origin,
+                geo_axis_r,
+                geo_axis_t,
+                geo_axis_z,
+                geo_radius,
+                geo_s,
+                geo_n
             ]
         );
     }
@@ -154,6 +223,21 @@ mod tests {
         let (fields, size) = glsl_struct("TileInstance", Rules::Std140);
         assert_eq!(fields[1], ("origin_sample".to_string(), 8));
         assert_eq!(size % 16, 0);
+    }
+
+    #[test]
+    fn entity_structs_match_glsl_std430() {
+        check!(EntityVertex, Rules::Std430, [position, normal]);
+        check!(
+            EntityInstance,
+            Rules::Std430,
+            [offset_scale, axis_x, axis_y, axis_z]
+        );
+        check!(
+            EntityPush,
+            Rules::Std430,
+            [relative_world_to_clip, sun_dir, sky_colour]
+        );
     }
 
     #[test]

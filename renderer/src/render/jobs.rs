@@ -7,6 +7,8 @@ use aerie_terrain::clipmap::{
 };
 use aerie_terrain::pool::TileKey;
 
+use crate::render::normal_map::normal_bytes;
+
 /// Bytes per texel of every height texture (R32_SFLOAT).
 pub const TEXEL_BYTES: u64 = 4;
 
@@ -26,6 +28,16 @@ pub struct ImageUpload {
 }
 
 impl ImageUpload {
+    /// The source samples the upload reads (its step is a power of two: a level's spacing).
+    pub fn sample_rect(&self) -> aerie_terrain::source::SampleRect {
+        debug_assert!(self.step.is_power_of_two(), "step {}", self.step);
+        aerie_terrain::source::SampleRect {
+            level: self.step.trailing_zeros(),
+            origin: self.origin_sample,
+            size: self.size,
+        }
+    }
+
     pub fn bytes(&self) -> u64 {
         self.size[0] as u64 * self.size[1] as u64 * TEXEL_BYTES
     }
@@ -122,6 +134,19 @@ impl StagingBudget {
     }
 }
 
+/// Samples the frame thread gathers from the source in one frame, at most (level strips and
+/// pool uploads together): the default staging region's worth (8 MiB of f32), a few
+/// milliseconds of copying. A burst larger than that — every level's strips arriving at once
+/// at start-up, which spill past the staging region — waits for the next frames.
+pub const DEFAULT_DATA_CAP_SAMPLES: usize = 2 << 20;
+
+/// Whether a job of `job` samples may be gathered after `gathered` samples this frame under a
+/// cap of `cap`: it fits, or nothing was gathered yet (so one job larger than the cap still
+/// moves, alone, and nothing waits forever).
+pub fn within_data_cap(gathered: usize, job: usize, cap: usize) -> bool {
+    gathered == 0 || gathered.saturating_add(job) <= cap
+}
+
 /// Eye position (metres) → dataset sample coordinates, the unit of clipmap placement.
 pub fn eye_samples(eye: glam::DVec3, spacing: [f64; 2]) -> [f64; 2] {
     [eye.x / spacing[0], eye.y / spacing[1]]
@@ -171,15 +196,28 @@ pub fn split_into_submissions(
     capacity: u64,
     alignment: u64,
 ) -> Result<Vec<Vec<ImageUpload>>, PlanError> {
+    split_level_uploads(jobs, capacity, alignment, false)
+}
+
+/// [`split_into_submissions`] of level strips, each staged with its normal texels right after
+/// its heights when `normals` ([`crate::render::normal_map::NORMAL_TEXEL_BYTES`] per texel).
+pub fn split_level_uploads(
+    jobs: &[ImageUpload],
+    capacity: u64,
+    alignment: u64,
+    normals: bool,
+) -> Result<Vec<Vec<ImageUpload>>, PlanError> {
+    let normal_texel = normal_bytes([1, 1], normals);
     let mut pending: std::collections::VecDeque<ImageUpload> = jobs.iter().copied().collect();
     let mut submissions = Vec::new();
     while !pending.is_empty() {
         let mut budget = StagingBudget::new(capacity, alignment);
         let mut batch = Vec::new();
         while let Some(job) = pending.pop_front() {
-            let row_bytes = job.size[0] as u64 * TEXEL_BYTES;
-            let fit_rows =
-                (budget.remaining().saturating_sub(STREAM_ROW_SLACK_BYTES) / row_bytes) as u32;
+            let row_bytes = job.size[0] as u64 * (TEXEL_BYTES + normal_texel);
+            // The normals' own allocation may add one more alignment's padding.
+            let slack = STREAM_ROW_SLACK_BYTES * if normals { 2 } else { 1 };
+            let fit_rows = (budget.remaining().saturating_sub(slack) / row_bytes) as u32;
             if fit_rows == 0 {
                 if batch.is_empty() {
                     return Err(PlanError::Staging(format!(
@@ -191,6 +229,9 @@ pub fn split_into_submissions(
             }
             let (head, tail) = job.split_rows(fit_rows.min(job.size[1]));
             budget.take(head.bytes())?;
+            if normals {
+                budget.take(normal_bytes(head.size, true))?;
+            }
             batch.push(head);
             if let Some(tail) = tail {
                 pending.push_front(tail);
@@ -212,5 +253,21 @@ pub fn refined_upload(tile_quads: u32, key: &TileKey, slot: u32, side: u32) -> I
         size: [side, side],
         origin_sample: [key.tx as i64 * tile, key.ty as i64 * tile],
         step: 1 << (key.level - key.refinement),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_data_cap_admits_what_fits_and_always_the_first_job() {
+        assert!(within_data_cap(0, 10, 100));
+        assert!(within_data_cap(90, 10, 100));
+        assert!(!within_data_cap(91, 10, 100));
+        // A job larger than the cap still moves when it is the frame's first.
+        assert!(within_data_cap(0, 1000, 100));
+        assert!(!within_data_cap(1, 1000, 100));
+        assert!(!within_data_cap(usize::MAX, 1, 100));
     }
 }

@@ -21,6 +21,13 @@
 //!   triangles per skirted tile.
 //! - **Prefetch** happens only along the eye's motion, never evicts a slot drawn in the last
 //!   [`PREFETCH_PROTECT_FRAMES`] frames, and stops at the first tile the budget cannot take.
+//! - **Streaming.** Every upload is admitted only with its samples gathered from the source
+//!   (`gathered.rs`): a level strip whose samples are not resident stays pending in
+//!   [`LevelContent`] and is retried each frame, the selection draws a level tile only when its
+//!   texels are there (else coarser, late), and a refined tile whose samples are not resident
+//!   is drawn at its best resident resolution and counted late (`tiles_late_stream`), as a
+//!   budget miss is. What was missing is asked of the source at the end of the plan, largest
+//!   projected error first, then nearest; prefetches below anything drawn.
 
 use std::sync::Arc;
 
@@ -28,18 +35,27 @@ use glam::DVec3;
 
 use aerie_terrain::bake::ErrorBake;
 use aerie_terrain::camera::Camera;
-use aerie_terrain::clipmap::{place_levels, CacheRegion, ClipmapDesc, LevelPlacement};
+use aerie_terrain::clipmap::{place_levels, ClipmapDesc, LevelPlacement};
 use aerie_terrain::pool::{RefinedTilePool, Request, TileKey};
 use aerie_terrain::select::{
-    neighbour_eps, select_tiles, select_tiles_multi, DrawItem, SelectParams, Selection, View,
+    select_tiles, select_tiles_multi_ready, DrawItem, SelectParams, Selection, View,
 };
+use aerie_terrain::source::TerrainSource;
+
+use crate::render::feed::{Feed, DRAWN_PRIORITY, PREFETCH_PRIORITY};
+use crate::render::gathered::Gatherer;
+
+use aerie_terrain::geodesy::GeoGrid;
 
 use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, TileInstance};
 use crate::render::jobs::{
-    eye_samples, refined_upload, split_into_submissions, strip_uploads, ImageUpload, PlanError,
+    eye_samples, refined_upload, split_level_uploads, within_data_cap, ImageUpload, PlanError,
     StagingBudget, TEXEL_BYTES,
 };
+use crate::render::normal_map::normal_bytes;
 use crate::render::stats::{FrameStats, RESOLUTIONS};
+use crate::render::tile_instances::{build_instances, InstanceFrame};
+pub use crate::render::tile_instances::{indirect_draws, slot_placement};
 
 /// Largest number of m×m instances one frame may draw (48 bytes each per frame in flight): the
 /// instance buffers grow on demand up to this — `full` on a large dataset draws every visible
@@ -73,23 +89,26 @@ impl PoolSlots {
     }
 }
 
-/// The CPU state a plan reads and advances: clipmap cache regions, pool bookkeeping and the
-/// previous eye (for prefetch), with the dataset's bake and sample spacing.
+/// The CPU state a plan reads and advances: clipmap cache regions and what the level textures
+/// hold, pool bookkeeping and the previous eye (for prefetch), with the dataset's bake, sample
+/// spacing and the source its samples come from.
 pub struct PlanState {
     pub bake: Arc<ErrorBake>,
     /// Metres between samples (x east, y north).
     pub spacing: [f64; 2],
     pub clipmap: ClipmapDesc,
-    /// Each level's cached region (None: never filled).
-    pub caches: Vec<Option<CacheRegion>>,
     /// Pools for r = 1..=MAX_REFINEMENT (index r − 1).
     pub pools: Vec<PoolSlots>,
     /// Eye of the previous planned frame.
     pub prev_eye: Option<DVec3>,
-    prefetch_selection: Selection,
+    /// The level textures' caches and content, the source and this frame's samples from it.
+    pub feed: Feed,
+    pub(crate) prefetch_selection: Selection,
     shared: SharedSelection,
     /// Shared (multi-channel) selections made so far: one per frame, whatever the channel count.
     pub shared_selections: u64,
+    /// A geographic dataset drawn on the WGS84 ellipsoid (`GeoGrid::of`); None: the flat plane.
+    pub earth: Option<GeoGrid>,
 }
 
 /// The selection shared by a set of channels, kept while the set and the level placement stay
@@ -97,19 +116,22 @@ pub struct PlanState {
 /// so it is made once per frame, not n times (each costs O(n): a frame would be O(n²)).
 #[derive(Default)]
 struct SharedSelection {
-    /// The channels' generation, the placement and the parameters it was made for.
-    key: Option<(u64, Vec<LevelPlacement>, SelectParams)>,
+    /// The channels' generation, the placement, the parameters and the level textures'
+    /// content generation it was made for.
+    key: Option<(u64, Vec<LevelPlacement>, SelectParams, u64)>,
     selection: Selection,
 }
 
 impl PlanState {
     pub fn new(
         bake: Arc<ErrorBake>,
-        spacing: [f64; 2],
+        source: Arc<dyn TerrainSource>,
         clipmap: ClipmapDesc,
         pool_capacity: &[u32],
     ) -> Self {
-        let levels = clipmap.level_count() as usize;
+        let grid = source.grid();
+        let spacing = [grid.spacing_x, grid.spacing_y];
+        let feed = Feed::new(clipmap.clone(), spacing, Gatherer::new(source));
         let pools = (1..=pool_capacity.len() as u32)
             .map(|r| PoolSlots {
                 side: (clipmap.tile_quads << r) + 1,
@@ -120,19 +142,51 @@ impl PlanState {
             bake,
             spacing,
             clipmap,
-            caches: vec![None; levels],
             pools,
             prev_eye: None,
+            feed,
             prefetch_selection: Selection::default(),
             shared: SharedSelection::default(),
             shared_selections: 0,
+            earth: None,
         }
     }
 
-    /// The level-texture uploads that fill (or refresh) every level around `eye`.
+    /// Where the clipmap centres its levels for an eye at `eye` (world metres): the eye's grid
+    /// position, which on the ellipsoid is not its world x, y.
+    pub fn viewer(&self, eye: DVec3) -> [f64; 2] {
+        match &self.earth {
+            Some(g) => eye_samples(g.grid_of_world(eye), self.spacing),
+            None => eye_samples(eye, self.spacing),
+        }
+    }
+
+    /// The frame's selection parameters with this dataset's Earth model.
+    /// The eye in the grid's metres (`viewer` × spacing, height kept): where the feed ranks
+    /// what it asks for by nearness.
+    pub fn grid_eye(&self, eye: DVec3) -> DVec3 {
+        let v = self.viewer(eye);
+        DVec3::new(v[0] * self.spacing[0], v[1] * self.spacing[1], eye.z)
+    }
+
+    pub fn select_params(&self, params: &SelectParams) -> SelectParams {
+        SelectParams {
+            earth: self.earth,
+            ..*params
+        }
+    }
+
+    /// The level-texture uploads that fill (or refresh) every level around `eye`, of what the
+    /// source holds now (their samples gathered; the rest is asked for and stays pending).
+    /// Start-up, before the first frame: not capped by the per-frame data cap.
     pub fn strips_around(&mut self, eye: DVec3) -> Vec<ImageUpload> {
-        let placements = place_levels(&self.clipmap, eye_samples(eye, self.spacing));
-        strip_uploads(&self.clipmap, &mut self.caches, &placements)
+        self.feed.gatherer.begin_frame();
+        let placements = place_levels(&self.clipmap, self.viewer(eye));
+        let cap = std::mem::replace(&mut self.feed.data_cap_samples, usize::MAX);
+        let strips = self.feed.update_levels(&placements, self.grid_eye(eye));
+        self.feed.data_cap_samples = cap;
+        self.feed.gatherer.send_requests();
+        strips
     }
 }
 
@@ -170,11 +224,23 @@ pub struct PoolUpload {
     pub prefetch: bool,
 }
 
+/// Why a refined tile was drawn coarser.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LateReason {
+    /// Its upload did not fit what was left of the frame's staging region, or of its data cap.
+    Budget,
+    /// Every slot of its pool was handed out this frame.
+    NoSlot,
+    /// Its samples were not resident in the source (asked for).
+    Stream,
+}
+
 /// A refined tile drawn coarser this frame: `key` was asked for, `drawn_refinement` was resident.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LateTile {
     pub key: TileKey,
     pub drawn_refinement: u32,
+    pub reason: LateReason,
 }
 
 /// Everything a frame does, as data.
@@ -195,6 +261,8 @@ pub struct FramePlan {
     pub draws: [DrawIndexedIndirect; RESOLUTIONS],
     /// Commands the multi-draw issues: every group, or none when nothing is drawn.
     pub draw_count: u32,
+    /// Whether every strip (spilled or not) is staged with its normal texels after its heights.
+    pub normal_maps: bool,
     /// Bytes staging the plan takes from the frame's region, padding included.
     pub staged_bytes: u64,
     pub stats: FrameStats,
@@ -210,34 +278,41 @@ pub fn fixed_reserve(selected_nodes: usize, overlay_bytes: Option<u64>) -> u64 {
         + overlay
 }
 
-/// Places the levels around the eye, turns the levels that moved into strip uploads (advancing
-/// the cache regions) and selects the frame's tiles into `out`: for `camera` alone, or once for
-/// every channel (per tile the largest ρ/τ among the channels that see it).
+/// Places the levels around the eye, turns what the levels lack into strip uploads of the
+/// samples the source holds (advancing the cache regions and their content) and selects the
+/// frame's tiles into `out` over what the level textures will hold: for `camera` alone, or
+/// once for every channel (per tile the largest ρ/τ among the channels that see it).
 pub fn select_frame(
     state: &mut PlanState,
     inputs: &FrameInputs,
     out: &mut Selection,
 ) -> Vec<ImageUpload> {
-    let placements = place_levels(
-        &state.clipmap,
-        eye_samples(inputs.camera.position, state.spacing),
-    );
-    let strips = strip_uploads(&state.clipmap, &mut state.caches, &placements);
+    state.feed.gatherer.begin_frame();
+    let eye = state.grid_eye(inputs.camera.position);
+    let placements = place_levels(&state.clipmap, state.viewer(inputs.camera.position));
+    let strips = state.feed.update_levels(&placements, eye);
+    let params = state.select_params(inputs.select);
     if inputs.channels.is_empty() {
-        let (camera, viewport) = (inputs.camera, inputs.viewport);
-        select_tiles(
+        let view = View {
+            camera: inputs.camera,
+            viewport: inputs.viewport,
+            tau_px: inputs.select.tau_px,
+        };
+        select_tiles_multi_ready(
             &state.bake,
             &state.clipmap,
             &placements,
-            camera,
-            viewport,
-            inputs.select,
+            &[view],
+            &params,
+            &state.feed.content,
             out,
         );
     } else {
-        let key = (inputs.channels_generation, placements, *inputs.select);
+        let generation = state.feed.content.generation();
+        let key = (inputs.channels_generation, placements, params, generation);
         if state.shared.key.as_ref() == Some(&key) {
             out.clone_from(&state.shared.selection);
+            state.feed.want_tiles(&out.wants, eye);
             return strips;
         }
         let placements = &key.1;
@@ -250,18 +325,20 @@ pub fn select_frame(
                 tau_px: *tau_px,
             })
             .collect();
-        select_tiles_multi(
+        select_tiles_multi_ready(
             &state.bake,
             &state.clipmap,
             placements,
             &views,
-            inputs.select,
+            &params,
+            &state.feed.content,
             out,
         );
         state.shared_selections += 1;
         state.shared.selection.clone_from(out);
         state.shared.key = Some(key);
     }
+    state.feed.want_tiles(&out.wants, eye);
     strips
 }
 
@@ -280,17 +357,25 @@ pub fn plan_frame(
     let mut budget = inputs.staging;
     let reserve = fixed_reserve(selection.items.len(), inputs.overlay_bytes);
 
-    // Strips first, mandatory: all in this frame, or all streamed before it.
+    // Strips first, mandatory: all in this frame, or all streamed before it; with normal maps
+    // each strip's normal texels are staged right after its heights.
+    let normals = state.feed.gatherer.normal_maps();
+    plan.normal_maps = normals;
     let strip_bytes: u64 = strips.iter().map(ImageUpload::bytes).sum();
-    plan.stats.bytes_clipmap = strip_bytes;
-    if strip_bytes + reserve + STRIP_SLACK_BYTES * strips.len() as u64 > budget.capacity() {
+    let normal_total: u64 = strips.iter().map(|s| normal_bytes(s.size, normals)).sum();
+    plan.stats.bytes_clipmap = strip_bytes + normal_total;
+    let allocations = strips.len() as u64 * (1 + normals as u64);
+    if strip_bytes + normal_total + reserve + STRIP_SLACK_BYTES * allocations > budget.capacity() {
         // A jump (or a tiny budget).
         plan.spilled_strips =
-            split_into_submissions(&strips, budget.capacity(), budget.alignment())?;
+            split_level_uploads(&strips, budget.capacity(), budget.alignment(), normals)?;
         plan.stats.budget_spills = plan.spilled_strips.len() as u32;
     } else {
         for s in &strips {
             budget.take(s.bytes())?;
+            if normals {
+                budget.take(normal_bytes(s.size, true))?;
+            }
         }
         plan.strips = strips;
     }
@@ -301,7 +386,23 @@ pub fn plan_frame(
     resolve_refined_tiles(state, selection, &mut budget, reserve, &mut plan)?;
     prefetch(state, inputs, &mut budget, reserve, &mut plan)?;
 
-    let (instances, groups) = build_instances(state, inputs, &plan.draw_list);
+    let gatherer = &mut state.feed.gatherer;
+    gatherer.send_requests();
+    plan.stats.cpu_terrain_data_us = gatherer.time().as_secs_f64() * 1e6;
+    plan.stats.set_stream(&gatherer.stream_stats());
+    plan.stats.cells_pending = state.feed.pending_cells();
+
+    let (instances, groups) = build_instances(
+        &InstanceFrame {
+            tile_quads: state.clipmap.tile_quads,
+            spacing: state.spacing,
+            earth: state.earth.as_ref(),
+            eye: inputs.camera.position,
+            skirt_factor: inputs.skirt_factor,
+            skirt_min_m: inputs.skirt_min_m,
+        },
+        &plan.draw_list,
+    );
     let (draws, triangles) = indirect_draws(&groups, inputs.tile_indices);
     let total = instances.len();
     if total > MAX_INSTANCES {
@@ -338,6 +439,9 @@ fn selection_stats(frame: u64, sel: &Selection) -> FrameStats {
         selection_digest: selection_digest(sel),
         finest_level: sel.finest_level,
         tiles_unbounded: sel.unbounded,
+        tiles_hidden: sel.hidden,
+        tiles_late: sel.stream_late,
+        tiles_late_stream: sel.stream_late,
         ..Default::default()
     };
     for l in &sel.levels {
@@ -370,13 +474,19 @@ pub fn selection_digest(sel: &Selection) -> u64 {
     h
 }
 
+/// Samples an upload gathers.
+fn job_samples(job: &ImageUpload) -> usize {
+    job.size[0] as usize * job.size[1] as usize
+}
+
 /// Whether a pool upload of `slot_bytes` fits what is left above the reserve.
-fn upload_fits(budget: &StagingBudget, slot_bytes: u64, reserve: u64) -> bool {
+pub(crate) fn upload_fits(budget: &StagingBudget, slot_bytes: u64, reserve: u64) -> bool {
     budget.remaining() >= slot_bytes + reserve + POOL_UPLOAD_SLACK_BYTES
 }
 
 /// Finds or uploads the pool slot of every refined ring tile (its nodes follow one another in
-/// the selection) and fills `plan.draw_list`. A miss that does not fit the budget leaves the
+/// the selection) and fills `plan.draw_list`. A miss that does not fit the budget, or whose
+/// samples the source does not hold (asked for, by the tile's projected error), leaves the
 /// tile at its best resident resolution — its nodes coarsened to that level — and is late.
 fn resolve_refined_tiles(
     state: &mut PlanState,
@@ -410,9 +520,21 @@ fn resolve_refined_tiles(
         let pool = &mut state.pools[r as usize - 1];
         let slot_bytes = pool.slot_bytes();
         let side = pool.side;
-        let request = pool
-            .lru
-            .request(key, &mut || upload_fits(budget, slot_bytes, reserve));
+        let job = refined_upload(q, &key, 0, side);
+        let gatherer = &mut state.feed.gatherer;
+        let (mut not_resident, mut no_budget) = (false, false);
+        let cap = state.feed.data_cap_samples;
+        // Admitted only with its samples in hand (the slot is assigned after).
+        let request = pool.lru.request(key, &mut || {
+            if !upload_fits(budget, slot_bytes, reserve)
+                || !within_data_cap(gatherer.samples().len(), job_samples(&job), cap)
+            {
+                no_budget = true;
+                return false;
+            }
+            not_resident = gatherer.gather(&job).is_err();
+            !not_resident
+        });
         let (resident_r, slot) = match request {
             Request::Hit { slot } => {
                 plan.stats.pool_hits += 1;
@@ -433,10 +555,25 @@ fn resolve_refined_tiles(
             }
             Request::Unavailable => {
                 plan.stats.tiles_late += 1;
+                if not_resident {
+                    plan.stats.tiles_late_stream += 1;
+                    let rho = group.iter().map(|i| i.rho_px).fold(0.0f32, f32::max);
+                    state
+                        .feed
+                        .gatherer
+                        .want(job.sample_rect(), DRAWN_PRIORITY + rho);
+                }
                 let best = best_resident(&mut state.pools, key);
                 plan.late.push(LateTile {
                     key,
                     drawn_refinement: best.0,
+                    reason: if not_resident {
+                        LateReason::Stream
+                    } else if no_budget {
+                        LateReason::Budget
+                    } else {
+                        LateReason::NoSlot
+                    },
                 });
                 best
             }
@@ -502,7 +639,9 @@ fn coarsen(
 
 /// Uploads, with whatever budget is left, the refined tiles the eye will need
 /// `prefetch_frames` frames from now along its motion (DESIGN.md "Pools": we budget and
-/// prefetch them). Never evicts a slot drawn in the last [`PREFETCH_PROTECT_FRAMES`] frames.
+/// prefetch them), of what the source holds; asks for the rest, and for the level cells the
+/// levels will expose there. Never evicts a slot drawn in the last [`PREFETCH_PROTECT_FRAMES`]
+/// frames.
 fn prefetch(
     state: &mut PlanState,
     inputs: &FrameInputs,
@@ -522,19 +661,23 @@ fn prefetch(
         position: camera.position + motion * inputs.prefetch_frames,
         ..*camera
     };
-    let placements = place_levels(&state.clipmap, eye_samples(ahead.position, state.spacing));
+    let placements = place_levels(&state.clipmap, state.viewer(ahead.position));
+    let ahead_grid = state.grid_eye(ahead.position);
+    state.feed.want_ahead(&placements, ahead_grid);
     select_tiles(
         &state.bake,
         &state.clipmap,
         &placements,
         &ahead,
         inputs.viewport,
-        inputs.select,
+        &state.select_params(inputs.select),
         &mut state.prefetch_selection,
     );
     let q = state.clipmap.tile_quads;
     let mut last = None;
-    for item in &state.prefetch_selection.items {
+    let mut rank = 0u32;
+    let items = std::mem::take(&mut state.prefetch_selection.items);
+    for item in &items {
         if item.refinement == 0 || last == Some((item.level, item.tx, item.ty)) {
             continue;
         }
@@ -550,9 +693,21 @@ fn prefetch(
             continue;
         }
         let slot_bytes = pool.slot_bytes();
+        let job = refined_upload(q, &key, 0, pool.side);
+        let gatherer = &mut state.feed.gatherer;
+        let mut not_resident = false;
+        let cap = state.feed.data_cap_samples;
         let request = pool.lru.prefetch(
             key,
-            &mut || upload_fits(budget, slot_bytes, reserve),
+            &mut || {
+                if !upload_fits(budget, slot_bytes, reserve)
+                    || !within_data_cap(gatherer.samples().len(), job_samples(&job), cap)
+                {
+                    return false;
+                }
+                not_resident = gatherer.gather(&job).is_err();
+                !not_resident
+            },
             PREFETCH_PROTECT_FRAMES,
         );
         if let Request::Miss { slot, evicted } = request {
@@ -566,97 +721,24 @@ fn prefetch(
                 evicted,
                 prefetch: true,
             });
+        } else if not_resident {
+            rank += 1;
+            state
+                .feed
+                .gatherer
+                .want(job.sample_rect(), PREFETCH_PRIORITY / (1.0 + rank as f32));
         } else if !upload_fits(budget, slot_bytes, reserve) {
             break;
         }
     }
+    state.prefetch_selection.items = items;
     Ok(())
-}
-
-/// Where a node lies in its pool slot: the slot holds the ring tile at level L − r, so a node
-/// at `node_level` starts `(slot_x, slot_y)` slot texels in and steps `slot_stride` texels per
-/// vertex. Unrefined nodes (r = 0) read the clipmap: (0, 0, 1).
-pub fn slot_placement(item: &DrawItem, tile_quads: u32) -> (u32, u32, u32) {
-    let r = item.refinement;
-    if r == 0 {
-        return (0, 0, 1);
-    }
-    let q = tile_quads as i64;
-    let node = q << item.node_level;
-    let origin = [item.node_tx as i64 * node, item.node_ty as i64 * node];
-    let tile = q << item.level;
-    let slot_step = 1i64 << (item.level - r);
-    (
-        ((origin[0] - item.tx as i64 * tile) / slot_step) as u32,
-        ((origin[1] - item.ty as i64 * tile) / slot_step) as u32,
-        1u32 << (item.node_level - (item.level - r)),
-    )
-}
-
-/// Per-instance data grouped by refinement (unrefined first, then r = 1..): node origin
-/// relative to the eye (f64 → f32), sample origin, vertex step, level, pool slot and the node's
-/// place in it, skirt depth. Returns the concatenated records and each group's size.
-fn build_instances(
-    state: &PlanState,
-    inputs: &FrameInputs,
-    draw_list: &[(DrawItem, u32)],
-) -> (Vec<TileInstance>, [u32; RESOLUTIONS]) {
-    let q = state.clipmap.tile_quads;
-    let eye = inputs.camera.position;
-    let mut groups: [Vec<TileInstance>; RESOLUTIONS] = Default::default();
-    let nodes: Vec<(u32, u32, u32, f32)> = draw_list
-        .iter()
-        .map(|(i, _)| (i.node_level, i.node_tx, i.node_ty, i.eps_m))
-        .collect();
-    let reach = neighbour_eps(&nodes);
-    for (&(item, slot), &reach_m) in draw_list.iter().zip(&reach) {
-        let node = (q as i64) << item.node_level;
-        let origin = [item.node_tx as i64 * node, item.node_ty as i64 * node];
-        let (slot_x, slot_y, slot_stride) = slot_placement(&item, q);
-        groups[item.refinement as usize].push(TileInstance {
-            origin_rel: [
-                (origin[0] as f64 * state.spacing[0] - eye.x) as f32,
-                (origin[1] as f64 * state.spacing[1] - eye.y) as f32,
-            ],
-            origin_sample: [origin[0] as i32, origin[1] as i32],
-            step: 1 << item.node_level,
-            level: item.level,
-            refinement: item.refinement,
-            slot,
-            // ε + max(ε, neighbours' ε) at the default factor 2 (see neighbour_eps).
-            skirt_m: 0.5 * inputs.skirt_factor * (item.eps_m + reach_m) + inputs.skirt_min_m,
-            slot_x,
-            slot_y,
-            slot_stride,
-        });
-    }
-    let sizes = groups.each_ref().map(|g| g.len() as u32);
-    (groups.concat(), sizes)
-}
-
-/// One indexed indirect command per refinement group, each starting where the previous ended,
-/// and the triangles they draw. A tile without indices draws nothing.
-pub fn indirect_draws(
-    group_sizes: &[u32; RESOLUTIONS],
-    (first_index, index_count): (u32, u32),
-) -> ([DrawIndexedIndirect; RESOLUTIONS], u64) {
-    let mut draws = [DrawIndexedIndirect::default(); RESOLUTIONS];
-    let mut first_instance = 0u32;
-    let mut triangles = 0u64;
-    for (draw, &n) in draws.iter_mut().zip(group_sizes) {
-        *draw = DrawIndexedIndirect {
-            index_count,
-            instance_count: if index_count == 0 { 0 } else { n },
-            first_index,
-            vertex_offset: 0,
-            first_instance,
-        };
-        first_instance += n;
-        triangles += n as u64 * (index_count as u64 / 3);
-    }
-    (draws, triangles)
 }
 
 #[cfg(test)]
 #[path = "plan_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "plan_stream_tests.rs"]
+mod stream_tests;

@@ -9,7 +9,8 @@ use aerie_terrain::camera::{Attitude, Camera, Frustum};
 use aerie_terrain::clipmap::ClipmapDesc;
 use aerie_terrain::dataset::Dataset;
 use aerie_terrain::pool::TileKey;
-use aerie_terrain::select::{DrawItem, SelectParams, Selection};
+use aerie_terrain::select::{select_tiles_multi, DrawItem, SelectParams, Selection};
+use aerie_terrain::source::InMemoryTerrain;
 use aerie_terrain::Heightfield;
 
 use super::*;
@@ -21,7 +22,7 @@ const Q: u32 = 16;
 const INDICES: (u32, u32) = (0, 1734);
 const ALIGN: u64 = 64;
 
-fn rough_bake() -> Arc<ErrorBake> {
+fn rough_dataset() -> Arc<Dataset> {
     let hf = Heightfield {
         width: N,
         height: N,
@@ -37,8 +38,7 @@ fn rough_bake() -> Arc<ErrorBake> {
         voids_filled: 0,
         spacing_note: String::new(),
     };
-    let ds = Dataset::from_heightfield(hf, "plan test".into());
-    Arc::new(bake(&ds, BakeParams::default(), &|_, _| {}))
+    Arc::new(Dataset::from_heightfield(hf, "plan test".into()))
 }
 
 fn clipmap() -> ClipmapDesc {
@@ -52,7 +52,14 @@ fn clipmap() -> ClipmapDesc {
 }
 
 fn state(pool_capacity: &[u32]) -> PlanState {
-    PlanState::new(rough_bake(), [10.0, 10.0], clipmap(), pool_capacity)
+    let ds = rough_dataset();
+    let b = Arc::new(bake(&ds, BakeParams::default(), &|_, _| {}));
+    PlanState::new(
+        b,
+        Arc::new(InMemoryTerrain::new(ds)),
+        clipmap(),
+        pool_capacity,
+    )
 }
 
 fn camera(x: f64, y: f64, z: f64, heading: f64) -> Camera {
@@ -312,7 +319,8 @@ fn a_late_tile_is_drawn_at_its_best_resident_resolution_coarsened_once() {
         plan1.late,
         [LateTile {
             key,
-            drawn_refinement: 1
+            drawn_refinement: 1,
+            reason: LateReason::Budget,
         }]
     );
     let nodes: Vec<_> = plan1

@@ -1,4 +1,4 @@
-//! The dataset's GPU objects: level textures (one array layer per level, toroidal), one texture
+//! The terrain's GPU objects: level textures (one array layer per level, toroidal), one texture
 //! array per refined-tile pool, and the per-frame-in-flight buffers the frame's pushes land in —
 //! with the CPU plan state that decides what they hold.
 
@@ -9,8 +9,8 @@ use gpu_allocator::MemoryLocation;
 
 use aerie_terrain::bake::ErrorBake;
 use aerie_terrain::clipmap::ClipmapDesc;
-use aerie_terrain::dataset::Dataset;
 use aerie_terrain::select::MAX_REFINEMENT;
+use aerie_terrain::source::{SourceGrid, TerrainSource};
 
 use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, TileInstance};
 use crate::render::plan::{PlanState, MAX_INSTANCES};
@@ -18,6 +18,10 @@ use crate::render::stats::RESOLUTIONS;
 use crate::vk::frame_context::FrameContext;
 use crate::vk::image::{Image2d, ImageDesc};
 use crate::vk::{Buffer, Device, VkError, FRAMES_IN_FLIGHT};
+
+/// The normal maps' texel format: x and y of the unit normal (z ≥ 0 is reconstructed), 2 bytes
+/// a texel, half the heights' 4 (`render/normal_map.rs`).
+pub const NORMAL_FORMAT: vk::Format = vk::Format::R8G8_SNORM;
 
 /// Initial instance capacity cap: what every LOD mode but `full` needs at most in practice.
 const INITIAL_MAX_INSTANCES: usize = 1 << 16;
@@ -88,10 +92,14 @@ impl FrameBuffers {
     }
 }
 
-/// The dataset on the GPU and the plan state deciding its contents.
+/// The terrain on the GPU and the plan state deciding its contents (the source is the plan's).
 pub struct GpuTerrain {
-    pub dataset: Arc<Dataset>,
+    /// What the source serves (grid, spacing, valid extent).
+    pub grid: SourceGrid,
     pub levels: Image2d,
+    /// The levels' normal maps (same layout, RG8_SNORM, `render/normal_map.rs`); a 1×1
+    /// placeholder without normal maps.
+    pub normals: Image2d,
     /// One texture array per pool r = 1..=MAX_REFINEMENT (a 1×1 placeholder when r has none).
     pub pool_images: Vec<Image2d>,
     /// One per frame in flight, indexed by the frame context.
@@ -100,22 +108,26 @@ pub struct GpuTerrain {
 }
 
 impl GpuTerrain {
-    /// Creates the textures and per-frame buffers for `dataset` (checked against the device's
-    /// limits); their contents are undefined until initialised and filled.
+    /// Creates the textures and per-frame buffers for `source`'s terrain (checked against the
+    /// device's limits); their contents are undefined until initialised and filled.
     pub fn new(
         d: &Device,
-        dataset: Arc<Dataset>,
+        source: Arc<dyn TerrainSource>,
         bake: Arc<ErrorBake>,
         clipmap: ClipmapDesc,
         pool_capacity: &[u32; MAX_REFINEMENT as usize],
+        normal_maps: bool,
     ) -> Result<Self, VkError> {
         Self::check_level_limits(d, &clipmap)?;
         let level_count = clipmap.level_count();
         let side = clipmap.texture_side();
         let max = d.properties.limits.max_image_dimension2_d;
         let max_layers = d.properties.limits.max_image_array_layers;
-        let spacing = [dataset.hf.spacing_x, dataset.hf.spacing_y];
-        let plan = PlanState::new(bake, spacing, clipmap, pool_capacity);
+        let grid = source.grid().clone();
+        let mut plan = PlanState::new(bake, source, clipmap, pool_capacity);
+        // Geographic data is drawn on the ellipsoid (issue 14); the rest on the flat plane.
+        plan.earth =
+            aerie_terrain::geodesy::GeoGrid::of(grid.geo.as_ref(), grid.spacing_x, grid.spacing_y);
         let image_desc = |w: u32, layers: u32| ImageDesc {
             width: w,
             height: w,
@@ -125,9 +137,32 @@ impl GpuTerrain {
             layers,
         };
         let levels = Image2d::new(d, "level textures", image_desc(side, level_count))?;
+        if normal_maps {
+            plan.feed
+                .gatherer
+                .set_normal_maps(Some([grid.spacing_x, grid.spacing_y]));
+        }
+        let (nside, nlayers) = if normal_maps {
+            (side, level_count)
+        } else {
+            (1, 1)
+        };
+        let normal_desc = ImageDesc {
+            format: NORMAL_FORMAT,
+            ..image_desc(nside, nlayers)
+        };
+        let normals = match Image2d::new(d, "normal maps", normal_desc) {
+            Ok(n) => n,
+            Err(e) => {
+                let mut levels = levels;
+                levels.destroy(d);
+                return Err(e);
+            }
+        };
         let mut this = Self {
-            dataset,
+            grid,
             levels,
+            normals,
             pool_images: Vec::new(),
             frame_buffers: Vec::new(),
             plan,
@@ -186,9 +221,11 @@ impl GpuTerrain {
         Ok(())
     }
 
-    /// Every height texture: the levels, then the pools.
+    /// Every terrain texture: the levels, their normal maps, then the pools.
     pub fn images(&self) -> impl Iterator<Item = vk::Image> + '_ {
-        std::iter::once(self.levels.raw).chain(self.pool_images.iter().map(|p| p.raw))
+        [self.levels.raw, self.normals.raw]
+            .into_iter()
+            .chain(self.pool_images.iter().map(|p| p.raw))
     }
 
     /// Makes `frame`'s buffers hold `instances` records: a larger set replaces them, the old
@@ -199,16 +236,7 @@ impl GpuTerrain {
         frame: &mut FrameContext,
         instances: usize,
     ) -> Result<(), VkError> {
-        let i = frame.index();
-        if instances <= self.frame_buffers[i].instance_capacity {
-            return Ok(());
-        }
-        let grown = FrameBuffers::new(d, instances.next_power_of_two().min(MAX_INSTANCES))?;
-        let old = std::mem::replace(&mut self.frame_buffers[i], grown);
-        frame.defer_destroy(old.indirect);
-        frame.defer_destroy(old.instances);
-        frame.defer_destroy(old.uniforms);
-        Ok(())
+        reserve_instances(&mut self.frame_buffers, d, frame, instances)
     }
 
     /// Call after the device is idle.
@@ -219,6 +247,29 @@ impl GpuTerrain {
         for p in &mut self.pool_images {
             p.destroy(device);
         }
+        self.normals.destroy(device);
         self.levels.destroy(device);
+    }
+}
+
+/// [`GpuTerrain::reserve_instances`] on the buffers alone (while the plan's samples are
+/// borrowed for staging).
+pub fn reserve_instances(
+    frame_buffers: &mut [FrameBuffers],
+    d: &Device,
+    frame: &mut FrameContext,
+    instances: usize,
+) -> Result<(), VkError> {
+    {
+        let i = frame.index();
+        if instances <= frame_buffers[i].instance_capacity {
+            return Ok(());
+        }
+        let grown = FrameBuffers::new(d, instances.next_power_of_two().min(MAX_INSTANCES))?;
+        let old = std::mem::replace(&mut frame_buffers[i], grown);
+        frame.defer_destroy(old.indirect);
+        frame.defer_destroy(old.instances);
+        frame.defer_destroy(old.uniforms);
+        Ok(())
     }
 }

@@ -13,14 +13,20 @@ pub struct FrameStats {
     pub finest_level: u32,
     pub tiles_considered: u32,
     pub tiles_culled: u32,
+    /// Nodes in the frustum but hidden behind nearer terrain (horizon culling), not drawn.
+    pub tiles_hidden: u32,
     /// Ring tiles drawn (considered − culled).
     pub tiles_drawn: u32,
     /// Drawn ring tiles per refinement r chosen by the bound (index r; 0 = unrefined).
     pub tiles_by_refinement: [u32; RESOLUTIONS],
     /// m×m instances drawn: one per unrefined tile, one per quadtree node of a refined tile.
     pub instances: u32,
-    /// Tiles drawn coarser than the bound asked because their upload did not fit this frame.
+    /// Tiles drawn coarser than the bound asked (or, outside the quadtree, not drawn) because
+    /// their upload did not fit this frame or their samples were not resident yet.
     pub tiles_late: u32,
+    /// The part of `tiles_late` due to streaming: samples not resident (a pool upload, or the
+    /// level texture a finer tile is drawn from).
+    pub tiles_late_stream: u32,
     /// Tiles whose bound could not be met within the refinement cap.
     pub tiles_unbounded: u32,
     pub triangles: u64,
@@ -34,6 +40,19 @@ pub struct FrameStats {
     pub pool_hits: u32,
     pub pool_misses: u32,
     pub prefetched: u32,
+    /// Level-texture cells still waiting for their samples after this frame.
+    pub cells_pending: u32,
+    /// The source's totals after this frame (zero for a dataset in memory): `gather` and
+    /// `is_resident` answers wholly resident or not, pages loaded and refused, decoded bytes
+    /// resident now against the budget.
+    pub stream_hits: u64,
+    pub stream_misses: u64,
+    pub stream_loaded: u64,
+    pub stream_failed: u64,
+    pub stream_resident_bytes: u64,
+    pub stream_budget_bytes: u64,
+    /// Time the frame thread spent gathering terrain samples from the source this frame.
+    pub cpu_terrain_data_us: f64,
     /// A hash of the selection (nodes and refinements): equal for channels sharing one.
     #[serde(skip)]
     pub selection_digest: u64,
@@ -45,12 +64,22 @@ pub struct FrameStats {
 }
 
 impl FrameStats {
-    pub const CSV_HEADER: &'static str = "frame,finest_level,tiles_considered,tiles_culled,tiles_drawn,refined_r0,refined_r1,refined_r2,refined_r3,refined_r4,refined_r5,refined_r6,instances,tiles_late,tiles_unbounded,triangles,draw_calls,bytes_clipmap,bytes_refined,bytes_uploaded,budget_spills,pool_hits,pool_misses,prefetched,cpu_select_us,cpu_upload_us,cpu_record_us,gpu_upload_ms,gpu_terrain_ms";
+    pub const CSV_HEADER: &'static str = "frame,finest_level,tiles_considered,tiles_culled,tiles_drawn,refined_r0,refined_r1,refined_r2,refined_r3,refined_r4,refined_r5,refined_r6,instances,tiles_late,tiles_late_stream,tiles_unbounded,triangles,draw_calls,bytes_clipmap,bytes_refined,bytes_uploaded,budget_spills,pool_hits,pool_misses,prefetched,cells_pending,stream_hits,stream_misses,stream_loaded,stream_failed,stream_resident_bytes,stream_budget_bytes,cpu_terrain_data_us,cpu_select_us,cpu_upload_us,cpu_record_us,gpu_upload_ms,gpu_terrain_ms,tiles_hidden";
+
+    /// Copies the source's running totals.
+    pub fn set_stream(&mut self, s: &aerie_terrain::source::StreamStats) {
+        self.stream_hits = s.hits;
+        self.stream_misses = s.misses;
+        self.stream_loaded = s.loaded;
+        self.stream_failed = s.failed;
+        self.stream_resident_bytes = s.resident_bytes;
+        self.stream_budget_bytes = s.budget_bytes;
+    }
 
     pub fn csv_row(&self) -> String {
         let r = &self.tiles_by_refinement;
         format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1},{:.1},{:.1},{:.3},{:.3}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1},{:.1},{:.1},{:.1},{:.3},{:.3},{}",
             self.frame,
             self.finest_level,
             self.tiles_considered,
@@ -65,6 +94,7 @@ impl FrameStats {
             r[6],
             self.instances,
             self.tiles_late,
+            self.tiles_late_stream,
             self.tiles_unbounded,
             self.triangles,
             self.draw_calls,
@@ -75,11 +105,20 @@ impl FrameStats {
             self.pool_hits,
             self.pool_misses,
             self.prefetched,
+            self.cells_pending,
+            self.stream_hits,
+            self.stream_misses,
+            self.stream_loaded,
+            self.stream_failed,
+            self.stream_resident_bytes,
+            self.stream_budget_bytes,
+            self.cpu_terrain_data_us,
             self.cpu_select_us,
             self.cpu_upload_us,
             self.cpu_record_us,
             self.gpu_upload_ms,
-            self.gpu_terrain_ms
+            self.gpu_terrain_ms,
+            self.tiles_hidden
         )
     }
 }
@@ -114,5 +153,17 @@ mod tests {
         assert_eq!(at("refined_r0"), "1");
         assert_eq!(at("refined_r6"), "8");
         assert_eq!(at("gpu_terrain_ms"), "1.500");
+        let s = FrameStats {
+            tiles_late_stream: 3,
+            stream_budget_bytes: 1 << 30,
+            cpu_terrain_data_us: 12.25,
+            ..Default::default()
+        };
+        let row = s.csv_row();
+        let fields: Vec<&str> = row.split(',').collect();
+        let at = |name: &str| fields[header.iter().position(|h| *h == name).unwrap()];
+        assert_eq!(at("tiles_late_stream"), "3");
+        assert_eq!(at("stream_budget_bytes"), "1073741824");
+        assert_eq!(at("cpu_terrain_data_us"), "12.2");
     }
 }

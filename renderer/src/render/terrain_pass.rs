@@ -3,11 +3,14 @@
 
 use ash::vk;
 
+use crate::render::drape_textures::DrapeTextures;
 use crate::render::gpu::DrawIndexedIndirect;
 use crate::render::resources::{FrameBuffers, GpuTerrain};
+use crate::render::sky_pass::record_sky;
 use crate::render::uniforms::SKY_LINEAR;
 use crate::vk::pipeline::{
-    TerrainPipeline, BINDING_CLIPMAP, BINDING_FRAME, BINDING_INSTANCES, BINDING_POOLS,
+    TerrainPipeline, BINDING_CLASSES, BINDING_CLIPMAP, BINDING_FRAME, BINDING_IMAGERY,
+    BINDING_INSTANCES, BINDING_NORMAL_MAPS, BINDING_POOLS,
 };
 use crate::vk::target::{OffscreenTarget, DEPTH_CLEAR};
 use crate::vk::Device;
@@ -25,7 +28,8 @@ pub fn descriptor_pool_sizes() -> [vk::DescriptorPoolSize; 3] {
         },
         vk::DescriptorPoolSize {
             ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-            descriptor_count: DESCRIPTOR_SETS * (1 + aerie_terrain::select::MAX_REFINEMENT),
+            // The clipmap, the pools, the normal maps, then the imagery and the classes.
+            descriptor_count: DESCRIPTOR_SETS * (2 + aerie_terrain::select::MAX_REFINEMENT + 2),
         },
     ]
 }
@@ -40,6 +44,8 @@ pub fn write_descriptors(
     fb: &FrameBuffers,
     t: &GpuTerrain,
     sampler: vk::Sampler,
+    normal_sampler: vk::Sampler,
+    drape: &DrapeTextures,
 ) {
     let uniform_info = [vk::DescriptorBufferInfo {
         buffer: fb.uniforms.raw,
@@ -58,6 +64,17 @@ pub fn write_descriptors(
     };
     let clipmap_info = [image(t.levels.view)];
     let pool_info: Vec<_> = t.pool_images.iter().map(|p| image(p.view)).collect();
+    let normal_info = [vk::DescriptorImageInfo {
+        sampler: normal_sampler,
+        ..image(t.normals.view)
+    }];
+    let drape_image = |view, sampler| vk::DescriptorImageInfo {
+        sampler,
+        image_view: view,
+        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+    };
+    let imagery_info = [drape_image(drape.imagery_view(), drape.linear)];
+    let classes_info = [drape_image(drape.classes_view(), drape.nearest)];
     let writes = [
         vk::WriteDescriptorSet::default()
             .dst_set(set)
@@ -79,6 +96,21 @@ pub fn write_descriptors(
             .dst_binding(BINDING_POOLS)
             .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
             .image_info(&pool_info),
+        vk::WriteDescriptorSet::default()
+            .dst_set(set)
+            .dst_binding(BINDING_NORMAL_MAPS)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .image_info(&normal_info),
+        vk::WriteDescriptorSet::default()
+            .dst_set(set)
+            .dst_binding(BINDING_IMAGERY)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .image_info(&imagery_info),
+        vk::WriteDescriptorSet::default()
+            .dst_set(set)
+            .dst_binding(BINDING_CLASSES)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .image_info(&classes_info),
     ];
     // `set` comes from this frame's pool, whose previous submission has completed (the frame
     // context); every buffer, view and the sampler written are live; the info arrays outlive
@@ -87,7 +119,8 @@ pub fn write_descriptors(
     unsafe { d.raw.update_descriptor_sets(&writes, &[]) };
 }
 
-/// The terrain pass: clear, bind, one multi-draw indirect (one command per resolution).
+/// The terrain pass: clear, bind, one multi-draw indirect (one command per resolution), then
+/// with `sky` the sky where no terrain was drawn (`sky_pass.rs`).
 #[allow(clippy::too_many_arguments)]
 pub fn record_terrain_pass(
     d: &Device,
@@ -98,6 +131,9 @@ pub fn record_terrain_pass(
     index_buffer: vk::Buffer,
     indirect: vk::Buffer,
     draw_count: u32,
+    sky: bool,
+    // Draws recorded after the tiles, before the sky (the tessellation baseline's patches).
+    extra: &dyn Fn(vk::CommandBuffer),
 ) {
     let (w, h) = (target.width, target.height);
     let colour_attachment = [vk::RenderingAttachmentInfo::default()
@@ -174,6 +210,11 @@ pub fn record_terrain_pass(
                 std::mem::size_of::<DrawIndexedIndirect>() as u32,
             );
         }
-        d.raw.cmd_end_rendering(cmd);
     }
+    extra(cmd);
+    if sky {
+        record_sky(d, cmd, pipeline, set);
+    }
+    // SAFETY: `cmd` is inside the rendering begun above.
+    unsafe { d.raw.cmd_end_rendering(cmd) };
 }

@@ -1,15 +1,16 @@
-//! Carrying out upload jobs: gathering dataset samples into the staging region, recording the
-//! copies into the height textures, and streaming uploads larger than one frame's budget over
-//! several submissions (the first fill of a dataset, a spill after a jump, the index buffer).
+//! Carrying out upload jobs: copying the samples the plan gathered from its source into the
+//! staging region (in the plan's order: strips, then pool uploads), recording the copies into
+//! the height textures, and streaming uploads larger than one frame's budget over several
+//! submissions (the first fill of a dataset, a spill after a jump, the index buffer).
 
 use ash::vk;
 
-use aerie_terrain::gather::gather;
 use aerie_terrain::select::MAX_REFINEMENT;
-use aerie_terrain::Heightfield;
 
+use crate::render::gathered::SampleCursor;
 use crate::render::gpu::FrameUniforms;
 use crate::render::jobs::ImageUpload;
+use crate::render::normal_map::NormalTexel;
 use crate::render::overlay_pass::Panel;
 use crate::render::plan::FramePlan;
 use crate::vk::access::{image_barrier, memory_barrier, Access};
@@ -17,24 +18,52 @@ use crate::vk::frame_context::FrameRing;
 use crate::vk::staging::StagingRing;
 use crate::vk::{Device, VkError};
 
-/// Where a sampled height texture rests between uploads.
-const SAMPLED: [Access; 1] = [Access::VertexShaderReadSampledImage];
+/// Where a sampled texture rests between uploads (heights in the vertex shader, normal maps in
+/// the fragment shader).
+const SAMPLED: [Access; 2] = [
+    Access::VertexShaderReadSampledImage,
+    Access::FragmentShaderReadSampledImage,
+];
 const COPY_DST: [Access; 1] = [Access::TransferWrite];
 
-/// Gathers one upload's samples straight into the open staging region; returns its copy region.
-pub fn stage_gather(
+/// Copies one upload's gathered samples (the cursor's next) into the open staging region;
+/// returns its copy region.
+pub fn stage_samples(
     staging: &mut StagingRing,
-    hf: &Heightfield,
+    samples: &mut SampleCursor,
     job: &ImageUpload,
 ) -> Result<vk::BufferImageCopy, VkError> {
+    let Some(src) = samples.next(job) else {
+        return Err(VkError::Other(format!(
+            "the plan gathered fewer samples than its uploads need ({} left for {}×{})",
+            samples.left(),
+            job.size[0],
+            job.size[1]
+        )));
+    };
     let (offset, bytes) = staging.alloc(job.bytes(), 4)?;
-    gather(
-        hf,
-        job.origin_sample,
-        job.step,
-        job.size,
-        bytemuck::cast_slice_mut(bytes),
-    );
+    bytes.copy_from_slice(bytemuck::cast_slice(src));
+    Ok(buffer_image_copy(offset, job))
+}
+
+/// Copies one level strip's normal texels (the cursor's next) into the open staging region;
+/// returns its copy region (into the normal texture, same texels and layer as the heights).
+pub fn stage_normals(
+    staging: &mut StagingRing,
+    normals: &mut SampleCursor<NormalTexel>,
+    job: &ImageUpload,
+) -> Result<vk::BufferImageCopy, VkError> {
+    let Some(src) = normals.next(job) else {
+        return Err(VkError::Other(format!(
+            "the plan computed fewer normal texels than its strips need ({} left for {}×{})",
+            normals.left(),
+            job.size[0],
+            job.size[1]
+        )));
+    };
+    let bytes = src.len() as u64 * crate::render::normal_map::NORMAL_TEXEL_BYTES;
+    let (offset, out) = staging.alloc(bytes, 4)?;
+    out.copy_from_slice(bytemuck::cast_slice(src));
     Ok(buffer_image_copy(offset, job))
 }
 
@@ -75,7 +104,7 @@ pub fn record_image_copies(
     let colour = vk::ImageAspectFlags::COLOR;
     image_barrier(device, cmd, image, colour, &SAMPLED, &COPY_DST, false);
     // `image` is live and in TRANSFER_DST_OPTIMAL after the barrier; every region was staged inside
-    // `staging` by `stage_gather` and lies inside the image (the plan's texel rectangles are within
+    // `staging` by `stage_samples` and lies inside the image (the plan's texel rectangles are within
     // the texture side and its layers).
     // SAFETY: `cmd` is recording.
     unsafe {
@@ -153,23 +182,32 @@ pub fn stream_buffer(
 }
 
 /// Streams level-texture uploads into `image`, one submission per inner list (as the plan split
-/// them). Returns the submission count.
+/// them), each job's normal texels after its heights into the normal texture when `normals`.
+/// Returns the submission count.
 pub fn stream_image_uploads(
     device: &Device,
     ring: &mut FrameRing,
-    hf: &Heightfield,
+    samples: &mut SampleCursor,
     image: vk::Image,
+    mut normals: Option<(vk::Image, &mut SampleCursor<NormalTexel>)>,
     submissions: &[Vec<ImageUpload>],
 ) -> Result<u32, VkError> {
     for jobs in submissions {
         let mut frame = ring.begin_frame(device)?;
-        let copies = jobs
-            .iter()
-            .map(|job| stage_gather(frame.staging(), hf, job))
-            .collect::<Result<Vec<_>, _>>()?;
+        let mut copies = Vec::with_capacity(jobs.len());
+        let mut normal_copies = Vec::new();
+        for job in jobs {
+            copies.push(stage_samples(frame.staging(), samples, job)?);
+            if let Some((_, cursor)) = normals.as_mut() {
+                normal_copies.push(stage_normals(frame.staging(), cursor, job)?);
+            }
+        }
         let src = frame.staging_buffer();
         let cmd = frame.begin_recording(device)?;
         record_image_copies(device, cmd, src, image, &copies);
+        if let Some((normal_image, _)) = normals.as_ref() {
+            record_image_copies(device, cmd, src, *normal_image, &normal_copies);
+        }
         let _in_flight = frame.submit(device)?;
     }
     Ok(submissions.len() as u32)
@@ -178,6 +216,8 @@ pub fn stream_image_uploads(
 /// Where a frame's plan landed in its staging region.
 pub struct StagedFrame {
     pub strip_copies: Vec<vk::BufferImageCopy>,
+    /// The strips' normal texels, into the normal texture (empty without normal maps).
+    pub normal_copies: Vec<vk::BufferImageCopy>,
     /// Copies per pool r = 1..=MAX_REFINEMENT (index r − 1), in the plan's order.
     pub pool_copies: Vec<Vec<vk::BufferImageCopy>>,
     pub uniforms: u64,
@@ -189,24 +229,36 @@ pub struct StagedFrame {
 }
 
 /// Stages everything `plan` says, in its order — strips, pool uploads, uniforms, indirect
-/// commands, instances, overlay — into the frame's open region, and checks that it took
-/// exactly the bytes the plan counted (so the plan's budget decisions were about this region).
+/// commands, instances, overlay — into the frame's open region (the uploads' samples from
+/// `samples`, which must then be spent), and checks that it took exactly the bytes the plan
+/// counted (so the plan's budget decisions were about this region).
 pub fn stage_frame(
     staging: &mut StagingRing,
-    hf: &Heightfield,
+    samples: &mut SampleCursor,
+    normals: &mut SampleCursor<NormalTexel>,
     plan: &FramePlan,
     uniforms: &FrameUniforms,
     overlay: Option<&Panel>,
 ) -> Result<StagedFrame, VkError> {
-    let strip_copies = plan
-        .strips
-        .iter()
-        .map(|job| stage_gather(staging, hf, job))
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut strip_copies = Vec::with_capacity(plan.strips.len());
+    let mut normal_copies = Vec::new();
+    for job in &plan.strips {
+        strip_copies.push(stage_samples(staging, samples, job)?);
+        if plan.normal_maps {
+            normal_copies.push(stage_normals(staging, normals, job)?);
+        }
+    }
     let mut pool_copies = vec![Vec::new(); MAX_REFINEMENT as usize];
     for p in &plan.pool_uploads {
-        let copy = stage_gather(staging, hf, &p.upload)?;
+        let copy = stage_samples(staging, samples, &p.upload)?;
         pool_copies[p.key.refinement as usize - 1].push(copy);
+    }
+    if samples.left() != 0 || normals.left() != 0 {
+        return Err(VkError::Other(format!(
+            "the plan gathered {} samples and {} normal texels more than its uploads staged",
+            samples.left(),
+            normals.left()
+        )));
     }
     let uniforms = staging.push(std::slice::from_ref(uniforms), 16)?;
     let draws = staging.push(&plan.draws, 4)?;
@@ -228,6 +280,7 @@ pub fn stage_frame(
     }
     Ok(StagedFrame {
         strip_copies,
+        normal_copies,
         pool_copies,
         uniforms,
         draws,

@@ -29,16 +29,41 @@ impl StraightPass {
         duration_s: f64,
     ) -> Self {
         let hf = &ds.hf;
-        let ex = (ds.valid_width - 1) as f64 * hf.spacing_x;
-        let ey = (ds.valid_height - 1) as f64 * hf.spacing_y;
+        let (_, top) = hf.min_max();
+        let extent = [
+            (ds.valid_width - 1) as f64 * hf.spacing_x,
+            (ds.valid_height - 1) as f64 * hf.spacing_y,
+        ];
+        Self::over_extent(
+            extent,
+            top as f64,
+            heading_deg,
+            pitch_deg,
+            speed,
+            agl,
+            duration_s,
+        )
+    }
+
+    /// [`Self::over`] a terrain of `extent` metres (east, north) whose highest sample is `top`
+    /// metres — a source whose samples are not all in memory (a streamed store).
+    pub fn over_extent(
+        extent: [f64; 2],
+        top: f64,
+        heading_deg: f64,
+        pitch_deg: f64,
+        speed: f64,
+        agl: f64,
+        duration_s: f64,
+    ) -> Self {
+        let [ex, ey] = extent;
         let centre = DVec2::new(ex / 2.0, ey / 2.0);
         let h = heading_deg.to_radians();
         let dir = DVec2::new(h.sin(), h.cos());
         let half = (speed * duration_s / 2.0).min(ex.min(ey) / 2.0);
-        let (_, top) = hf.min_max();
         Self {
             start: centre - dir * half,
-            altitude: top as f64 + agl,
+            altitude: top + agl,
             speed,
             attitude: Attitude::from_degrees(heading_deg, pitch_deg, 0.0),
         }

@@ -3,8 +3,9 @@
 //! frame, either carried forward to the frame's display time or locked to a host frame number.
 //!
 //! Pure decisions, tested without sockets or a device:
-//! - [`GeoMapping`]: WGS84 latitude/longitude/altitude ↔ the dataset's local metres, the same
-//!   mapping the terrain loaders use to place a geographic grid;
+//! - [`GeoMapping`]: WGS84 latitude/longitude/altitude ↔ the world frame a geographic dataset
+//!   is drawn in (ENU at its south-west sample, the terrain on the ellipsoid), and ↔ the grid
+//!   metres its samples are indexed by;
 //! - [`FrameHistory`]: the last poses keyed by host frame counter, and which one a frame renders
 //!   in frame-locked mode (`--sync-frames k`);
 //! - [`aircraft_pose`]: a wire [`Pose`] → the renderer's [`AircraftPose`].
@@ -24,103 +25,149 @@ use glam::DVec3;
 
 use crate::sim::channel::AircraftPose;
 use aerie_terrain::camera::Attitude;
-use aerie_terrain::dataset::Dataset;
-use aerie_terrain::GeoReference;
+use aerie_terrain::geodesy::geoid::GeoidCells;
+use aerie_terrain::geodesy::GeoidCache;
 
-/// Where geodetic poses land in the dataset's local frame.
-///
-/// The terrain loaders put a geographic grid (SRTM `.hgt`, geographic GeoTIFF, stitched tiles)
-/// on a regular metric grid: sample (col, row) sits at `x = col · spacing_x`, `y = row ·
-/// spacing_y`, where col/row count `dlon`/`dlat` steps from the south-west sample and the
-/// spacings are the WGS84 arc lengths of one step at the grid's centre latitude
-/// (`terrain::load::geographic_spacing_m`). A pose must land on the ground the terrain shows
-/// there, so it goes through the *same* linear map:
-///
-/// ```text
-/// x = (lon − west_lon) / dlon · spacing_x      y = (lat − south_lat) / dlat · spacing_y
-/// z = altitude as sent (metres; the grid's heights are metres above sea level, like CIGI's)
-/// ```
-///
-/// North is +y everywhere on this grid, so headings need no correction. It is not a tangent
-/// plane: far from the centre latitude the east-west scale differs from the true one by
-/// `cos(lat)/cos(centre)` — the terrain is drawn with the same distortion, so the aircraft
-/// stays over the right ground. Longitudes are taken the short way round from `west_lon`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GeoMapping {
-    pub south_lat_deg: f64,
-    pub west_lon_deg: f64,
-    pub dlat_deg: f64,
-    pub dlon_deg: f64,
-    pub spacing_x: f64,
-    pub spacing_y: f64,
+pub use crate::sim::geo_mapping::GeoMapping;
+
+/// The vertical datum of a host's geodetic altitudes (`aerie run --host-heights`,
+/// `[input] host_heights`; PROTOCOL.md "Datums and placement").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum HostHeights {
+    /// Above mean sea level, as CIGI specifies and SRTM heights are: used as they are.
+    #[default]
+    Msl,
+    /// Above the WGS84 ellipsoid (a GNSS height): the EGM96 geoid undulation N is taken off,
+    /// H = h − N, before the pose is placed over terrain in MSL heights.
+    Ellipsoidal,
 }
 
-impl GeoMapping {
-    /// The mapping of a dataset with a geographic geo-reference; `Err` names why there is none.
-    pub fn of_dataset(ds: &Dataset) -> Result<Self, String> {
-        match &ds.hf.geo {
-            Some(GeoReference::Geographic {
-                south_lat_deg,
-                west_lon_deg,
-                dlat_deg,
-                dlon_deg,
-            }) => Ok(Self {
-                south_lat_deg: *south_lat_deg,
-                west_lon_deg: *west_lon_deg,
-                dlat_deg: *dlat_deg,
-                dlon_deg: *dlon_deg,
-                spacing_x: ds.hf.spacing_x,
-                spacing_y: ds.hf.spacing_y,
-            }),
-            Some(GeoReference::Projected { crs, .. }) => Err(format!(
-                "{}: projected grid ({crs}); geodetic poses need a geographic (lat/lon) dataset, send local x/y/z instead",
-                ds.source
-            )),
-            None => Err(format!(
-                "{}: no geo-reference; geodetic poses need a geo-referenced dataset (e.g. SRTM .hgt), send local x/y/z instead",
-                ds.source
-            )),
+impl HostHeights {
+    /// The config's name of it.
+    pub fn of_config(h: aerie_config::HostHeightsName) -> Self {
+        match h {
+            aerie_config::HostHeightsName::Msl => HostHeights::Msl,
+            aerie_config::HostHeightsName::Ellipsoidal => HostHeights::Ellipsoidal,
+        }
+    }
+}
+
+impl std::str::FromStr for HostHeights {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        aerie_config::HostHeightsName::parse(s)
+            .map(Self::of_config)
+            .ok_or_else(|| {
+                format!(
+                    "unknown height datum `{s}` (expected {})",
+                    aerie_config::HostHeightsName::NAMES
+                )
+            })
+    }
+}
+
+/// A host's geodetic altitudes brought into the data's datum: as they are for
+/// [`HostHeights::Msl`], less the geoid undulation (kept per place in a [`GeoidCache`]) for
+/// [`HostHeights::Ellipsoidal`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct HostDatum {
+    pub heights: HostHeights,
+    geoid: GeoidCache,
+}
+
+impl HostDatum {
+    pub fn new(heights: HostHeights) -> Self {
+        Self {
+            heights,
+            geoid: GeoidCache::default(),
         }
     }
 
-    /// Latitude/longitude (degrees) and altitude (metres) → local metres.
-    pub fn to_local(&self, lat_deg: f64, lon_deg: f64, alt_m: f64) -> DVec3 {
-        let dlon = (lon_deg - self.west_lon_deg + 180.0).rem_euclid(360.0) - 180.0;
-        DVec3::new(
-            dlon / self.dlon_deg * self.spacing_x,
-            (lat_deg - self.south_lat_deg) / self.dlat_deg * self.spacing_y,
-            alt_m,
-        )
+    /// A host altitude at (lat, lon) → metres in the data's datum (MSL).
+    pub fn to_data_m(&mut self, lat_deg: f64, lon_deg: f64, alt_m: f64) -> f64 {
+        match self.heights {
+            HostHeights::Msl => alt_m,
+            HostHeights::Ellipsoidal => self.geoid.msl_of_ellipsoidal(lat_deg, lon_deg, alt_m),
+        }
     }
 
-    /// Local metres → (latitude, longitude in [−180, 180), altitude).
-    pub fn to_geodetic(&self, p: DVec3) -> (f64, f64, f64) {
-        let lon = self.west_lon_deg + p.x / self.spacing_x * self.dlon_deg;
-        (
-            self.south_lat_deg + p.y / self.spacing_y * self.dlat_deg,
-            (lon + 180.0).rem_euclid(360.0) - 180.0,
-            p.z,
-        )
+    /// A wire pose with its geodetic altitude in the data's datum (local poses unchanged).
+    pub fn pose_in_data_datum(&mut self, pose: &Pose) -> Pose {
+        let mut p = *pose;
+        if let PosePosition::Geodetic {
+            lat_deg,
+            lon_deg,
+            alt_m,
+        } = pose.position
+        {
+            p.position = PosePosition::Geodetic {
+                lat_deg,
+                lon_deg,
+                alt_m: self.to_data_m(lat_deg, lon_deg, alt_m),
+            };
+        }
+        p
     }
 }
 
-/// A wire pose as the renderer's aircraft pose: local ENU positions as they are, geodetic ones
-/// through `geo` (an error when the dataset has none: the reason from [`GeoMapping::of_dataset`]).
+/// The host's datum for heights at many places (entities, terrain-query points and their
+/// answers): [`HostDatum`] with N kept per place ([`GeoidCells`]).
+#[derive(Debug, Clone, Default)]
+pub struct HostDatumAtPlaces {
+    pub heights: HostHeights,
+    cells: GeoidCells,
+}
+
+impl HostDatumAtPlaces {
+    pub fn new(heights: HostHeights) -> Self {
+        Self {
+            heights,
+            cells: GeoidCells::default(),
+        }
+    }
+
+    /// A host altitude at (lat, lon) → metres in the data's datum (MSL).
+    pub fn to_data_m(&mut self, lat_deg: f64, lon_deg: f64, alt_m: f64) -> f64 {
+        match self.heights {
+            HostHeights::Msl => alt_m,
+            HostHeights::Ellipsoidal => alt_m - self.cells.undulation_m(lat_deg, lon_deg),
+        }
+    }
+
+    /// A height in the data's datum at (lat, lon) → the host's datum (an answer's).
+    pub fn to_host_m(&mut self, lat_deg: f64, lon_deg: f64, h_m: f64) -> f64 {
+        match self.heights {
+            HostHeights::Msl => h_m,
+            HostHeights::Ellipsoidal => h_m + self.cells.undulation_m(lat_deg, lon_deg),
+        }
+    }
+}
+
+/// A wire pose as the renderer's aircraft pose: local ENU positions (and their attitudes) as
+/// they are, against the dataset's origin; geodetic ones at their exact point with the attitude
+/// taken at that point ([`GeoMapping::to_world`], [`GeoMapping::attitude_at`]) — an error when
+/// the dataset has no geographic reference (the reason from [`GeoMapping::of_dataset`]).
 pub fn aircraft_pose(pose: &Pose, geo: Result<&GeoMapping, &str>) -> Result<AircraftPose, String> {
-    let position = match pose.position {
-        PosePosition::LocalEnu { x, y, z } => DVec3::new(x, y, z),
+    let [h, p, r] = pose.attitude_deg;
+    let attitude = Attitude::from_degrees(h, p, r);
+    Ok(match pose.position {
+        PosePosition::LocalEnu { x, y, z } => AircraftPose {
+            position: DVec3::new(x, y, z),
+            attitude,
+        },
         PosePosition::Geodetic {
             lat_deg,
             lon_deg,
             alt_m,
-        } => geo
-            .map_err(|why| format!("received a geodetic pose (lat/lon/alt) but {why}"))?
-            .to_local(lat_deg, lon_deg, alt_m),
-    };
-    let [h, p, r] = pose.attitude_deg;
-    Ok(AircraftPose {
-        position,
-        attitude: Attitude::from_degrees(h, p, r),
+        } => {
+            let g =
+                geo.map_err(|why| format!("received a geodetic pose (lat/lon/alt) but {why}"))?;
+            AircraftPose {
+                position: g.to_world(lat_deg, lon_deg, alt_m),
+                attitude: g.attitude_at(lat_deg, lon_deg, attitude),
+            }
+        }
     })
 }
 
@@ -297,6 +344,8 @@ pub struct InputSpec {
     pub world_bound_m: f64,
     /// Ask an X-Plane to stream RPOS to the port (`--xplane`).
     pub xplane_rpos: Option<RposRequest>,
+    /// The datum of the host's geodetic altitudes (`--host-heights`).
+    pub host_heights: HostHeights,
 }
 
 /// How long without a pose before the stream is reported lost when the extrapolation cap is
@@ -334,6 +383,15 @@ pub struct SimInput {
     params: ExtrapolationParams,
     sync_frames: Option<u32>,
     history: FrameHistory,
+    datum: HostDatum,
+}
+
+impl SimInput {
+    /// The datum of the host's geodetic heights (`--host-heights`), for its entities and
+    /// terrain queries too.
+    pub fn host_heights(&self) -> HostHeights {
+        self.datum.heights
+    }
 }
 
 pub fn state_name(s: StreamState) -> &'static str {
@@ -435,6 +493,7 @@ impl SimInput {
             params,
             sync_frames: spec.sync_frames,
             history: FrameHistory::default(),
+            datum: HostDatum::new(spec.host_heights),
         })
     }
 
@@ -500,6 +559,7 @@ impl SimInput {
                 )
             }
         };
+        let pose = self.datum.pose_in_data_datum(&pose);
         let aircraft = aircraft_pose(&pose, self.geo.as_ref().map_err(String::as_str))?;
         Ok(Some((aircraft, info)))
     }
@@ -572,197 +632,5 @@ impl Drop for SimInput {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn stamped(frame: u64, arrival_s: f64) -> Stamped {
-        Stamped {
-            pose: Pose {
-                position: PosePosition::LocalEnu {
-                    x: frame as f64,
-                    y: 0.0,
-                    z: 100.0,
-                },
-                attitude_deg: [0.0; 3],
-                sim_time_s: frame as f64 / 60.0,
-                frame,
-                velocity_enu: None,
-                angular_rates_deg_s: None,
-            },
-            arrival_s,
-            sample: frame,
-        }
-    }
-
-    fn frames(h: &FrameHistory) -> Vec<u64> {
-        h.entries.iter().map(|s| s.pose.frame).collect()
-    }
-
-    #[test]
-    fn serial_frame_numbers_wrap() {
-        assert_eq!(frame_diff(5, 3), 2);
-        assert_eq!(frame_diff(3, 5), -2);
-        assert_eq!(frame_diff(1, u64::from(u32::MAX)), 2);
-        assert_eq!(frame_diff(u64::from(u32::MAX), 1), -2);
-    }
-
-    #[test]
-    fn newest_minus_k_with_reordering() {
-        let mut h = FrameHistory::new(8);
-        for f in [10, 12, 11, 14, 13] {
-            assert_eq!(h.insert(stamped(f, 0.0)), Inserted::Kept, "{f}");
-        }
-        assert_eq!(frames(&h), [10, 11, 12, 13, 14]);
-        assert_eq!(h.insert(stamped(12, 1.0)), Inserted::Duplicate);
-        let p = h.pick(0).unwrap();
-        assert_eq!((p.target, p.sample.pose.frame, p.exact), (14, 14, true));
-        let p = h.pick(2).unwrap();
-        assert_eq!((p.target, p.sample.pose.frame, p.exact), (12, 12, true));
-        // Fewer than k + 1 frames seen: nothing yet (never a frame after the target).
-        assert!(h.pick(5).is_none());
-        assert_eq!(h.pick(4).unwrap().sample.pose.frame, 10);
-        assert!(FrameHistory::new(4).pick(0).is_none());
-    }
-
-    #[test]
-    fn gap_renders_the_newest_frame_before_the_target() {
-        let mut h = FrameHistory::new(8);
-        for f in [20, 21, 23, 24] {
-            h.insert(stamped(f, 0.0));
-        }
-        // 22 was lost: newest − 2 = 22 → 21, not exact.
-        let p = h.pick(2).unwrap();
-        assert_eq!((p.target, p.sample.pose.frame, p.exact), (22, 21, false));
-        // The late 22 fills the gap.
-        assert_eq!(h.insert(stamped(22, 0.1)), Inserted::Kept);
-        let p = h.pick(2).unwrap();
-        assert_eq!((p.sample.pose.frame, p.exact), (22, true));
-    }
-
-    #[test]
-    fn capacity_and_wraparound() {
-        let mut h = FrameHistory::new(4);
-        let max = u64::from(u32::MAX);
-        for f in [max - 2, max - 1, max, 0, 1] {
-            assert_eq!(h.insert(stamped(f, 0.0)), Inserted::Kept, "{f}");
-        }
-        // Wrapped frame numbers are newer; the oldest was dropped to keep 4.
-        assert_eq!(frames(&h), [max - 1, max, 0, 1]);
-        assert_eq!(h.newest(), Some(1));
-        let p = h.pick(2).unwrap();
-        assert_eq!((p.sample.pose.frame, p.exact), (max, true));
-        // Older than everything kept while full.
-        assert_eq!(h.insert(stamped(max - 3, 0.0)), Inserted::TooOld);
-        // A host restart far behind: start over.
-        assert_eq!(h.insert(stamped(max - 1000, 0.0)), Inserted::Restart);
-        assert_eq!(frames(&h), [max - 1000]);
-    }
-
-    #[test]
-    fn picks_agree_for_any_arrival_order() {
-        // Two machines receiving the same frames in different orders and at different times
-        // render the same pose for the same target once the target has arrived.
-        let order_a = [1u64, 2, 3, 4, 5, 6, 7, 8];
-        let order_b = [2u64, 1, 4, 3, 6, 5, 8, 7];
-        let (mut a, mut b) = (FrameHistory::new(16), FrameHistory::new(16));
-        for (fa, fb) in order_a.iter().zip(order_b) {
-            a.insert(stamped(*fa, 0.0));
-            b.insert(stamped(fb, 0.5));
-            for k in 0..3 {
-                if let (Some(pa), Some(pb)) = (a.pick(k), b.pick(k)) {
-                    assert!(pa.sample.pose.frame <= pa.target);
-                    if pa.target == pb.target && pa.exact && pb.exact {
-                        assert_eq!(pa.sample.pose, pb.sample.pose);
-                    }
-                }
-            }
-        }
-        assert_eq!(
-            a.pick(1).unwrap().sample.pose,
-            b.pick(1).unwrap().sample.pose
-        );
-    }
-
-    fn inn_valley() -> GeoMapping {
-        // N47E011 at 3": spacing at the centre latitude 47.5°.
-        let (sx, sy) = aerie_terrain::load::geographic_spacing_m(47.5, 1.0 / 1200.0, 1.0 / 1200.0);
-        GeoMapping {
-            south_lat_deg: 47.0,
-            west_lon_deg: 11.0,
-            dlat_deg: 1.0 / 1200.0,
-            dlon_deg: 1.0 / 1200.0,
-            spacing_x: sx,
-            spacing_y: sy,
-        }
-    }
-
-    #[test]
-    fn geodetic_lands_on_the_sample_grid() {
-        let g = inn_valley();
-        // Sample (col 600, row 300) is at lon 11.5°, lat 47.25°.
-        let p = g.to_local(47.25, 11.5, 2500.0);
-        assert!((p.x - 600.0 * g.spacing_x).abs() < 1e-6, "{p}");
-        assert!((p.y - 300.0 * g.spacing_y).abs() < 1e-6, "{p}");
-        assert_eq!(p.z, 2500.0);
-        let (lat, lon, alt) = g.to_geodetic(p);
-        assert!((lat - 47.25).abs() < 1e-12 && (lon - 11.5).abs() < 1e-12 && alt == 2500.0);
-        // Longitudes given in [180, 360) or across the antimeridian go the short way.
-        let w = GeoMapping {
-            west_lon_deg: 179.5,
-            ..g
-        };
-        let a = w.to_local(47.0, -179.75, 0.0);
-        assert!((a.x - 900.0 * g.spacing_x).abs() < 1e-6, "{a}");
-        let b = w.to_local(47.0, 180.25, 0.0);
-        assert!((a.x - b.x).abs() < 1e-6);
-    }
-
-    #[test]
-    fn geodetic_pose_needs_a_geo_reference() {
-        let pose = Pose {
-            position: PosePosition::Geodetic {
-                lat_deg: 47.1,
-                lon_deg: 11.2,
-                alt_m: 3000.0,
-            },
-            attitude_deg: [90.0, -5.0, 10.0],
-            sim_time_s: 0.0,
-            frame: 1,
-            velocity_enu: None,
-            angular_rates_deg_s: None,
-        };
-        let e = aircraft_pose(&pose, Err("gen.f32: no geo-reference")).unwrap_err();
-        assert!(
-            e.contains("geodetic") && e.contains("gen.f32: no geo-reference"),
-            "{e}"
-        );
-        let g = inn_valley();
-        let a = aircraft_pose(&pose, Ok(&g)).unwrap();
-        assert_eq!(a.position, g.to_local(47.1, 11.2, 3000.0));
-        assert!((a.attitude.heading.to_degrees() - 90.0).abs() < 1e-12);
-        assert!((a.attitude.roll.to_degrees() - 10.0).abs() < 1e-12);
-        // Local poses need nothing.
-        let local = Pose {
-            position: PosePosition::LocalEnu {
-                x: 1.0,
-                y: 2.0,
-                z: 3.0,
-            },
-            ..pose
-        };
-        let a = aircraft_pose(&local, Err("none")).unwrap();
-        assert_eq!(a.position, DVec3::new(1.0, 2.0, 3.0));
-    }
-
-    #[test]
-    fn protocols_parse() {
-        assert_eq!("shm".parse::<InputProtocol>(), Ok(InputProtocol::Shm));
-        assert_eq!(
-            "cigi".parse::<InputProtocol>(),
-            Ok(InputProtocol::Udp(ProtocolChoice::Only(
-                aerie_sim_bridge::Protocol::Cigi
-            )))
-        );
-        assert!("ftp".parse::<InputProtocol>().unwrap_err().contains("shm"));
-    }
-}
+#[path = "pose_input_tests.rs"]
+mod tests;

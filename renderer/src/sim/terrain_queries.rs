@@ -6,22 +6,90 @@
 
 use aerie_sim_bridge::query::{Answer, LosAnswer, LosHit, Surface, TerrainQueries};
 use aerie_sim_bridge::PosePosition;
-use aerie_terrain::query::{first_hit, height_of_terrain, InMemorySource, Lookup, Ray};
+use std::cell::RefCell;
+use std::sync::Arc;
+
+use aerie_terrain::query::{
+    first_hit, height_of_terrain, InMemorySource, Lookup, Ray, SurfaceSource,
+};
+use aerie_terrain::stream::{StreamedStore, StreamedSurface};
 use glam::DVec3;
 
-use crate::sim::pose_input::GeoMapping;
+use crate::sim::pose_input::{GeoMapping, HostDatumAtPlaces, HostHeights};
+
+/// Where the answers are read: the dataset in memory, or a streamed store's resident level-0
+/// pages (a snapshot taken at the start of each IG frame, [`DatasetQueries::refresh`]).
+enum QuerySurface {
+    Memory(InMemorySource),
+    Streamed {
+        store: Arc<StreamedStore>,
+        snapshot: StreamedSurface,
+    },
+}
 
 /// The query service of one loaded dataset.
 pub struct DatasetQueries {
-    source: InMemorySource,
+    source: QuerySurface,
     geo: Option<GeoMapping>,
+    /// Level-0 tiles questions found not resident since the last [`Self::take_pending`].
+    pending: RefCell<Vec<[u32; 2]>>,
+    /// The host's height datum: geodetic query points are read in it, and answered in it.
+    datum: RefCell<HostDatumAtPlaces>,
 }
 
-fn answer<T, U>(l: Lookup<T>, f: impl FnOnce(T) -> U) -> Answer<U> {
-    match l {
-        Lookup::Ready(t) => Answer::Ready(f(t)),
-        Lookup::NoTerrain => Answer::NoTerrain,
-        Lookup::Pending { .. } => Answer::Pending,
+impl DatasetQueries {
+    fn answer<T, U>(&self, l: Lookup<T>, f: impl FnOnce(T) -> U) -> Answer<U> {
+        match l {
+            Lookup::Ready(t) => Answer::Ready(f(t)),
+            Lookup::NoTerrain => Answer::NoTerrain,
+            Lookup::Pending { tile } => {
+                self.pending.borrow_mut().push(tile);
+                Answer::Pending
+            }
+        }
+    }
+
+    fn surface(&self) -> &dyn SurfaceSource {
+        match &self.source {
+            QuerySurface::Memory(m) => m,
+            QuerySurface::Streamed { snapshot, .. } => snapshot,
+        }
+    }
+
+    /// Queries on a streamed store's resident level-0 pages: a question over a tile not
+    /// resident is answered pending, and the tile is listed for [`Self::take_pending`].
+    pub fn streamed(store: Arc<StreamedStore>, geo: Option<GeoMapping>) -> Self {
+        let snapshot = store.surface();
+        Self {
+            source: QuerySurface::Streamed { store, snapshot },
+            geo,
+            pending: RefCell::new(Vec::new()),
+            datum: RefCell::default(),
+        }
+    }
+
+    /// Geodetic heights asked and answered in the host's datum (`--host-heights`): an
+    /// ellipsoidal host's query altitudes lose the geoid undulation N before the lookup, and
+    /// the heights answered (HOT, a LOS hit's altitude) gain it back.
+    pub fn with_host_heights(self, heights: HostHeights) -> Self {
+        *self.datum.borrow_mut() = HostDatumAtPlaces::new(heights);
+        self
+    }
+
+    /// Takes a fresh snapshot of a streamed store's resident pages (nothing in memory).
+    pub fn refresh(&mut self) {
+        if let QuerySurface::Streamed { store, snapshot } = &mut self.source {
+            *snapshot = store.surface();
+        }
+    }
+
+    /// The level-0 tiles questions were pending on since the last call (deduplicated), for the
+    /// renderer to ask its source for.
+    pub fn take_pending(&self) -> Vec<[u32; 2]> {
+        let mut v = std::mem::take(&mut *self.pending.borrow_mut());
+        v.sort_unstable();
+        v.dedup();
+        v
     }
 }
 
@@ -35,7 +103,12 @@ pub fn direction_enu(azimuth_deg: f64, elevation_deg: f64) -> DVec3 {
 impl DatasetQueries {
     /// Queries on `source`; geodetic points need `geo` (else they have no terrain).
     pub fn new(source: InMemorySource, geo: Option<GeoMapping>) -> Self {
-        Self { source, geo }
+        Self {
+            source: QuerySurface::Memory(source),
+            geo,
+            pending: RefCell::new(Vec::new()),
+            datum: RefCell::default(),
+        }
     }
 
     /// A point in the dataset's local metres, `None` when it is geodetic and the dataset has
@@ -47,7 +120,10 @@ impl DatasetQueries {
                 lat_deg,
                 lon_deg,
                 alt_m,
-            } => self.geo.as_ref()?.to_local(lat_deg, lon_deg, alt_m),
+            } => {
+                let alt = self.datum.borrow_mut().to_data_m(lat_deg, lon_deg, alt_m);
+                self.geo.as_ref()?.to_local(lat_deg, lon_deg, alt)
+            }
         };
         v.is_finite().then_some(v)
     }
@@ -60,7 +136,7 @@ impl DatasetQueries {
                 PosePosition::Geodetic {
                     lat_deg,
                     lon_deg,
-                    alt_m,
+                    alt_m: self.datum.borrow_mut().to_host_m(lat_deg, lon_deg, alt_m),
                 }
             }
             _ => PosePosition::LocalEnu {
@@ -75,7 +151,7 @@ impl DatasetQueries {
         let Some(ray) = ray else {
             return Answer::NoTerrain;
         };
-        answer(first_hit(&self.source, &ray), |hit| {
+        self.answer(first_hit(self.surface(), &ray), |hit| {
             hit.map(|h| LosHit {
                 range_m: h.range_m,
                 point: self.position_like(from, h.point),
@@ -90,8 +166,16 @@ impl TerrainQueries for DatasetQueries {
         let Some(p) = self.local(at) else {
             return Answer::NoTerrain;
         };
-        answer(height_of_terrain(&self.source, p.x, p.y), |g| Surface {
-            height_m: g.height_m,
+        self.answer(height_of_terrain(self.surface(), p.x, p.y), |g| Surface {
+            height_m: match *at {
+                PosePosition::Geodetic {
+                    lat_deg, lon_deg, ..
+                } => self
+                    .datum
+                    .borrow_mut()
+                    .to_host_m(lat_deg, lon_deg, g.height_m),
+                PosePosition::LocalEnu { .. } => g.height_m,
+            },
             normal_enu: g.normal.to_array(),
         })
     }
@@ -131,7 +215,6 @@ mod tests {
     use aerie_terrain::bake::{bake, BakeParams};
     use aerie_terrain::dataset::Dataset;
     use aerie_terrain::{GeoReference, Heightfield};
-    use std::sync::Arc;
 
     /// A 33×33 grid, 10 m apart, rising 1 m per metre eastwards: h = x.
     fn ramp() -> DatasetQueries {
@@ -174,7 +257,7 @@ mod tests {
         assert!((s.height_m - 123.0).abs() < 1e-9, "{s:?}");
         // The normal of z = x leans west: (−1, 0, 1)/√2.
         assert!((s.normal_enu[0] + 0.5f64.sqrt()).abs() < 1e-9, "{s:?}");
-        let geo = GeoMapping::of_dataset(q.source.dataset()).unwrap();
+        let geo = q.geo.unwrap();
         let (lat_deg, lon_deg, alt_m) = geo.to_geodetic(DVec3::new(123.0, 45.0, 500.0));
         let g = PosePosition::Geodetic {
             lat_deg,
@@ -213,7 +296,7 @@ mod tests {
             Answer::Ready(None)
         );
         // The same as a segment, in geodetic points: the hit comes back geodetic.
-        let geo = GeoMapping::of_dataset(q.source.dataset()).unwrap();
+        let geo = q.geo.unwrap();
         let g = |x: f64, y: f64, z: f64| {
             let (lat_deg, lon_deg, alt_m) = geo.to_geodetic(DVec3::new(x, y, z));
             PosePosition::Geodetic {
@@ -239,5 +322,49 @@ mod tests {
         assert!((e - DVec3::X).length() < 1e-12);
         let n_up = direction_enu(0.0, 45.0);
         assert!((n_up - DVec3::new(0.0, 0.5f64.sqrt(), 0.5f64.sqrt())).length() < 1e-12);
+    }
+
+    /// An ellipsoidal host: its query altitude loses N (EGM96 at 47° N 11° E, ≈ +47 m) before
+    /// the lookup, and the HOT and LOS answers come back with N added, so a host comparing
+    /// them with its own ellipsoidal heights sees the terrain where the MSL data has it.
+    #[test]
+    fn ellipsoidal_hosts_ask_and_are_answered_in_their_datum() {
+        let msl = ramp();
+        let ell = ramp().with_host_heights(HostHeights::Ellipsoidal);
+        let geo = msl.geo.unwrap();
+        let (lat_deg, lon_deg, _) = geo.to_geodetic(DVec3::new(123.0, 45.0, 0.0));
+        let n = aerie_terrain::geodesy::egm96_undulation_m(lat_deg, lon_deg);
+        assert!(n > 40.0 && n < 55.0, "{n}");
+        let at = PosePosition::Geodetic {
+            lat_deg,
+            lon_deg,
+            alt_m: 500.0,
+        };
+        let h_msl = msl.height_of_terrain(&at).ready().unwrap().height_m;
+        let h_ell = ell.height_of_terrain(&at).ready().unwrap().height_m;
+        assert!((h_msl - 123.0).abs() < 1e-6, "{h_msl}");
+        assert!((h_ell - h_msl - n).abs() < 0.02, "{h_ell} vs {h_msl} + {n}");
+        // Level from x = 0 at 200 m above MSL: the ellipsoidal host says 200 + N, and the hit
+        // (where z = x = 200) comes back at 200 + N in its datum.
+        let from = |q: &DatasetQueries, alt: f64| {
+            let (lat_deg, lon_deg, _) = geo.to_geodetic(DVec3::new(0.0, 160.0, 0.0));
+            let p = PosePosition::Geodetic {
+                lat_deg,
+                lon_deg,
+                alt_m: alt,
+            };
+            q.line_of_sight_vector(&p, 90.0, 0.0, 0.0, 1000.0)
+                .ready()
+                .unwrap()
+                .unwrap()
+        };
+        let a = from(&msl, 200.0);
+        let b = from(&ell, 200.0 + n);
+        assert!((a.range_m - b.range_m).abs() < 0.05, "{a:?} vs {b:?}");
+        let alt = |h: &LosHit| match h.point {
+            PosePosition::Geodetic { alt_m, .. } => alt_m,
+            PosePosition::LocalEnu { z, .. } => z,
+        };
+        assert!((alt(&b) - alt(&a) - n).abs() < 0.05, "{b:?} vs {a:?}");
     }
 }

@@ -7,7 +7,8 @@
 //! piecewise-linear surface (full-resolution samples, the SW–NE diagonal of
 //! [`quad_surface`], each vertex lowered by the curvature drop d²/2R exactly as the renderer
 //! does, [`EARTH_RADIUS_M`]) — and the drawn point are both projected with the frame's camera;
-//! the distance between the two in pixels is that pixel's error. Silhouettes are covered by
+//! the distance between the two in pixels is that pixel's error. Geographic data is drawn on the
+//! WGS84 ellipsoid: there "under" is along the normal, the true point at its exact position. Silhouettes are covered by
 //! it: where the drawn ridge is lower than the true one, the drawn crest pixels measure how far
 //! the true crest is above them. A pixel that is sky in the frame but terrain in a reference
 //! frame (the same camera drawn with `LodMode::Full`) is a *hole*; holes are counted, with the
@@ -30,6 +31,9 @@ use glam::{DMat3, DVec2, DVec3};
 
 use aerie_terrain::camera::Camera;
 use aerie_terrain::dataset::Dataset;
+use aerie_terrain::geodesy::GeoGrid;
+
+pub use crate::tools::heatmap::heatmap_rgba;
 use aerie_terrain::mesh::quad_surface;
 use aerie_terrain::select::{DrawItem, EARTH_RADIUS_M};
 
@@ -268,17 +272,49 @@ impl Default for MeasureParams {
 
 /// The true full-resolution surface of a dataset as the renderer's `full` mode draws it:
 /// piecewise linear over the samples with the SW–NE diagonal, each vertex lowered by the
-/// curvature drop for the given eye.
+/// curvature drop for the given eye — or, for geographic data, each sample at its exact place
+/// on the WGS84 ellipsoid (`GeoGrid`), as the renderer draws those.
 #[derive(Debug, Clone, Copy)]
 pub struct TrueSurface<'a> {
     ds: &'a Dataset,
     eye: DVec3,
     curvature: bool,
+    earth: Option<GeoGrid>,
 }
 
 impl<'a> TrueSurface<'a> {
     pub fn new(ds: &'a Dataset, eye: DVec3, curvature: bool) -> Self {
-        Self { ds, eye, curvature }
+        let hf = &ds.hf;
+        let earth = GeoGrid::of(hf.geo.as_ref(), hf.spacing_x, hf.spacing_y);
+        Self {
+            ds,
+            eye,
+            curvature: curvature && earth.is_none(),
+            earth,
+        }
+    }
+
+    /// World position of sample (col, row) as drawn at full resolution.
+    pub fn sample_point(&self, col: usize, row: usize) -> DVec3 {
+        let hf = &self.ds.hf;
+        let g = DVec2::new(col as f64 * hf.spacing_x, row as f64 * hf.spacing_y);
+        match &self.earth {
+            Some(e) => e.world_of_grid(g, hf.at(col, row) as f64),
+            None => g.extend(self.vertex(col, row)),
+        }
+    }
+
+    /// The true surface point under the world point `p` (along the vertical, or the normal on
+    /// the ellipsoid), None off the real samples.
+    pub fn point_under(&self, p: DVec3) -> Option<DVec3> {
+        match &self.earth {
+            None => self.height_at(p.x, p.y).map(|h| DVec3::new(p.x, p.y, h)),
+            Some(e) => {
+                let g = e.grid_of_world(p);
+                let h = self.height_at(g.x, g.y)?;
+                Some(e.world_of_grid(g.truncate(), h))
+            }
+        }
     }
 
     /// Curvature drop at world (x, y) for this eye (0 when curvature is off).
@@ -523,15 +559,12 @@ fn measure_rows(
                 }
                 let z = proj.near / d as f64;
                 let p = proj.unproject(px, py as u32, z);
-                match surface.height_at(p.x, p.y) {
+                match surface.point_under(p) {
                     None => out.off_dataset_px += 1,
-                    Some(ht) => {
-                        let q = DVec3::new(p.x, p.y, ht);
-                        match (proj.project(p), proj.project(q)) {
-                            (Some(a), Some(b)) => e = (a - b).length(),
-                            _ => out.unprojectable_px += 1,
-                        }
-                    }
+                    Some(q) => match (proj.project(p), proj.project(q)) {
+                        (Some(a), Some(b)) => e = (a - b).length(),
+                        _ => out.unprojectable_px += 1,
+                    },
                 }
             } else if ref_terrain == Some(true) {
                 out.holes_px += 1;
@@ -572,40 +605,6 @@ fn hole_distance(depth: &[f32], w: u32, h: u32, px: u32, py: usize, limit: u32) 
     limit as f64
 }
 
-/// A heat map of per-pixel errors ([`measure`]'s `heat`): sky black, holes cyan; errors from 0
-/// to `scale_px` along blue → green → yellow → red, above it magenta. RGBA8, rows top to bottom.
-pub fn heatmap_rgba(errors: &[f32], scale_px: f64) -> Vec<u8> {
-    let mut out = Vec::with_capacity(errors.len() * 4);
-    for &e in errors {
-        let rgb = if e.is_nan() {
-            [0, 0, 0]
-        } else if e < 0.0 {
-            [0, 255, 255]
-        } else if e as f64 > scale_px {
-            [255, 0, 255]
-        } else {
-            ramp((e as f64 / scale_px).clamp(0.0, 1.0))
-        };
-        out.extend_from_slice(&[rgb[0], rgb[1], rgb[2], 255]);
-    }
-    out
-}
-
-/// 0 → dark blue, ⅓ → green, ⅔ → yellow, 1 → red.
-fn ramp(t: f64) -> [u8; 3] {
-    const STOPS: [[f64; 3]; 4] = [
-        [20.0, 30.0, 120.0],
-        [30.0, 190.0, 60.0],
-        [250.0, 230.0, 40.0],
-        [230.0, 30.0, 30.0],
-    ];
-    let x = t * 3.0;
-    let k = (x.floor() as usize).min(2);
-    let f = x - k as f64;
-    let c = |i: usize| (STOPS[k][i] + (STOPS[k + 1][i] - STOPS[k][i]) * f).round() as u8;
-    [c(0), c(1), c(2)]
-}
-
 /// Brute-force error (px) of one drawn node, DESIGN.md's definition: for full-resolution
 /// samples p of the level-`level` tile (tx, ty) (tiles of `tile_quads` quads), the distance on
 /// screen between the true point (x, y, h(p) − drop) and the point of the level surface drawn
@@ -629,7 +628,7 @@ pub fn node_error_px(
     let (c0, r0) = (tx as usize * side, ty as usize * side);
     let surf = TrueSurface::new(ds, camera.position, curvature);
     let proj = Projector::new(camera, size.0, size.1);
-    let vertex = |c: usize, r: usize| surf.vertex(c.min(hf.width - 1), r.min(hf.height - 1));
+    let vertex = |c: usize, r: usize| surf.sample_point(c.min(hf.width - 1), r.min(hf.height - 1));
     let on_screen = |p: DVec2| p.x >= 0.0 && p.x <= proj.w && p.y >= 0.0 && p.y <= proj.h;
     let stride = stride.max(1);
     let positions = |start: usize, limit: usize| -> Vec<usize> {
@@ -648,8 +647,7 @@ pub fn node_error_px(
     let mut worst: f64 = 0.0;
     for &row in &rows {
         for &c in &cols {
-            let (x, y) = (c as f64 * hf.spacing_x, row as f64 * hf.spacing_y);
-            let truth = surf.vertex(c, row);
+            let truth = surf.sample_point(c, row);
             let (ci, ri) = (
                 ((c - c0) / step).min(side / step - 1),
                 ((row - r0) / step).min(side / step - 1),
@@ -657,16 +655,25 @@ pub fn node_error_px(
             let (vc, vr) = (c0 + ci * step, r0 + ri * step);
             let u = (c - vc) as f64 / step as f64;
             let v = (row - vr) as f64 / step as f64;
-            let drawn = quad_surface(
-                vertex(vc, vr),
-                vertex(vc + step, vr),
-                vertex(vc, vr + step),
-                vertex(vc + step, vr + step),
-                u,
-                v,
-            );
-            let a = proj.project(DVec3::new(x, y, truth));
-            let b = proj.project(DVec3::new(x, y, drawn));
+            let corners = [
+                (vc, vr),
+                (vc + step, vr),
+                (vc, vr + step),
+                (vc + step, vr + step),
+            ]
+            .map(|(c, r)| vertex(c, r));
+            let axis = |k: usize| {
+                let [sw, se, nw, ne] = corners.map(|p| p[k]);
+                quad_surface(sw, se, nw, ne, u, v)
+            };
+            // Flat: the vertical through the sample; on the ellipsoid the GPU's interpolation
+            // of the vertices' exact positions.
+            let drawn = match surf.earth {
+                None => DVec3::new(truth.x, truth.y, axis(2)),
+                Some(_) => DVec3::new(axis(0), axis(1), axis(2)),
+            };
+            let a = proj.project(truth);
+            let b = proj.project(drawn);
             if let (Some(pa), Some(pb)) = (a, b) {
                 if on_screen(pa) || on_screen(pb) {
                     worst = worst.max((pa - pb).length());

@@ -21,6 +21,11 @@
 //! | `stream` | `live`, `lost`, `waiting` (default view, no pose yet) or `builtin` (no input) |
 //! | `triangles` | triangles drawn over all channels (empty when the frame drew none) |
 //! | `frame_ms` | wall time of the frame (headless: its rendering; windows: since the last frame) |
+//! | `tiles_late` | tiles drawn coarser than the bound asks over all channels (budget or streaming) |
+//! | `tiles_late_stream` | the part of `tiles_late` whose samples were not resident yet |
+//! | `terrain_data_us` | longest time a channel's frame spent gathering terrain samples |
+//! | `terrain_hits,terrain_misses` | the source's resident / not resident answers so far |
+//! | `terrain_resident_bytes,terrain_budget_bytes` | decoded pages in the page cache, its budget |
 //!
 //! Floating-point values are written with Rust's shortest round-trip formatting, so a reader
 //! gets back exactly the f64 the renderer used.
@@ -34,7 +39,33 @@ use aerie_io::{AtomicFile, FileSystem};
 use crate::sim::channel::AircraftPose;
 use crate::sim::pose_input::{state_name, GeoMapping, PoseInfo};
 
-pub const HEADER: &str = "frame,wall_s,host_frame,sync_target,sim_time_s,x_m,y_m,z_m,lat_deg,lon_deg,alt_m,heading_deg,pitch_deg,roll_deg,pose_age_ms,extrapolated,stream,triangles,frame_ms";
+pub const HEADER: &str = "frame,wall_s,host_frame,sync_target,sim_time_s,x_m,y_m,z_m,lat_deg,lon_deg,alt_m,heading_deg,pitch_deg,roll_deg,pose_age_ms,extrapolated,stream,triangles,frame_ms,tiles_late,tiles_late_stream,terrain_data_us,terrain_hits,terrain_misses,terrain_resident_bytes,terrain_budget_bytes";
+
+/// What a drawn frame's terrain source did (empty columns for frames not drawn).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TerrainColumns {
+    pub tiles_late: u64,
+    pub tiles_late_stream: u64,
+    pub terrain_data_us: f64,
+    pub hits: u64,
+    pub misses: u64,
+    pub resident_bytes: u64,
+    pub budget_bytes: u64,
+}
+
+impl TerrainColumns {
+    /// Adds one channel's frame (late tiles summed, the longest gathering kept, the source's
+    /// totals as of the last).
+    pub fn add(&mut self, s: &crate::render::frame::FrameStats) {
+        self.tiles_late += s.tiles_late as u64;
+        self.tiles_late_stream += s.tiles_late_stream as u64;
+        self.terrain_data_us = self.terrain_data_us.max(s.cpu_terrain_data_us);
+        self.hits = s.stream_hits;
+        self.misses = s.stream_misses;
+        self.resident_bytes = s.stream_resident_bytes;
+        self.budget_bytes = s.stream_budget_bytes;
+    }
+}
 
 /// Where the frame's pose came from.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,6 +87,7 @@ pub struct FrameRow {
     pub origin: PoseOrigin,
     pub triangles: Option<u64>,
     pub frame_ms: Option<f64>,
+    pub terrain: Option<TerrainColumns>,
 }
 
 fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
@@ -66,7 +98,7 @@ fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
 pub fn format_row(row: &FrameRow, geo: Option<&GeoMapping>) -> String {
     let p = row.pose.position;
     let a = row.pose.attitude;
-    let geodetic = geo.map(|g| g.to_geodetic(p));
+    let geodetic = geo.map(|g| g.world_to_geodetic(p));
     let info = match row.origin {
         PoseOrigin::Input(i) => Some(i),
         _ => None,
@@ -77,7 +109,7 @@ pub fn format_row(row: &FrameRow, geo: Option<&GeoMapping>) -> String {
         PoseOrigin::Builtin => "builtin",
     };
     format!(
-        "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+        "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
         row.frame,
         row.wall_s,
         opt(info.map(|i| i.host_frame)),
@@ -97,6 +129,13 @@ pub fn format_row(row: &FrameRow, geo: Option<&GeoMapping>) -> String {
         stream,
         opt(row.triangles),
         opt(row.frame_ms),
+        opt(row.terrain.map(|t| t.tiles_late)),
+        opt(row.terrain.map(|t| t.tiles_late_stream)),
+        opt(row.terrain.map(|t| t.terrain_data_us)),
+        opt(row.terrain.map(|t| t.hits)),
+        opt(row.terrain.map(|t| t.misses)),
+        opt(row.terrain.map(|t| t.resident_bytes)),
+        opt(row.terrain.map(|t| t.budget_bytes)),
     )
 }
 
@@ -209,6 +248,7 @@ mod tests {
             dlon_deg: 1.0 / 1200.0,
             spacing_x: 62.79,
             spacing_y: 92.65,
+            projected: None,
         };
         let row = FrameRow {
             frame: 7,
@@ -224,6 +264,13 @@ mod tests {
             }),
             triangles: Some(5000),
             frame_ms: Some(16.5),
+            terrain: Some(TerrainColumns {
+                tiles_late: 3,
+                tiles_late_stream: 2,
+                terrain_data_us: 41.5,
+                budget_bytes: 1 << 30,
+                ..Default::default()
+            }),
         };
         let line = format_row(&row, Some(&geo));
         let cols: Vec<&str> = line.trim_end().split(',').collect();
@@ -235,15 +282,25 @@ mod tests {
         assert_eq!(col("x_m").parse::<f64>().unwrap(), pose.position.x);
         assert_eq!(col("z_m").parse::<f64>().unwrap(), pose.position.z);
         let lat: f64 = col("lat_deg").parse().unwrap();
-        assert!((lat - (47.0 - 0.1 / 92.65 / 1200.0)).abs() < 1e-12, "{lat}");
+        // The world frame is ENU at the grid's south-west sample, on the ellipsoid.
+        let want = aerie_terrain::geodesy::LocalTangentPlane::new(
+            aerie_terrain::geodesy::Geodetic::new(47.0, 11.0, 0.0),
+        )
+        .enu_to_geodetic(pose.position);
+        assert!((lat - want.lat_deg).abs() < 1e-12, "{lat} vs {want:?}");
+        assert!(lat < 47.0 && lat > 46.999_99, "{lat}");
         assert!((col("heading_deg").parse::<f64>().unwrap() - 359.9).abs() < 1e-9);
         assert_eq!(col("extrapolated"), "1");
         assert_eq!(col("stream"), "live");
         assert_eq!(col("triangles"), "5000");
+        assert_eq!(col("tiles_late_stream"), "2");
+        assert_eq!(col("terrain_data_us"), "41.5");
+        assert_eq!(col("terrain_budget_bytes"), "1073741824");
         // Without input or geo-reference those columns are empty.
         let builtin = FrameRow {
             origin: PoseOrigin::Builtin,
             triangles: None,
+            terrain: None,
             ..row
         };
         let line = format_row(&builtin, None);
@@ -265,6 +322,7 @@ mod tests {
             origin: PoseOrigin::Builtin,
             triangles: Some(1000),
             frame_ms: Some(16.0),
+            terrain: None,
         }
     }
 

@@ -27,6 +27,9 @@ pub enum Access {
     VertexShaderReadStorageBuffer,
     /// Read as a uniform buffer by the vertex and fragment shaders.
     AnyShaderReadUniformBuffer,
+    /// Read as uniform or storage buffers by the tessellation control and evaluation shaders
+    /// (the tessellation baseline's frame uniforms, patches and heights).
+    TessellationShaderRead,
     /// Read as indirect draw commands.
     IndirectBuffer,
     /// Read as an index buffer.
@@ -39,7 +42,7 @@ pub enum Access {
 
 impl Access {
     /// Every use, for tests and tables.
-    pub const ALL: [Access; 14] = [
+    pub const ALL: [Access; 15] = [
         Access::Nothing,
         Access::SwapchainAcquired,
         Access::TransferRead,
@@ -50,6 +53,7 @@ impl Access {
         Access::FragmentShaderReadSampledImage,
         Access::VertexShaderReadStorageBuffer,
         Access::AnyShaderReadUniformBuffer,
+        Access::TessellationShaderRead,
         Access::IndirectBuffer,
         Access::IndexBuffer,
         Access::HostRead,

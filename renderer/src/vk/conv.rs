@@ -61,6 +61,11 @@ pub fn map_access(a: Access) -> AccessInfo {
             A::UNIFORM_READ,
             L::UNDEFINED,
         ),
+        Access::TessellationShaderRead => (
+            S::TESSELLATION_CONTROL_SHADER | S::TESSELLATION_EVALUATION_SHADER,
+            A::UNIFORM_READ | A::SHADER_READ,
+            L::UNDEFINED,
+        ),
         Access::IndirectBuffer => (S::DRAW_INDIRECT, A::INDIRECT_COMMAND_READ, L::UNDEFINED),
         Access::IndexBuffer => (S::VERTEX_INPUT, A::INDEX_READ, L::UNDEFINED),
         Access::HostRead => (S::HOST, A::HOST_READ, L::UNDEFINED),

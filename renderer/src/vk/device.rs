@@ -37,6 +37,9 @@ pub struct Device {
     pub properties: vk::PhysicalDeviceProperties,
     /// Nanoseconds per timestamp tick; `None` when the queue cannot write timestamps.
     pub timestamp_period_ns: Option<f64>,
+    /// `tessellationShader` is enabled (the device offers it): the tessellation baseline's
+    /// pipeline can be made.
+    pub tessellation: bool,
     allocator: ManuallyDrop<Mutex<Allocator>>,
     /// Set by `destroy`, so that a second call neither drops the allocator again nor destroys
     /// the device twice.
@@ -135,9 +138,13 @@ impl Device {
         let queue_infos = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
             .queue_priorities(&priorities)];
+        // SAFETY: as above.
+        let offered = unsafe { instance.raw.get_physical_device_features(physical) };
+        let tessellation = offered.tessellation_shader == vk::TRUE;
         let features = vk::PhysicalDeviceFeatures::default()
             .multi_draw_indirect(true)
-            .draw_indirect_first_instance(true);
+            .draw_indirect_first_instance(true)
+            .tessellation_shader(tessellation);
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true);
         let extensions = if desc.swapchain {
             vec![ash::khr::swapchain::NAME.as_ptr()]
@@ -185,6 +192,7 @@ impl Device {
             queue_family,
             properties,
             timestamp_period_ns,
+            tessellation,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             destroyed: false,
         })

@@ -278,13 +278,14 @@ impl FrameContext<'_> {
         self.ring.frames[self.frame.index()].deferred.push(buffer);
     }
 
-    /// Resets the fence and the command pool and begins the command buffer.
+    /// Resets the command pool and begins the command buffer. The fence stays signalled until
+    /// [`Self::submit_with`] resets it right before the submission, so a frame abandoned between
+    /// here and its submission (an error while recording) leaves nothing that waits forever.
     pub fn begin_recording(&mut self, device: &Device) -> Result<vk::CommandBuffer, VkError> {
         let f = &self.ring.frames[self.frame.index()];
         // The context holds the proof that the fence signalled; recording begins on a reset buffer.
-        // SAFETY: the command buffer is not pending, so the fence and pool may be reset.
+        // SAFETY: the command buffer is not pending, so the pool may be reset.
         unsafe {
-            device.raw.reset_fences(&[f.fence]).call("vkResetFences")?;
             device
                 .raw
                 .reset_command_pool(f.pool, vk::CommandPoolResetFlags::empty())
@@ -332,8 +333,10 @@ impl FrameContext<'_> {
         let i = self.frame.index();
         let ring = self.ring;
         let f = &mut ring.frames[i];
-        // `f.cmd` was begun by `begin_recording`, which also reset the fence.
-        // SAFETY: the buffer is recording, the fence unsignalled, the semaphore slices outlive the call.
+        // `f.cmd` was begun by `begin_recording`; the fence is signalled (the context's proof)
+        // and no submission uses it, so it may be reset here, right before the one that will
+        // signal it again.
+        // SAFETY: the buffer is recording, the semaphore slices outlive the calls.
         unsafe {
             device
                 .raw
@@ -345,10 +348,17 @@ impl FrameContext<'_> {
                 .wait_semaphores(waits)
                 .wait_dst_stage_mask(wait_stages)
                 .signal_semaphores(signals);
-            device
-                .raw
-                .queue_submit(device.queue, &[submit], f.fence)
-                .call("vkQueueSubmit")?;
+            device.raw.reset_fences(&[f.fence]).call("vkResetFences")?;
+            if let Err(result) = device.raw.queue_submit(device.queue, &[submit], f.fence) {
+                // The fence is unsignalled and nothing would signal it: an empty submission
+                // does, so later waits on this frame return (or report a lost device) instead
+                // of blocking forever.
+                let _ = device.raw.queue_submit(device.queue, &[], f.fence);
+                return Err(VkError::Call {
+                    call: "vkQueueSubmit",
+                    result,
+                });
+            }
         }
         f.timestamps_pending = self.timed;
         ring.next = (i + 1) % ring.frames.len();

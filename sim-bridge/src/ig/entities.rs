@@ -5,7 +5,9 @@
 //! frame by heading (yaw), pitch and roll in that order. Positions are geodetic with the
 //! altitude the host gives (mean sea level); an offset of a few hundred metres is taken in the
 //! local tangent plane at the entity, where the geoid's slope changes heights by micrometres.
-//! Drawing entities is a later step; this table is what it will read.
+//! The renderer draws the table each frame (`renderer/src/sim/traffic.rs`): the entities
+//! dead-reckoned by their Rate Control from the last time the host placed them
+//! ([`EntityTable::advanced`]), then placed with [`EntityTable::anchor`].
 
 use std::collections::BTreeMap;
 
@@ -85,6 +87,9 @@ pub struct Entity {
     pub rates: Option<EntityRates>,
     /// The host frame of the last packet that touched it.
     pub host_frame: u32,
+    /// Which placement of the table last set its position or attitude (Entity Control or
+    /// Conformal Clamped; rates do not count): dead reckoning runs from that moment.
+    pub placed: u64,
 }
 
 /// An Entity Control, as the table takes it (from any CIGI version).
@@ -131,6 +136,8 @@ pub enum EntityChange {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EntityTable {
     entities: BTreeMap<u16, Entity>,
+    /// Placements applied so far (stamps [`Entity::placed`]).
+    placements: u64,
 }
 
 impl EntityTable {
@@ -181,6 +188,7 @@ impl EntityTable {
                     attitude_deg: [0.0; 3],
                     rates: None,
                     host_frame: 0,
+                    placed: 0,
                 }),
                 true,
             )),
@@ -188,13 +196,17 @@ impl EntityTable {
     }
 
     /// Applies an Entity Control sent in host frame `host_frame`.
+    /// Destroying an entity destroys every entity attached to it, down the chain (CIGI: a
+    /// parent's children go with it).
     pub fn apply_control(&mut self, c: &EntityControlUpdate, host_frame: u32) -> EntityChange {
         if c.state == 2 {
-            return match self.entities.remove(&c.id) {
-                Some(_) => EntityChange::Destroyed,
-                None => EntityChange::Ignored,
+            return match self.destroy(c.id) {
+                0 => EntityChange::Ignored,
+                _ => EntityChange::Destroyed,
             };
         }
+        self.placements += 1;
+        let placed = self.placements;
         let (e, new) = match self.slot(c.id) {
             Ok(x) => x,
             Err(change) => return change,
@@ -216,6 +228,7 @@ impl EntityTable {
         };
         e.attitude_deg = c.attitude_deg;
         e.host_frame = host_frame;
+        e.placed = placed;
         if new {
             EntityChange::Created
         } else {
@@ -232,6 +245,8 @@ impl EntityTable {
         lon_deg: f64,
         host_frame: u32,
     ) -> EntityChange {
+        self.placements += 1;
+        let placed = self.placements;
         let (e, new) = match self.slot(id) {
             Ok(x) => x,
             Err(change) => return change,
@@ -239,6 +254,7 @@ impl EntityTable {
         e.placement = Placement::Clamped { lat_deg, lon_deg };
         e.attitude_deg = [yaw_deg, 0.0, 0.0];
         e.host_frame = host_frame;
+        e.placed = placed;
         if new {
             EntityChange::Created
         } else {
@@ -257,6 +273,39 @@ impl EntityTable {
             }
             None => EntityChange::Ignored,
         }
+    }
+
+    /// Removes `id` and, down the chain, every entity attached to it. Returns how many went.
+    pub fn destroy(&mut self, id: u16) -> usize {
+        let mut gone = vec![id];
+        let mut removed = 0;
+        while let Some(at) = gone.pop() {
+            if self.entities.remove(&at).is_none() {
+                continue;
+            }
+            removed += 1;
+            gone.extend(self.entities.values().filter_map(|e| match e.placement {
+                Placement::Attached { parent, .. } if parent == at => Some(e.id),
+                _ => None,
+            }));
+        }
+        removed
+    }
+
+    /// The table with every entity that has rates moved by them for `elapsed_s(entity)`
+    /// seconds (the time since the host last placed it): dead reckoning between host frames.
+    /// Children follow their parents because they stay relative to them.
+    pub fn advanced(&self, elapsed_s: impl Fn(&Entity) -> f64) -> EntityTable {
+        let mut out = self.clone();
+        for e in out.entities.values_mut() {
+            if let Some(r) = e.rates {
+                let dt = elapsed_s(e);
+                if dt.is_finite() && dt > 0.0 {
+                    *e = dead_reckon(e, &r, dt.min(MAX_DEAD_RECKONING_S));
+                }
+            }
+        }
+        out
     }
 
     /// Forgets every entity but the ownship (a host's Reset). Returns how many were removed.
@@ -308,6 +357,70 @@ impl EntityTable {
         }
         Err(AnchorError::ChainTooDeep(id))
     }
+}
+
+/// Dead reckoning stops after this long without a placement from the host (a host that went
+/// quiet does not fly its traffic off the map).
+pub const MAX_DEAD_RECKONING_S: f64 = 10.0;
+/// Integration step of dead reckoning: attitude rates turn the velocity, so a turn is
+/// followed as an arc rather than a chord.
+const DEAD_RECKONING_STEP_S: f64 = 0.05;
+
+/// `e` moved by rates `r` for `dt` seconds. Linear rates are in body axes (x forward, y right,
+/// z down) or, with the world flag, in the parent's axes (north-east-down for a top-level
+/// entity); angular rates (roll, pitch, yaw, deg/s) turn the attitude. A clamped entity moves
+/// horizontally and turns by its yaw rate only (the terrain sets its height, pitch and roll).
+fn dead_reckon(e: &Entity, r: &EntityRates, dt: f64) -> Entity {
+    let mut out = *e;
+    let v = DVec3::from_array(r.linear_m_s.map(f64::from));
+    let [roll_rate, pitch_rate, yaw_rate] = r.angular_deg_s.map(f64::from);
+    let steps = (dt / DEAD_RECKONING_STEP_S).ceil().clamp(1.0, 1000.0) as usize;
+    let h = dt / steps as f64;
+    // Displacement in the parent's (or north-east-down) axes, integrated at mid-step attitude.
+    let mut moved = DVec3::ZERO;
+    let mut att = e.attitude_deg;
+    let clamped = matches!(e.placement, Placement::Clamped { .. });
+    for _ in 0..steps {
+        let mut mid = att;
+        mid[0] += 0.5 * h * yaw_rate;
+        if !clamped {
+            mid[1] += 0.5 * h * pitch_rate;
+            mid[2] += 0.5 * h * roll_rate;
+        }
+        let step = if r.world_frame {
+            v
+        } else {
+            body_to_parent(mid[0], mid[1], mid[2]) * v
+        };
+        moved += step * h;
+        att[0] += h * yaw_rate;
+        if !clamped {
+            att[1] += h * pitch_rate;
+            att[2] += h * roll_rate;
+        }
+    }
+    att[0] = att[0].rem_euclid(360.0);
+    out.attitude_deg = att;
+    out.placement = match e.placement {
+        Placement::Geodetic(g) => {
+            // North-east-down → east-north-up in the tangent plane at the entity.
+            let enu = DVec3::new(moved.y, moved.x, -moved.z);
+            Placement::Geodetic(LocalTangentPlane::new(g).enu_to_geodetic(enu))
+        }
+        Placement::Clamped { lat_deg, lon_deg } => {
+            let at = LocalTangentPlane::new(Geodetic::new(lat_deg, lon_deg, 0.0));
+            let p = at.enu_to_geodetic(DVec3::new(moved.y, moved.x, 0.0));
+            Placement::Clamped {
+                lat_deg: p.lat_deg,
+                lon_deg: p.lon_deg,
+            }
+        }
+        Placement::Attached { parent, offset_m } => Placement::Attached {
+            parent,
+            offset_m: (DVec3::from_array(offset_m) + moved).to_array(),
+        },
+    };
+    out
 }
 
 /// Why an entity-relative point could not be placed.
@@ -446,237 +559,5 @@ fn clamped_axes(heading_deg: f64, normal_enu: [f64; 3]) -> DMat3 {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn control(id: u16, lat: f64, lon: f64, alt: f64, att: [f64; 3]) -> EntityControlUpdate {
-        EntityControlUpdate {
-            id,
-            state: 1,
-            attached: false,
-            parent: 0,
-            entity_type: 7,
-            alpha: 255,
-            lat_or_x: lat,
-            lon_or_y: lon,
-            alt_or_z: alt,
-            attitude_deg: att,
-        }
-    }
-
-    fn flat(height: f64) -> impl Fn(f64, f64) -> Answer<Surface> {
-        move |_, _| {
-            Answer::Ready(Surface {
-                height_m: height,
-                normal_enu: [0.0, 0.0, 1.0],
-            })
-        }
-    }
-
-    fn close(a: DVec3, b: DVec3, tol: f64) -> bool {
-        (a - b).length() < tol
-    }
-
-    #[test]
-    fn body_axes_follow_heading_pitch_roll() {
-        let m = body_to_enu(0.0, 0.0, 0.0);
-        assert!(close(m.x_axis, DVec3::Y, 1e-12), "forward is north");
-        assert!(close(m.y_axis, DVec3::X, 1e-12), "right is east");
-        assert!(close(m.z_axis, -DVec3::Z, 1e-12), "down is down");
-        let m = body_to_enu(90.0, 0.0, 0.0);
-        assert!(
-            close(m.x_axis, DVec3::X, 1e-12),
-            "heading 90: forward is east"
-        );
-        assert!(close(m.y_axis, -DVec3::Y, 1e-12), "right of east is south");
-        let m = body_to_enu(0.0, 90.0, 0.0);
-        assert!(close(m.x_axis, DVec3::Z, 1e-12), "nose up");
-        let m = body_to_enu(0.0, 0.0, 90.0);
-        assert!(close(m.y_axis, -DVec3::Z, 1e-12), "right wing down");
-        // A general attitude: the columns stay orthonormal and right-handed.
-        let m = body_to_enu(123.0, -17.0, 41.0);
-        assert!((m.determinant() - 1.0).abs() < 1e-12);
-        assert!(close(m.x_axis.cross(m.y_axis), m.z_axis, 1e-12));
-        // Forward at heading 123, pitch −17: its horizontal part points 123° from north.
-        let f = m.x_axis;
-        assert!((f.x.atan2(f.y).to_degrees() - 123.0).abs() < 1e-9);
-        assert!((f.z.asin().to_degrees() + 17.0).abs() < 1e-9);
-    }
-
-    #[test]
-    fn entity_relative_points_land_where_the_geodesy_says() {
-        let mut t = EntityTable::default();
-        let origin = Geodetic::new(47.25, 11.4, 1500.0);
-        assert_eq!(
-            t.apply_control(
-                &control(
-                    5,
-                    origin.lat_deg,
-                    origin.lon_deg,
-                    origin.alt_m,
-                    [90.0, 0.0, 0.0]
-                ),
-                1
-            ),
-            EntityChange::Created
-        );
-        let ltp = LocalTangentPlane::new(origin);
-        // 100 m ahead of an east-facing entity is 100 m east; 50 m "down" is 50 m lower.
-        for (offset, want) in [
-            ([100.0, 0.0, 0.0], DVec3::new(100.0, 0.0, 0.0)),
-            ([0.0, 20.0, 0.0], DVec3::new(0.0, -20.0, 0.0)),
-            ([0.0, 0.0, 50.0], DVec3::new(0.0, 0.0, -50.0)),
-        ] {
-            let placed = t
-                .anchor(5, offset)
-                .unwrap()
-                .place(&flat(0.0))
-                .ready()
-                .unwrap();
-            let got = ltp.geodetic_to_enu(placed.point);
-            assert!(close(got, want, 1e-6), "{offset:?}: {got} vs {want}");
-        }
-        // Pitched up 30° heading north: 1 km ahead is 866 m north and 500 m up.
-        t.apply_control(
-            &control(
-                6,
-                origin.lat_deg,
-                origin.lon_deg,
-                origin.alt_m,
-                [0.0, 30.0, 0.0],
-            ),
-            2,
-        );
-        let p = t.anchor(6, [1000.0, 0.0, 0.0]).unwrap().place(&flat(0.0));
-        let got = ltp.geodetic_to_enu(p.ready().unwrap().point);
-        let want = DVec3::new(0.0, 1000.0 * 30f64.to_radians().cos(), 500.0);
-        assert!(close(got, want, 1e-6), "{got} vs {want}");
-        // The body axes at the point: forward still 30° up, 1 km away (the tangent planes
-        // differ by 0.009°).
-        let axes = p.ready().unwrap().body_to_enu();
-        assert!((axes.x_axis.z.asin().to_degrees() - 30.0).abs() < 0.02);
-    }
-
-    #[test]
-    fn attached_chains_compose_and_loops_are_refused() {
-        let mut t = EntityTable::default();
-        let origin = Geodetic::new(-33.9, 151.2, 100.0);
-        t.apply_control(
-            &control(
-                1,
-                origin.lat_deg,
-                origin.lon_deg,
-                origin.alt_m,
-                [90.0, 0.0, 0.0],
-            ),
-            1,
-        );
-        // A child 10 m ahead of its parent, turned a further 90° (so it faces south).
-        let child = EntityControlUpdate {
-            attached: true,
-            parent: 1,
-            ..control(2, 10.0, 0.0, 0.0, [90.0, 0.0, 0.0])
-        };
-        t.apply_control(&child, 1);
-        let ltp = LocalTangentPlane::new(origin);
-        // 5 m ahead of the child = 10 m east, then 5 m south.
-        let p = t.anchor(2, [5.0, 0.0, 0.0]).unwrap().place(&flat(0.0));
-        let got = ltp.geodetic_to_enu(p.ready().unwrap().point);
-        assert!(close(got, DVec3::new(10.0, -5.0, 0.0), 1e-6), "{got}");
-        assert!(close(
-            p.ready().unwrap().body_to_enu().x_axis,
-            -DVec3::Y,
-            1e-5
-        ));
-        // A loop: 3 → 4 → 3.
-        for (id, parent) in [(3, 4), (4, 3)] {
-            t.apply_control(
-                &EntityControlUpdate {
-                    attached: true,
-                    parent,
-                    ..control(id, 0.0, 0.0, 0.0, [0.0; 3])
-                },
-                1,
-            );
-        }
-        assert_eq!(t.anchor(3, [0.0; 3]), Err(AnchorError::ChainTooDeep(3)));
-        assert_eq!(t.anchor(9, [0.0; 3]), Err(AnchorError::UnknownEntity(9)));
-        let orphan = EntityControlUpdate {
-            attached: true,
-            parent: 77,
-            ..control(8, 0.0, 0.0, 0.0, [0.0; 3])
-        };
-        t.apply_control(&orphan, 1);
-        assert_eq!(t.anchor(8, [0.0; 3]), Err(AnchorError::UnknownEntity(77)));
-    }
-
-    #[test]
-    fn clamped_entities_sit_on_the_terrain_and_follow_its_slope() {
-        let mut t = EntityTable::default();
-        assert_eq!(
-            t.apply_clamped(12, 0.0, 46.0, 7.0, 3),
-            EntityChange::Created
-        );
-        // A slope rising to the north by 10°: normal tilted towards the south.
-        let tilt = 10f64.to_radians();
-        let ground = move |_: f64, _: f64| {
-            Answer::Ready(Surface {
-                height_m: 640.0,
-                normal_enu: [0.0, -tilt.sin(), tilt.cos()],
-            })
-        };
-        let a = t.anchor(12, [0.0, 0.0, 0.0]).unwrap();
-        let p = a.place(&ground).ready().unwrap();
-        assert!((p.point.alt_m - 640.0).abs() < 1e-9);
-        // Facing north up the slope: nose up by 10°.
-        assert!((p.body_to_enu().x_axis.z.asin().to_degrees() - 10.0).abs() < 1e-9);
-        assert!(p.body_to_enu().y_axis.z.abs() < 1e-12, "no roll");
-        // Not ready or no terrain: said so.
-        assert_eq!(a.place(&|_, _| Answer::Pending), Answer::Pending);
-        assert_eq!(a.place(&|_, _| Answer::NoTerrain), Answer::NoTerrain);
-    }
-
-    #[test]
-    fn destroy_rates_reset_and_the_bound() {
-        let mut t = EntityTable::default();
-        t.apply_control(&control(0, 1.0, 2.0, 3.0, [0.0; 3]), 1);
-        t.apply_control(&control(4, 1.0, 2.0, 3.0, [0.0; 3]), 1);
-        assert_eq!(
-            t.apply_rates(4, EntityRates::default(), 2),
-            EntityChange::Updated
-        );
-        assert_eq!(
-            t.apply_rates(99, EntityRates::default(), 2),
-            EntityChange::Ignored
-        );
-        assert!(t.get(4).unwrap().rates.is_some());
-        let inactive = EntityControlUpdate {
-            state: 0,
-            ..control(4, 1.0, 2.0, 3.0, [0.0; 3])
-        };
-        assert_eq!(t.apply_control(&inactive, 3), EntityChange::Updated);
-        assert_eq!(t.get(4).unwrap().state, EntityState::Inactive);
-        assert_eq!((t.len(), t.active()), (2, 1));
-        let destroy = EntityControlUpdate {
-            state: 2,
-            ..inactive
-        };
-        assert_eq!(t.apply_control(&destroy, 4), EntityChange::Destroyed);
-        assert_eq!(t.apply_control(&destroy, 4), EntityChange::Ignored);
-        assert_eq!(t.len(), 1);
-        for id in 1..=MAX_ENTITIES as u16 {
-            t.apply_control(&control(id, 0.0, 0.0, 0.0, [0.0; 3]), 5);
-        }
-        assert_eq!(t.len(), MAX_ENTITIES);
-        let one_more = control(MAX_ENTITIES as u16 + 1, 0.0, 0.0, 0.0, [0.0; 3]);
-        assert_eq!(t.apply_control(&one_more, 5), EntityChange::Full);
-        // Known entities still update when full.
-        assert_eq!(
-            t.apply_control(&control(3, 5.0, 5.0, 5.0, [0.0; 3]), 6),
-            EntityChange::Updated
-        );
-        assert_eq!(t.clear_host_entities(), MAX_ENTITIES - 1);
-        assert_eq!(t.len(), 1);
-        assert!(t.get(OWNSHIP_ID).is_some());
-    }
-}
+#[path = "entities_tests.rs"]
+mod tests;

@@ -29,7 +29,7 @@ const MAX_SAMPLES: u64 = 1 << 30;
 const MAX_MODEL_COORD_M: f64 = 1e8;
 const GT_MODEL_TYPE: u16 = 1024;
 const GT_RASTER_TYPE: u16 = 1025;
-const GEOGRAPHIC_TYPE: u16 = 2048;
+pub(crate) const GEOGRAPHIC_TYPE: u16 = 2048;
 const PROJECTED_CS_TYPE: u16 = 3072;
 const PROJ_LINEAR_UNITS: u16 = 3076;
 
@@ -38,7 +38,7 @@ fn tiff_err(path: &Path, what: &str, e: tiff::TiffError) -> DemError {
 }
 
 /// The GeoKey directory as (key id, value) for keys stored inline (location 0).
-fn geo_keys(dir: &[u16]) -> Vec<(u16, u16)> {
+pub(crate) fn geo_keys(dir: &[u16]) -> Vec<(u16, u16)> {
     if dir.len() < 4 {
         return Vec::new();
     }
@@ -51,7 +51,7 @@ fn geo_keys(dir: &[u16]) -> Vec<(u16, u16)> {
         .collect()
 }
 
-fn key(keys: &[(u16, u16)], id: u16) -> Option<u16> {
+pub(crate) fn key(keys: &[(u16, u16)], id: u16) -> Option<u16> {
     keys.iter().find(|(k, _)| *k == id).map(|&(_, v)| v)
 }
 
@@ -170,7 +170,7 @@ pub(super) fn load_geotiff(path: &Path) -> Result<Heightfield, DemError> {
 }
 
 /// Spacing, geo-reference and the note, from the pixel scale, the first tie point and the keys.
-fn placement(
+pub(crate) fn placement(
     path: &Path,
     width: usize,
     height: usize,

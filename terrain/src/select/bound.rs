@@ -6,7 +6,8 @@ use glam::{DVec2, DVec3};
 use crate::camera::{Camera, Frustum};
 use crate::tiles::Aabb;
 
-use super::selection::EARTH_RADIUS_M;
+/// Mean Earth radius used for the curvature drop d²/2R (DESIGN.md "Earth curvature").
+pub const EARTH_RADIUS_M: f64 = 6_371_000.0;
 
 /// Extra vertical error from drawing the curvature drop linearly between vertices: over a cell
 /// of diagonal `w` the chord of d²/2R departs from it by at most w²/8R.
@@ -132,6 +133,43 @@ pub fn frustum_vertical_gain(camera: &Camera) -> f64 {
     vertical_gain(w, [f.tan_left, f.tan_right], [-f.tan_up, -f.tan_down])
 }
 
+/// The gain of a node on the ellipsoid (corners in view space): its error is ε along normals
+/// that turn by up to `spread` from `up` (the centre's, in view space), plus an interpolation
+/// slack in any direction. Writing each normal as up + δ with |δ| ≤ spread, the screen motion
+/// of ε·n is at most ε·(g(up) + spread·c) with c = max sqrt(1 + a² + b²), the direction-free
+/// factor; the slack s adds s·c. So the gain is `g(up) + c·slack` with slack = spread + s/ε.
+/// (The reference of [`CornerPass::spread_gain`]: tests only.)
+#[cfg(test)]
+pub(super) fn spread_gain_of(corners: &[DVec3; 8], f: &Frustum, up: DVec3, slack: f64) -> f64 {
+    let g = vertical_gain_of(corners, f, up);
+    if slack <= 0.0 {
+        return g;
+    }
+    g + slack * obliquity_of(corners, f)
+}
+
+/// [`spread_gain_of`] over the whole frustum (boxes not culled against it).
+pub(super) fn frustum_spread_gain(f: &Frustum, up: DVec3, slack: f64) -> f64 {
+    vertical_gain(up, [f.tan_left, f.tan_right], [-f.tan_up, -f.tan_down])
+        + slack.max(0.0) * f.max_obliquity()
+}
+
+/// Largest sqrt(1 + a² + b²) over the (a, b) a box shows, clamped to the frustum (the whole
+/// frustum's when a corner is at or behind the eye plane). Convex: attained at range ends.
+#[cfg(test)]
+fn obliquity_of(corners: &[DVec3; 8], f: &Frustum) -> f64 {
+    let (mut a_max, mut b_max) = (0.0f64, 0.0f64);
+    for v in corners {
+        if v.z <= 1e-9 {
+            return f.max_obliquity();
+        }
+        let a = (v.x / v.z).clamp(f.tan_left, f.tan_right);
+        let b = (v.y / v.z).clamp(-f.tan_up, -f.tan_down);
+        (a_max, b_max) = (a_max.max(a.abs()), b_max.max(b.abs()));
+    }
+    (1.0 + a_max * a_max + b_max * b_max).sqrt()
+}
+
 fn vertical_gain(w: DVec3, a: [f64; 2], b: [f64; 2]) -> f64 {
     let gx = a.map(|a| (w.x - a * w.z).powi(2));
     let gy = b.map(|b| (w.y - b * w.z).powi(2));
@@ -149,5 +187,86 @@ pub fn projected_error_px(eps: f64, z_min: f64, focal_px: f64, obliquity: f64) -
         f64::INFINITY
     } else {
         eps * focal_px * obliquity / z
+    }
+}
+
+/// One pass over a box's view-space corners giving everything the bound needs of them: the
+/// frustum cull ([`outside_of`]), the smallest depth ([`min_depth_of`]) and the (a, b) ranges
+/// of [`vertical_gain_of`] and [`obliquity_of`] — the same comparisons and divisions in the
+/// same order, so the same values bit for bit, with the corners read once instead of four times.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct CornerPass {
+    /// Every corner outside one frustum plane: the box is culled.
+    pub outside: bool,
+    /// Smallest view depth of a corner, not clamped.
+    pub z_min: f64,
+    /// A corner at or behind the eye plane: the gains take the whole frustum's ranges.
+    behind: bool,
+    /// a = x/z and b = y/z ranges over the corners (when none is behind).
+    a: [f64; 2],
+    b: [f64; 2],
+}
+
+impl CornerPass {
+    pub(super) fn of(corners: &[DVec3; 8], f: &Frustum, near: f64) -> Self {
+        let mut z_min = f64::INFINITY;
+        let [mut n, mut r, mut l, mut u, mut d] = [true; 5];
+        let mut behind = false;
+        let (mut a_lo, mut a_hi, mut b_lo, mut b_hi) = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
+        for p in corners {
+            z_min = z_min.min(p.z);
+            n &= p.z < near;
+            r &= p.x > f.tan_right * p.z;
+            l &= p.x < f.tan_left * p.z;
+            u &= -p.y > f.tan_up * p.z;
+            d &= -p.y < f.tan_down * p.z;
+            if p.z <= 1e-9 {
+                behind = true;
+            } else if !behind {
+                let (a, b) = (p.x / p.z, p.y / p.z);
+                (a_lo, a_hi) = (a_lo.min(a), a_hi.max(a));
+                (b_lo, b_hi) = (b_lo.min(b), b_hi.max(b));
+            }
+        }
+        Self {
+            outside: n || r || l || u || d,
+            z_min,
+            behind,
+            a: [a_lo, a_hi],
+            b: [b_lo, b_hi],
+        }
+    }
+
+    /// [`vertical_gain_of`] of the corners; `w` is the world vertical in view space.
+    pub(super) fn vertical_gain(&self, f: &Frustum, w: DVec3) -> f64 {
+        if self.behind {
+            return vertical_gain(w, [f.tan_left, f.tan_right], [-f.tan_up, -f.tan_down]);
+        }
+        let a = self.a.map(|a| a.clamp(f.tan_left, f.tan_right));
+        let b = self.b.map(|b| b.clamp(-f.tan_up, -f.tan_down));
+        vertical_gain(w, a, b)
+    }
+
+    /// [`spread_gain_of`] of the corners. The largest |a| over the corners, each clamped, is
+    /// the larger of the clamped range ends' (clamping is monotonic): the same value.
+    pub(super) fn spread_gain(&self, f: &Frustum, up: DVec3, slack: f64) -> f64 {
+        let g = self.vertical_gain(f, up);
+        if slack <= 0.0 {
+            return g;
+        }
+        let obliquity = if self.behind {
+            f.max_obliquity()
+        } else {
+            let a = self.a.map(|a| a.clamp(f.tan_left, f.tan_right).abs());
+            let b = self.b.map(|b| b.clamp(-f.tan_up, -f.tan_down).abs());
+            let (a_max, b_max) = (0f64.max(a[0]).max(a[1]), 0f64.max(b[0]).max(b[1]));
+            (1.0 + a_max * a_max + b_max * b_max).sqrt()
+        };
+        g + slack * obliquity
     }
 }

@@ -5,19 +5,35 @@
 //! refinement r with ρ(ε(L−r)) ≤ τ. Pure CPU: plain data in, plain data out.
 
 mod bound;
+mod cdlod;
+mod horizon;
+mod node_cache;
 mod quadtree;
 mod selection;
 mod skirts;
+mod tess_density;
+mod tessellation;
 
 pub use bound::{
     box_vertical_gain, curvature_interpolation_error, frustum_vertical_gain, min_view_depth,
     projected_error_px, tile_aabb,
 };
-pub use quadtree::{select_tiles, select_tiles_multi};
+pub use cdlod::{box_distance, cdlod_decide, cdlod_range_m, CdlodDecision};
+pub use horizon::{footprint, Footprint, Horizon, HorizonSet, MAX_OCCLUDERS, SECTORS};
+pub use node_cache::NodeCache;
+pub use quadtree::{select_tiles, select_tiles_multi, select_tiles_multi_ready};
+pub use selection::{AllReady, TileReadiness};
 pub use selection::{
     DrawItem, LevelStats, LodMode, SelectParams, Selection, View, EARTH_RADIUS_M, MAX_REFINEMENT,
 };
 pub use skirts::neighbour_eps;
+pub use tess_density::{sample_density, TessDensity, DEFAULT_TOL_M, TESS_LEVEL_CAP, TESS_PATCH};
+pub use tessellation::{
+    distance_factor, edge_factor, rounded_level, select_patches, triangles_emitted, Spacing,
+    TessParams, TessPatch, TessStats,
+};
 
+#[cfg(test)]
+mod equivalence_tests;
 #[cfg(test)]
 mod tests;

@@ -9,12 +9,18 @@ use crate::clipmap::{ring_tiles, ClipmapDesc, LevelPlacement};
 use crate::tiles::Aabb;
 
 use super::bound::{
-    curvature_interpolation_error, frustum_vertical_gain, min_depth_of, outside_of,
-    projected_error_px, tile_aabb, vertical_gain_of,
+    curvature_interpolation_error, frustum_spread_gain, frustum_vertical_gain, projected_error_px,
+    tile_aabb, CornerPass,
 };
+use super::node_cache::{NodeCache, NodeFixed};
 use super::selection::{
-    DrawItem, LevelStats, LodMode, SelectParams, Selection, View, MAX_REFINEMENT,
+    AllReady, DrawItem, LevelStats, LodMode, SelectParams, Selection, TileReadiness, View,
+    MAX_REFINEMENT,
 };
+
+#[cfg(test)]
+#[path = "quadtree_reference.rs"]
+pub(super) mod reference;
 
 /// Geometry of a dataset the selection needs (from the bake).
 #[derive(Debug, Clone, Copy)]
@@ -63,6 +69,15 @@ struct Frame<'a> {
     grid: Grid,
     views: Vec<ViewCtx<'a>>,
     params: &'a SelectParams,
+    ready: &'a dyn TileReadiness,
+    /// The nodes' camera-independent values, kept across frames.
+    cache: std::cell::RefCell<&'a mut NodeCache>,
+    /// Tests: take the reference evaluation (`quadtree_reference.rs`).
+    #[cfg(test)]
+    reference: bool,
+    /// Horizon culling: the eyes' horizons and the nodes it hid.
+    horizon: Option<&'a super::horizon::HorizonSet>,
+    hidden: std::cell::Cell<u32>,
 }
 
 /// One channel's camera with what the bound needs from it.
@@ -70,6 +85,8 @@ struct ViewCtx<'a> {
     camera: &'a Camera,
     /// World → view, computed once per frame (not per node: the attitude's trigonometry).
     to_view: glam::DMat4,
+    /// Its rotation (for the ellipsoid's normals).
+    rotation: glam::DMat3,
     /// The world vertical in view space.
     up: DVec3,
     focal: f64,
@@ -79,6 +96,7 @@ struct ViewCtx<'a> {
 }
 
 /// A node as the views see it.
+#[derive(Clone, Copy)]
 struct NodeEval {
     eps: f64,
     /// Largest ρ (px) among the views that see the node.
@@ -92,29 +110,53 @@ impl Frame<'_> {
         (self.grid.spacing * (1u64 << level_drawn) as f64).length()
     }
 
-    /// ε of level-L tile drawn with refinement r, curvature interpolation included.
-    fn eps(&self, level: u32, tx: u32, ty: u32, r: u32) -> f64 {
-        let mut e = self.bake.eps_refined(level, tx, ty, r) as f64;
-        if self.params.curvature {
-            e += curvature_interpolation_error(self.cell_diagonal(level - r));
-        }
-        e
+    /// The node's camera-independent values (from the cache after the first time).
+    fn fixed(&self, level: u32, tx: u32, ty: u32) -> NodeFixed {
+        self.cache
+            .borrow_mut()
+            .get(level, tx, ty, || self.compute_fixed(level, tx, ty))
     }
 
-    /// ε of the level-ℓ surface over the level-ℓ tile (tx, ty), curvature slack included.
-    fn eps_node(&self, level: u32, tx: u32, ty: u32) -> f64 {
-        self.eps(level, tx, ty, 0)
-    }
-
-    /// The node's box as seen from `eye` (the curvature drop depends on the eye).
-    fn aabb(&self, level: u32, tx: u32, ty: u32, eye: DVec3) -> Aabb {
+    /// [`Self::fixed`] computed: ε of the level-ℓ surface over the level-ℓ tile (tx, ty) with
+    /// the curvature interpolation (on the ellipsoid: the drawn cell's slack,
+    /// `GeoGrid::cell_sag_m`), and the node on the ellipsoid (geographic data).
+    fn compute_fixed(&self, level: u32, tx: u32, ty: u32) -> NodeFixed {
         let (lo, hi) = self.grid.rect(level, tx, ty);
         let (min_h, max_h) = self.bake.bounds(level, tx, ty);
-        tile_aabb(
+        let raw = self.bake.eps_refined(level, tx, ty, 0) as f64;
+        let (mut eps, mut geo) = (raw, None);
+        if let Some(g) = &self.params.earth {
+            eps += g.cell_sag_m(lo, hi, 1 << level, min_h, max_h);
+            geo = Some(g.node_geometry(lo, hi, min_h, max_h));
+        } else if self.params.curvature {
+            eps += curvature_interpolation_error(self.cell_diagonal(level));
+        }
+        // On the ellipsoid: the normals' turn and the cell slack, in any direction.
+        let slack = geo.map_or(0.0, |n| {
+            let sag = eps - raw;
+            n.spread + if eps > 0.0 { sag / eps } else { 0.0 }
+        });
+        NodeFixed {
+            eps,
+            slack,
+            geo,
             lo,
             hi,
             min_h,
             max_h,
+        }
+    }
+
+    /// The node's box as seen from `eye` (the curvature drop depends on the eye).
+    fn aabb(&self, level: u32, node: &NodeFixed, eye: DVec3) -> Aabb {
+        if let Some(n) = &node.geo {
+            return n.aabb;
+        }
+        tile_aabb(
+            node.lo,
+            node.hi,
+            node.min_h,
+            node.max_h,
             eye,
             self.params.curvature,
             self.cell_diagonal(level),
@@ -124,26 +166,44 @@ impl Frame<'_> {
     /// ε and the projected error in every view that sees the node; `None` when no view does.
     /// With `cull` false, views that do not see it count too (for level skipping).
     fn evaluate(&self, level: u32, tx: u32, ty: u32, cull: bool) -> Option<NodeEval> {
-        let eps = self.eps_node(level, tx, ty);
-        let mut seen = false;
+        #[cfg(test)]
+        if self.reference {
+            return self.evaluate_reference(level, tx, ty, cull);
+        }
+        let node = self.fixed(level, tx, ty);
+        let (eps, geo, slack) = (node.eps, node.geo, node.slack);
+        let (mut seen, mut hidden) = (false, false);
         let (mut rho_px, mut rho_norm) = (0.0f64, 0.0f64);
-        for v in &self.views {
-            let aabb = self.aabb(level, tx, ty, v.camera.position);
+        for (vi, v) in self.views.iter().enumerate() {
+            let aabb = match &geo {
+                Some(n) => n.aabb,
+                None => self.aabb(level, &node, v.camera.position),
+            };
             let corners = aabb.corners().map(|c| v.to_view.transform_point3(c));
             let f = &v.camera.frustum;
-            if cull && outside_of(&corners, f, v.camera.near) {
+            let pass = CornerPass::of(&corners, f, v.camera.near);
+            // The one culling point: a node no view keeps is not drawn.
+            if cull && pass.outside {
+                continue;
+            }
+            if cull && self.horizon.is_some_and(|h| h.hides(vi, &aabb)) {
+                hidden = true;
                 continue;
             }
             seen = true;
-            let z_min = min_depth_of(&corners, v.camera.near);
-            let c = if cull {
-                vertical_gain_of(&corners, f, v.up)
-            } else {
-                v.vertical_gain
+            let z_min = pass.z_min.max(v.camera.near);
+            let c = match (&geo, cull) {
+                (Some(n), true) => pass.spread_gain(f, v.rotation * n.up, slack),
+                (Some(n), false) => frustum_spread_gain(f, v.rotation * n.up, slack),
+                (None, true) => pass.vertical_gain(f, v.up),
+                (None, false) => v.vertical_gain,
             };
             let rho = projected_error_px(eps, z_min, v.focal, c);
             rho_px = rho_px.max(rho);
             rho_norm = rho_norm.max(rho / v.tau);
+        }
+        if hidden && !seen {
+            self.hidden.set(self.hidden.get() + 1);
         }
         seen.then_some(NodeEval {
             eps,
@@ -157,12 +217,13 @@ impl Frame<'_> {
     /// 10 % inside (hysteresis).
     fn wants_distance_split(&self, level: u32, tx: u32, ty: u32, was_split: bool) -> bool {
         let side = (self.grid.q as f64) * (1u64 << level) as f64 * self.grid.spacing.max_element();
+        let node = self.fixed(level, tx, ty);
         let d = self
             .views
             .iter()
             .map(|v| {
                 let p = v.camera.position;
-                let aabb = self.aabb(level, tx, ty, p);
+                let aabb = self.aabb(level, &node, p);
                 (p.clamp(aabb.min, aabb.max) - p).length()
             })
             .fold(f64::INFINITY, f64::min);
@@ -184,14 +245,27 @@ impl Frame<'_> {
         finest: u32,
         out: &mut Vec<(u32, u32, u32, f32, f32)>,
     ) -> u32 {
-        let Some(NodeEval {
+        match self.evaluate(level, tx, ty, true) {
+            Some(eval) => self.subdivide_seen(level, tx, ty, eval, finest, out),
+            None => 0,
+        }
+    }
+
+    /// [`Self::subdivide`] of a node some view sees, already evaluated (`eval`).
+    fn subdivide_seen(
+        &self,
+        level: u32,
+        tx: u32,
+        ty: u32,
+        eval: NodeEval,
+        finest: u32,
+        out: &mut Vec<(u32, u32, u32, f32, f32)>,
+    ) -> u32 {
+        let NodeEval {
             eps: e,
             rho_px: rho,
             rho_norm,
-        }) = self.evaluate(level, tx, ty, true)
-        else {
-            return 0;
-        };
+        } = eval;
         let split = match self.params.mode {
             LodMode::Full => true,
             LodMode::Distance => {
@@ -252,12 +326,36 @@ pub fn select_tiles_multi(
     params: &SelectParams,
     out: &mut Selection,
 ) {
+    select_tiles_multi_ready(bake, desc, placements, views, params, &AllReady, out);
+}
+
+/// [`select_tiles_multi`] over level textures that may not hold every tile yet (a streamed
+/// source): a level tile is drawn from its texture only when `ready` says its texels are
+/// there; elsewhere the quadtree stops at the coarser level (refined from the pools where their
+/// samples are resident) and the tile counts in [`Selection::stream_late`]. Outside the
+/// quadtree (other modes, `coarsen` off) a ring tile not ready is not drawn and counts late.
+pub fn select_tiles_multi_ready(
+    bake: &ErrorBake,
+    desc: &ClipmapDesc,
+    placements: &[LevelPlacement],
+    views: &[View],
+    params: &SelectParams,
+    ready: &dyn TileReadiness,
+    out: &mut Selection,
+) {
     out.items.clear();
     out.levels.clear();
     out.levels.resize(placements.len(), LevelStats::default());
     out.unbounded = 0;
+    out.stream_late = 0;
+    out.wants.clear();
+    out.hidden = 0;
     if views.is_empty() {
         return;
+    }
+    if params.mode == LodMode::Cdlod {
+        out.split.clear();
+        return super::cdlod::select_cdlod(bake, placements, views, params, out);
     }
     let views: Vec<ViewCtx> = views
         .iter()
@@ -266,6 +364,7 @@ pub fn select_tiles_multi(
             ViewCtx {
                 camera: v.camera,
                 to_view: v.camera.world_to_view(),
+                rotation: v.camera.world_to_view_rotation(),
                 up: v.camera.world_to_view_rotation() * DVec3::Z,
                 focal: fx.max(fy),
                 vertical_gain: frustum_vertical_gain(v.camera),
@@ -274,8 +373,16 @@ pub fn select_tiles_multi(
         })
         .collect();
     let split_prev = std::mem::take(&mut out.split);
+    let mut cache = std::mem::take(&mut out.node_cache);
+    cache.begin(bake, params.earth.as_ref(), params.curvature);
     let split_now = std::cell::RefCell::new(std::collections::HashSet::new());
     let distance = params.mode == LodMode::Distance;
+    let mut horizon = std::mem::take(&mut out.horizon);
+    let cull_hidden = params.horizon_cull && params.mode == LodMode::Bounded;
+    if cull_hidden {
+        let eyes: Vec<DVec3> = views.iter().map(|v| v.camera.position).collect();
+        horizon.build(bake, params.earth.as_ref(), params.curvature, &eyes);
+    }
     let frame = Frame {
         split_prev: distance.then_some(&split_prev),
         split_now: distance.then_some(&split_now),
@@ -283,11 +390,21 @@ pub fn select_tiles_multi(
         grid: Grid::of(bake),
         views,
         params,
+        ready,
+        cache: std::cell::RefCell::new(&mut cache),
+        #[cfg(test)]
+        reference: reference::active(),
+        horizon: cull_hidden.then_some(&horizon),
+        hidden: std::cell::Cell::new(0),
     };
 
     if params.mode == LodMode::Bounded && params.coarsen {
         select_coarsest_first(&frame, placements, out);
+        out.hidden = frame.hidden.get();
+        drop(frame);
         out.split = split_now.into_inner();
+        out.node_cache = cache;
+        out.horizon = horizon;
         return;
     }
     let finest = if params.mode == LodMode::Bounded {
@@ -312,15 +429,21 @@ pub fn select_tiles_multi(
                 continue;
             }
             out.levels[i].considered += 1;
-            let Some(NodeEval {
-                eps,
-                rho_px: rho,
-                rho_norm,
-            }) = frame.evaluate(level, tx, ty, true)
-            else {
+            let Some(eval) = frame.evaluate(level, tx, ty, true) else {
                 out.levels[i].culled += 1;
                 continue;
             };
+            let NodeEval {
+                eps,
+                rho_px: rho,
+                rho_norm,
+            } = eval;
+            if !frame.ready.is_ready(level, tx, ty) {
+                // Not drawn rather than drawn stale (only the quadtree can fall back coarser).
+                out.stream_late += 1;
+                out.wants.push((level, tx, ty, rho as f32));
+                continue;
+            }
             out.levels[i].drawn += 1;
             if params.mode == LodMode::Clipmap
                 || (params.mode == LodMode::Bounded && rho_norm <= 1.0)
@@ -331,43 +454,35 @@ pub fn select_tiles_multi(
                     .push(DrawItem::whole(level, tx, ty, eps as f32, rho as f32));
                 continue;
             }
-            refine_ring_tile(&frame, level, tx, ty, i, &mut nodes, out);
+            out.unbounded += refine_ring_tile(&frame, level, tx, ty, eval, i, &mut nodes, out);
         }
     }
+    out.hidden = frame.hidden.get();
+    drop(frame);
     out.split = split_now.into_inner();
+    out.node_cache = cache;
+    out.horizon = horizon;
 }
 
-/// Draws ring tile (level, tx, ty) — which the finer levels do not cover — as a quadtree of
-/// nodes from one pool slot (refinement up to the cap), each split while it misses τ.
+/// Draws ring tile (level, tx, ty) — which the finer levels do not cover, and which `eval`
+/// says a view sees — as a quadtree of nodes from one pool slot (refinement up to the cap),
+/// each split while it misses τ.
+#[allow(clippy::too_many_arguments)]
 fn refine_ring_tile(
     frame: &Frame,
     level: u32,
     tx: u32,
     ty: u32,
+    eval: NodeEval,
     level_index: usize,
     nodes: &mut Vec<(u32, u32, u32, f32, f32)>,
     out: &mut Selection,
-) {
+) -> u32 {
     let cap = frame.params.max_refinement.min(level).min(MAX_REFINEMENT);
     nodes.clear();
-    out.unbounded += frame.subdivide(level, tx, ty, level - cap, nodes);
-    let r = nodes.iter().map(|n| level - n.0).max().unwrap_or(0);
-    let stats = &mut out.levels[level_index];
-    stats.refined[r as usize] += 1;
-    stats.nodes += nodes.len() as u32;
-    for &(node_level, node_tx, node_ty, eps_m, rho_px) in nodes.iter() {
-        out.items.push(DrawItem {
-            level,
-            tx,
-            ty,
-            refinement: r,
-            node_level,
-            node_tx,
-            node_ty,
-            eps_m,
-            rho_px,
-        });
-    }
+    let missed = frame.subdivide_seen(level, tx, ty, eval, level - cap, nodes);
+    out.push_refined(level_index, level, tx, ty, nodes);
+    missed
 }
 
 /// `Bounded` with [`SelectParams::coarsen`]: a quadtree over the clipmap levels. Every
@@ -393,17 +508,24 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
         if !has_terrain(frame.bake, level, tx, ty) {
             continue;
         }
+        if i == top && !frame.ready.is_ready(level, tx, ty) {
+            // The coarsest level is filled before the first frame; a root not there yet is not
+            // drawn rather than drawn stale.
+            out.stream_late += 1;
+            out.wants.push((level, tx, ty, f32::MAX));
+            continue;
+        }
         // A split node is not a tile of its own: `considered` counts drawn + culled.
-        let Some(NodeEval {
-            eps,
-            rho_px: rho,
-            rho_norm,
-        }) = frame.evaluate(level, tx, ty, true)
-        else {
+        let Some(eval) = frame.evaluate(level, tx, ty, true) else {
             out.levels[i].considered += 1;
             out.levels[i].culled += 1;
             continue;
         };
+        let NodeEval {
+            eps,
+            rho_px: rho,
+            rho_norm,
+        } = eval;
         if rho_norm <= 1.0 {
             let stats = &mut out.levels[i];
             stats.considered += 1;
@@ -414,16 +536,38 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                 .push(DrawItem::whole(level, tx, ty, eps as f32, rho as f32));
             continue;
         }
+        let mut waiting = false;
         if i > 0 && inside_patch(&placements[i - 1], 2 * tx, 2 * ty) {
-            // Children in the finer patch: descend (pushed so that they pop south-west first).
-            for (dx, dy) in [(1, 1), (0, 1), (1, 0), (0, 0)] {
-                stack.push((i - 1, 2 * tx + dx, 2 * ty + dy));
+            // Children in the finer patch: descend (pushed so that they pop south-west first),
+            // once all of them are in its texture; until then this node stands for them.
+            let children =
+                [(1, 1), (0, 1), (1, 0), (0, 0)].map(|(dx, dy)| (2 * tx + dx, 2 * ty + dy));
+            let child_level = level - 1;
+            let missing = |&(cx, cy): &(u32, u32)| {
+                has_terrain(frame.bake, child_level, cx, cy)
+                    && !frame.ready.is_ready(child_level, cx, cy)
+            };
+            if !children.iter().any(missing) {
+                for (cx, cy) in children {
+                    stack.push((i - 1, cx, cy));
+                }
+                continue;
             }
-            continue;
+            for &(cx, cy) in children.iter().filter(|c| missing(c)) {
+                out.wants.push((child_level, cx, cy, rho as f32));
+            }
+            waiting = true;
         }
         out.levels[i].considered += 1;
         out.levels[i].drawn += 1;
-        refine_ring_tile(frame, level, tx, ty, i, &mut nodes, out);
+        // Waiting for finer texels, the node is refined from the pools instead: beyond the
+        // cap it is late for streaming, not a tile the cap leaves unbounded.
+        let missed = refine_ring_tile(frame, level, tx, ty, eval, i, &mut nodes, out);
+        if waiting {
+            out.stream_late += (missed > 0) as u32;
+        } else {
+            out.unbounded += missed;
+        }
     }
     let drawn_levels = out.levels.iter().position(|l| l.drawn > 0);
     out.finest_level = drawn_levels.unwrap_or(0) as u32;

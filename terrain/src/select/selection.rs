@@ -2,9 +2,9 @@
 //! and per-level statistics.
 
 use crate::camera::Camera;
+use crate::geodesy::GeoGrid;
 
-/// Mean Earth radius used for the curvature drop d²/2R (DESIGN.md "Earth curvature").
-pub const EARTH_RADIUS_M: f64 = 6_371_000.0;
+pub use super::bound::EARTH_RADIUS_M;
 
 /// Highest refinement a tile may get (pool bindings exist for r = 1..=MAX_REFINEMENT).
 pub const MAX_REFINEMENT: u32 = 6;
@@ -23,6 +23,13 @@ pub enum LodMode {
     /// Classic discrete LOD by distance alone (seed 004): a node is split while the eye is
     /// closer than `distance_factor` × its side, with 10 % hysteresis against popping.
     Distance,
+    /// CDLOD (Strugar 2009): a quadtree over the tiles, LOD ranges doubling per level
+    /// (`cdlod_range` node sides), selection by box distance to the eye (`cdlod.rs`).
+    Cdlod,
+    /// Hardware tessellation (seed 001): a static base mesh of triangular patches whose edge
+    /// factors are a density map of second differences × a distance factor × `tess_density`
+    /// (`tess_density.rs`, `tessellation.rs`); drawn by its own pipeline, not from the tiles.
+    Tessellation,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,6 +49,18 @@ pub struct SelectParams {
     pub coarsen: bool,
     /// `Distance` mode: split a node while the eye is nearer than this many node sides.
     pub distance_factor: f64,
+    /// `Cdlod` mode: the LOD range of a level in its node sides (the ranges double per level).
+    pub cdlod_range: f64,
+    /// `Tessellation` mode: the global factor Tg (an edge of density 1 at the eye gets this many
+    /// segments, up to the device's limit).
+    pub tess_density: f64,
+    /// A geographic dataset drawn on the WGS84 ellipsoid: node boxes, normals and the
+    /// interpolation slack come from the curved surface (`curvature` is then moot). `None`:
+    /// the flat plane. Set by the renderer from the dataset.
+    pub earth: Option<GeoGrid>,
+    /// `Bounded`: drop nodes hidden behind nearer terrain from every view (`horizon.rs`): a
+    /// hidden node has no visible error, so it is neither refined nor drawn.
+    pub horizon_cull: bool,
 }
 
 impl Default for SelectParams {
@@ -53,6 +72,10 @@ impl Default for SelectParams {
             max_refinement: 5,
             coarsen: true,
             distance_factor: 3.0,
+            cdlod_range: 6.0,
+            tess_density: super::tess_density::TESS_PATCH as f64,
+            earth: None,
+            horizon_cull: false,
         }
     }
 }
@@ -117,7 +140,7 @@ pub struct LevelStats {
     pub skipped: bool,
 }
 
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Default)]
 pub struct Selection {
     pub items: Vec<DrawItem>,
     pub levels: Vec<LevelStats>,
@@ -127,6 +150,106 @@ pub struct Selection {
     pub unbounded: u32,
     /// `Distance` mode: nodes split this frame (level, tx, ty), the hysteresis state for the next.
     pub split: std::collections::HashSet<(u32, u32, u32)>,
+    /// Ring tiles drawn coarser than the bound asks (or, outside the quadtree, not drawn)
+    /// because the level texture they needed does not hold their samples yet (a streamed
+    /// source still loading them): counted late, as pool misses are.
+    pub stream_late: u32,
+    /// The level tiles the selection wanted to draw but were not ready, (level, tx, ty,
+    /// projected error in pixels that drawing them would remove), for the source's requests.
+    pub wants: Vec<(u32, u32, u32, f32)>,
+    /// The nodes' camera-independent values (ε, boxes on the ellipsoid), kept for the next
+    /// frames of the same dataset.
+    pub node_cache: super::node_cache::NodeCache,
+    /// Nodes in some view's frustum but hidden behind nearer terrain in every view that has
+    /// them ([`SelectParams::horizon_cull`]).
+    pub hidden: u32,
+    /// The horizons of the last frame (reused allocations, corner positions).
+    pub horizon: super::horizon::HorizonSet,
+}
+
+/// Field by field, so that `clone_from` reuses the target's vectors and keeps its own node
+/// cache (the derived one would replace the target whole, cache included).
+impl Clone for Selection {
+    fn clone(&self) -> Self {
+        let mut s = Self::default();
+        s.clone_from(self);
+        s
+    }
+
+    fn clone_from(&mut self, source: &Self) {
+        // Destructured: a new field does not compile until it is copied here too.
+        let Self {
+            items,
+            levels,
+            finest_level,
+            unbounded,
+            split,
+            stream_late,
+            wants,
+            node_cache,
+            hidden,
+            horizon: _,
+        } = source;
+        self.items.clone_from(items);
+        self.levels.clone_from(levels);
+        self.finest_level = *finest_level;
+        self.unbounded = *unbounded;
+        self.split.clone_from(split);
+        self.stream_late = *stream_late;
+        self.wants.clone_from(wants);
+        self.node_cache.clone_from(node_cache);
+        self.hidden = *hidden;
+        // The horizon is rebuilt every frame: the target keeps its own allocations.
+    }
+}
+
+impl Selection {
+    /// Appends ring tile (level, tx, ty)'s `nodes` (level, tx, ty, ε, ρ) as the draw items of one
+    /// pool slot — its refinement is the deepest node's — and counts them in level `level_index`'s
+    /// statistics. Shared by every mode that refines ring tiles from the pools.
+    pub(super) fn push_refined(
+        &mut self,
+        level_index: usize,
+        level: u32,
+        tx: u32,
+        ty: u32,
+        nodes: &[(u32, u32, u32, f32, f32)],
+    ) {
+        let r = nodes.iter().map(|n| level - n.0).max().unwrap_or(0);
+        let stats = &mut self.levels[level_index];
+        stats.refined[r as usize] += 1;
+        stats.nodes += nodes.len() as u32;
+        for &(node_level, node_tx, node_ty, eps_m, rho_px) in nodes {
+            self.items.push(DrawItem {
+                level,
+                tx,
+                ty,
+                refinement: r,
+                node_level,
+                node_tx,
+                node_ty,
+                eps_m,
+                rho_px,
+            });
+        }
+    }
+}
+
+/// Which level tiles the renderer can draw from its level textures now: their texels (and
+/// their neighbours', read for normals) hold this placement's samples. The selection descends
+/// into a finer level only where its tiles are ready, so nothing stale is ever drawn while a
+/// streamed source fills the level textures over the following frames.
+pub trait TileReadiness {
+    fn is_ready(&self, level: u32, tx: u32, ty: u32) -> bool;
+}
+
+/// Every tile ready: a source held in memory, whose level textures are filled before drawing.
+pub struct AllReady;
+
+impl TileReadiness for AllReady {
+    fn is_ready(&self, _level: u32, _tx: u32, _ty: u32) -> bool {
+        true
+    }
 }
 
 /// One display channel for [`select_tiles_multi`]: its camera, viewport and error bound.

@@ -14,10 +14,25 @@ fn open_err(p: &Path) -> String {
     Store::open(p).unwrap_err().to_string()
 }
 
+pub(super) const T: usize = super::index::TRAILER;
+
 /// Byte offset of the index, from the trailer.
-fn index_at(bytes: &[u8]) -> usize {
-    let t = bytes.len() - 32;
+pub(super) fn index_at(bytes: &[u8]) -> usize {
+    let t = bytes.len() - T;
     u64::from_le_bytes(bytes[t + 8..t + 16].try_into().unwrap()) as usize
+}
+
+/// Byte offset of the bake section, from the trailer.
+pub(super) fn bake_at(bytes: &[u8]) -> usize {
+    let t = bytes.len() - T;
+    u64::from_le_bytes(bytes[t + 24..t + 32].try_into().unwrap()) as usize
+}
+
+/// Rewrites the trailer's own CRC after a trailer field was changed.
+fn fix_trailer_crc(b: &mut [u8]) {
+    let t = b.len() - T;
+    let c = crc32fast::hash(&b[t..t + T - 4]);
+    b[t + T - 4..].copy_from_slice(&c.to_le_bytes());
 }
 
 /// Rewrites the trailer's index CRC (and the trailer's own) after an index entry was
@@ -27,8 +42,7 @@ fn fix_index_crc(bytes: &mut [u8], h: &StoreHeader) {
     let end = at + INDEX_ENTRY * h.page_count as usize;
     let crc = crc32fast::hash(&bytes[at..end]);
     bytes[end + 20..end + 24].copy_from_slice(&crc.to_le_bytes());
-    let c = crc32fast::hash(&bytes[end..end + 28]);
-    bytes[end + 28..end + 32].copy_from_slice(&c.to_le_bytes());
+    fix_trailer_crc(bytes);
 }
 
 #[test]
@@ -83,9 +97,10 @@ fn a_corrupt_page_is_an_error_naming_it_and_the_others_still_read() {
 
 /// The file with its pages replaced by `pages` (in index order): offsets, lengths, CRCs,
 /// index and trailer rewritten, so only the pages' content is wrong.
-fn with_pages(bytes: &[u8], h: &StoreHeader, pages: &[Vec<u8>]) -> Vec<u8> {
+pub(super) fn with_pages(bytes: &[u8], h: &StoreHeader, pages: &[Vec<u8>]) -> Vec<u8> {
     let ix = index_at(bytes);
-    let mut index = bytes[ix..bytes.len() - 32].to_vec();
+    let section = &bytes[bake_at(bytes)..ix];
+    let mut index = bytes[ix..bytes.len() - T].to_vec();
     let mut out = bytes[..h.data_offset as usize].to_vec();
     for (i, p) in pages.iter().enumerate() {
         let at = INDEX_ENTRY * i;
@@ -94,13 +109,17 @@ fn with_pages(bytes: &[u8], h: &StoreHeader, pages: &[Vec<u8>]) -> Vec<u8> {
         index[at + 28..at + 32].copy_from_slice(&crc32fast::hash(p).to_le_bytes());
         out.extend_from_slice(p);
     }
-    let index_offset = out.len() as u64;
+    let bake_offset = out.len() as u64;
+    out.extend_from_slice(section);
+    let trailer = super::index::Trailer {
+        index_offset: out.len() as u64,
+        index_crc: crc32fast::hash(&index),
+        bake_offset,
+        bake_len: section.len() as u64,
+        bake_crc: crc32fast::hash(section),
+    };
     out.extend_from_slice(&index);
-    out.extend_from_slice(&super::index::encode_trailer(
-        index_offset,
-        h.page_count,
-        crc32fast::hash(&index),
-    ));
+    out.extend_from_slice(&super::index::encode_trailer(&trailer, h.page_count));
     out
 }
 
@@ -171,9 +190,21 @@ fn damaged_headers_and_indexes_are_refused_with_offset_and_reason() {
         e.contains("byte 0 (magic)") && e.contains("not an aerie store"),
         "{e}"
     );
-    let e = case(&|b| b[8..12].copy_from_slice(&2u32.to_le_bytes()));
+    let e = case(&|b| b[8..12].copy_from_slice(&3u32.to_le_bytes()));
     assert!(
-        e.contains("byte 8 (format version)") && e.contains("version 2 is newer"),
+        e.contains("byte 8 (format version)") && e.contains("version 3 is newer"),
+        "{e}"
+    );
+    // A version-1 store (no bake section) is refused with what to do.
+    let e = case(&|b| {
+        b[8..12].copy_from_slice(&1u32.to_le_bytes());
+        let c = crc32fast::hash(&b[..FIXED_HEADER - 4]);
+        b[FIXED_HEADER - 4..FIXED_HEADER].copy_from_slice(&c.to_le_bytes());
+    });
+    assert!(
+        e.contains("byte 8 (format version)")
+            && e.contains("version 1 is older")
+            && e.contains("re-import"),
         "{e}"
     );
     let e = case(&|b| b[50] ^= 1);
@@ -190,7 +221,7 @@ fn damaged_headers_and_indexes_are_refused_with_offset_and_reason() {
     for cut in [ix + 40, ix - 10, good.len() - 10] {
         let e = case(&|b| b.truncate(cut));
         assert!(
-            e.contains(&format!("byte {} (trailer)", cut - 32))
+            e.contains(&format!("byte {} (trailer)", cut - T))
                 && e.contains("truncated or was not completely written"),
             "cut at {cut}: {e}"
         );
@@ -199,11 +230,10 @@ fn damaged_headers_and_indexes_are_refused_with_offset_and_reason() {
     let e = case(&|b| b.extend_from_slice(&[0; 7]));
     assert!(e.contains("(trailer)"), "{e}");
     // A trailer whose index does not end at the trailer, or whose page count disagrees.
-    let t = good.len() - 32;
+    let t = good.len() - T;
     let e = case(&|b| {
         b[t + 8..t + 16].copy_from_slice(&(ix as u64 - 32).to_le_bytes());
-        let c = crc32fast::hash(&b[t..t + 28]);
-        b[t + 28..t + 32].copy_from_slice(&c.to_le_bytes());
+        fix_trailer_crc(b);
     });
     assert!(
         e.contains(&format!("byte {} (index offset)", t + 8))
@@ -212,10 +242,20 @@ fn damaged_headers_and_indexes_are_refused_with_offset_and_reason() {
     );
     let e = case(&|b| {
         b[t + 16..t + 20].copy_from_slice(&(h.page_count - 1).to_le_bytes());
-        let c = crc32fast::hash(&b[t..t + 28]);
-        b[t + 28..t + 32].copy_from_slice(&c.to_le_bytes());
+        fix_trailer_crc(b);
     });
     assert!(e.contains("(trailer page count)"), "{e}");
+    // A bake section that does not end at the index.
+    let e = case(&|b| {
+        let len = u64::from_le_bytes(b[t + 32..t + 40].try_into().unwrap());
+        b[t + 32..t + 40].copy_from_slice(&(len + 1).to_le_bytes());
+        fix_trailer_crc(b);
+    });
+    assert!(
+        e.contains(&format!("byte {} (bake section)", t + 24))
+            && e.contains("does not end at the index"),
+        "{e}"
+    );
     // A corrupt index entry (CRC).
     let e = case(&|b| b[ix + 5] ^= 1);
     assert!(
@@ -229,7 +269,7 @@ fn damaged_headers_and_indexes_are_refused_with_offset_and_reason() {
         fix_index_crc(b, &h);
     });
     assert!(
-        e.contains("(page length)") && e.contains("past the start of the index"),
+        e.contains("(page length)") && e.contains("past the start of the bake section"),
         "{e}"
     );
     // An entry naming another page than its position.
@@ -344,9 +384,10 @@ fn a_failed_write_leaves_no_store_and_no_temporary() {
     check_round_trip(&ds, &b, &Store::open(&p).unwrap());
 }
 
-/// Every page of the store read back, or the first error (as text).
+/// The bake section and every page of the store read back, or the first error (as text).
 fn read_all(p: &Path) -> Result<Vec<Page>, String> {
     let store = Store::open(p).map_err(|e| e.to_string())?;
+    store.read_bake().map_err(|e| e.to_string())?;
     store
         .pages()
         .iter()
@@ -432,4 +473,22 @@ fn a_bad_sector_fails_only_its_page_and_short_reads_change_nothing() {
         ..Faults::default()
     });
     check_round_trip(&ds, &b, &Store::open_in(short.shared(), &p).unwrap());
+}
+
+#[test]
+fn a_corrupt_bake_section_is_refused_by_read_bake_naming_its_offset() {
+    let dir = tempfile::tempdir().unwrap();
+    let (p, _, b) = small_store(dir.path());
+    let mut bytes = std::fs::read(&p).unwrap();
+    let at = bake_at(&bytes);
+    assert_eq!(Store::open(&p).unwrap().read_bake().unwrap(), b);
+    bytes[at + 3] ^= 0x08;
+    std::fs::write(&p, &bytes).unwrap();
+    // The store still opens (its pages are fine) but its bake is refused, with the reason.
+    let store = Store::open(&p).unwrap();
+    let e = store.read_bake().unwrap_err().to_string();
+    assert!(
+        e.contains(&format!("byte {at} (bake section)")) && e.contains("corrupt"),
+        "{e}"
+    );
 }

@@ -20,35 +20,58 @@ pub fn encode_entry(e: &PageEntry, out: &mut Vec<u8>) {
 }
 
 /// Bytes of the trailer that ends every store.
-pub const TRAILER: usize = 32;
+pub const TRAILER: usize = 48;
 /// First 8 bytes of the trailer.
 pub const TRAILER_MAGIC: &[u8; 8] = b"AERIEIDX";
 
-/// The trailer: magic, index offset, page count, CRC-32 of the index entries, its own CRC.
-pub fn encode_trailer(index_offset: u64, pages: u32, index_crc: u32) -> Vec<u8> {
+/// Where the trailer says the index and the bake section are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Trailer {
+    pub index_offset: u64,
+    /// CRC-32 of the index entries.
+    pub index_crc: u32,
+    /// The bake section: first byte, stored (compressed) length, CRC-32 of the stored bytes.
+    pub bake_offset: u64,
+    pub bake_len: u64,
+    pub bake_crc: u32,
+}
+
+/// The trailer: magic, index offset, page count, CRC-32 of the index entries, the bake
+/// section's offset, length and CRC-32, its own CRC.
+pub fn encode_trailer(t: &Trailer, pages: u32) -> Vec<u8> {
     let mut p = Put(TRAILER_MAGIC.to_vec());
-    p.u64(index_offset);
+    p.u64(t.index_offset);
     p.u32(pages);
-    p.u32(index_crc);
-    p.u32(0);
+    p.u32(t.index_crc);
+    p.u64(t.bake_offset);
+    p.u64(t.bake_len);
+    p.u32(t.bake_crc);
     let crc = crc32fast::hash(&p.0);
     p.u32(crc);
     p.0
 }
 
-/// The index offset and the entries' CRC from the trailer (the last [`TRAILER`] bytes of a
-/// `len`-byte file), checked against the header: the index ends where the trailer starts.
-pub fn decode_trailer(b: &[u8], len: u64, h: &StoreHeader) -> Result<(u64, u32), FieldError> {
+/// The trailer (the last [`TRAILER`] bytes of a `len`-byte file), checked against the
+/// header: the pages, then the bake section, then the index, which ends where the trailer
+/// starts.
+pub fn decode_trailer(b: &[u8], len: u64, h: &StoreHeader) -> Result<Trailer, FieldError> {
     let at = (len - TRAILER as u64) as usize;
     let u32_at = |k: usize| u32::from_le_bytes(b[k..k + 4].try_into().expect("4"));
-    if &b[..8] != TRAILER_MAGIC || crc32fast::hash(&b[..28]) != u32_at(28) {
+    let u64_at = |k: usize| u64::from_le_bytes(b[k..k + 8].try_into().expect("8"));
+    if &b[..8] != TRAILER_MAGIC || crc32fast::hash(&b[..TRAILER - 4]) != u32_at(TRAILER - 4) {
         return Err(field_err(
             at,
             "trailer",
-            "the last 32 bytes are not a store trailer: the file is truncated or was not completely written",
+            "the last 48 bytes are not a store trailer: the file is truncated or was not completely written",
         ));
     }
-    let index_offset = u64::from_le_bytes(b[8..16].try_into().expect("8"));
+    let t = Trailer {
+        index_offset: u64_at(8),
+        index_crc: u32_at(20),
+        bake_offset: u64_at(24),
+        bake_len: u64_at(32),
+        bake_crc: u32_at(40),
+    };
     let pages = u32_at(16);
     if pages != h.page_count {
         return Err(field_err(
@@ -61,26 +84,39 @@ pub fn decode_trailer(b: &[u8], len: u64, h: &StoreHeader) -> Result<(u64, u32),
         ));
     }
     let index_len = INDEX_ENTRY as u64 * u64::from(pages);
-    if index_offset < h.data_offset || index_offset.checked_add(index_len) != Some(at as u64) {
+    if t.index_offset < h.data_offset || t.index_offset.checked_add(index_len) != Some(at as u64) {
         return Err(field_err(
             at + 8,
             "index offset",
             format!(
-                "an index of {pages} pages at byte {index_offset} does not end at the trailer (byte {at}) after the header ({} bytes)",
-                h.data_offset
+                "an index of {pages} pages at byte {} does not end at the trailer (byte {at}) after the header ({} bytes)",
+                t.index_offset, h.data_offset
             ),
         ));
     }
-    Ok((index_offset, u32_at(20)))
+    if t.bake_offset < h.data_offset
+        || t.bake_offset.checked_add(t.bake_len) != Some(t.index_offset)
+    {
+        return Err(field_err(
+            at + 24,
+            "bake section",
+            format!(
+                "a bake section of {} bytes at byte {} does not end at the index (byte {}) after the header ({} bytes)",
+                t.bake_len, t.bake_offset, t.index_offset, h.data_offset
+            ),
+        ));
+    }
+    Ok(t)
 }
 
 /// Index entries from their bytes (`b`, at byte `base` of the file, the trailer's CRC
 /// `want`), each checked against the layout: at its position, the pages back to back from
-/// the header's end to the index.
+/// the header's end to `pages_end` (the bake section).
 pub fn decode_index(
     b: &[u8],
     base: u64,
     want: u32,
+    pages_end: u64,
     h: &StoreHeader,
     layout: &Layout,
 ) -> Result<Vec<PageEntry>, FieldError> {
@@ -132,11 +168,11 @@ pub fn decode_index(
             ));
         }
         next = offset + u64::from(len);
-        if next > base {
+        if next > pages_end {
             return Err(field_err(
                 off + 24,
                 "page length",
-                format!("entry {i} ends at byte {next}, past the start of the index ({base})"),
+                format!("entry {i} ends at byte {next}, past the start of the bake section ({pages_end})"),
             ));
         }
         out.push(PageEntry {
@@ -149,11 +185,11 @@ pub fn decode_index(
             crc: u(28),
         });
     }
-    if next != base {
+    if next != pages_end {
         return Err(field_err(
             at(0),
             "index",
-            format!("the pages end at byte {next}, the index starts at {base}"),
+            format!("the pages end at byte {next}, the bake section starts at {pages_end}"),
         ));
     }
     Ok(out)

@@ -1,12 +1,12 @@
 //! A whole store read back into memory as the dataset and bake it was imported from, so every
-//! command that takes `--dem` takes a store too, on the renderer's one in-memory path, until
-//! pages stream to the clipmap (issue 13 item 2). Every page is read and checked; the samples'
-//! CRC-32 must equal the header's source checksum, so what is drawn is bit for bit what was
-//! imported.
+//! command that takes `--dem` takes a store too, on the renderer's in-memory path. The bake
+//! comes from the bake section; every page is read and checked (CRC, content, its tables
+//! against the bake section); the samples' CRC-32 must equal the header's source checksum, so
+//! what is drawn is bit for bit what was imported.
 
 use std::path::Path;
 
-use crate::bake::{BakeParams, ErrorBake, MeasuredBake};
+use crate::bake::ErrorBake;
 use crate::dataset::Dataset;
 use crate::heightfield::Heightfield;
 
@@ -21,53 +21,39 @@ pub fn load_store(path: &Path) -> Result<(Dataset, ErrorBake), String> {
     let layout = store.layout().clone();
     let (w, hh) = (h.width as usize, h.height as usize);
     let q = layout.q as usize;
+    let bake = store.read_bake().map_err(|e| e.to_string())?;
+    store.check_consistency(&bake).map_err(|e| e.to_string())?;
     let mut heights = vec![0f32; w * hh];
-    let mut min0 = Vec::new();
-    let mut max0 = Vec::new();
-    let mut eps: Vec<Vec<f32>> = Vec::with_capacity(layout.levels.len());
+    // Level 0 holds every sample; the coarser levels are read to check them and their tables.
     for (l, lv) in layout.levels.iter().enumerate() {
-        let n = (lv.tiles_x * lv.tiles_y) as usize;
-        let mut e = vec![0f32; n];
-        let (mut mn, mut mx) = if l == 0 {
-            (vec![0f32; n], vec![0f32; n])
-        } else {
-            (Vec::new(), Vec::new())
-        };
         for py in 0..lv.pages_y {
             for px in 0..lv.pages_x {
-                let page = store
-                    .read_page(PageId {
-                        level: l as u32,
-                        px,
-                        py,
-                    })
-                    .map_err(|e| e.to_string())?;
+                let id = PageId {
+                    level: l as u32,
+                    px,
+                    py,
+                };
+                let page = store.read_page(id).map_err(|e| e.to_string())?;
+                page.check_tables(&bake)
+                    .map_err(|e| format!("{}: {id}: {e}", path.display()))?;
                 let r = page.rect;
-                for j in 0..r.nty {
-                    for i in 0..r.ntx {
-                        let k = (j * r.ntx + i) as usize;
-                        let t = ((r.ty0 + j) * lv.tiles_x + r.tx0 + i) as usize;
-                        e[t] = page.eps[k];
-                        if l == 0 {
-                            mn[t] = page.min[k];
-                            mx[t] = page.max[k];
-                        }
-                    }
-                }
-                if l == 0 {
-                    let (c0, r0) = (r.tx0 as usize * q, r.ty0 as usize * q);
-                    for j in 0..r.rows as usize {
-                        let row = &page.samples[j * r.cols as usize..][..r.cols as usize];
+                let (c0, r0) = (r.tx0 as usize * q, r.ty0 as usize * q);
+                for j in 0..r.rows as usize {
+                    let row = &page.samples[j * r.cols as usize..][..r.cols as usize];
+                    if l == 0 {
                         heights[(r0 + j) * w + c0..][..r.cols as usize].copy_from_slice(row);
+                    } else if let Some(i) = row.iter().enumerate().position(|(i, v)| {
+                        let (c, rr) = ((c0 + i) << l, (r0 + j) << l);
+                        v.to_bits() != heights[rr * w + c].to_bits()
+                    }) {
+                        return Err(format!(
+                            "{}: {id}: sample ({i}, {j}) is not level 0's sample at its place",
+                            path.display()
+                        ));
                     }
                 }
             }
         }
-        if l == 0 {
-            min0 = mn;
-            max0 = mx;
-        }
-        eps.push(e);
     }
     let ds = Dataset {
         hf: Heightfield {
@@ -92,29 +78,13 @@ pub fn load_store(path: &Path) -> Result<(Dataset, ErrorBake), String> {
             h.source_checksum
         ));
     }
-    let bake = ErrorBake::from_measured(MeasuredBake {
-        params: BakeParams {
-            tile_size: h.tile_size,
-            levels: h.levels,
-        },
-        width: h.width,
-        height: h.height,
-        valid_width: h.valid_width,
-        valid_height: h.valid_height,
-        spacing_x: h.spacing_x,
-        spacing_y: h.spacing_y,
-        source_checksum: h.source_checksum,
-        min0,
-        max0,
-        eps,
-    });
     Ok((ds, bake))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bake::bake;
+    use crate::bake::{bake, BakeParams};
     use crate::dataset::load_dataset;
     use crate::store::{write_store, ImportParams};
 

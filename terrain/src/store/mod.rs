@@ -16,7 +16,8 @@
 //! ```text
 //! offset size  field
 //!      0    8  magic "AERIESTO"
-//!      8    4  u32 format version (1; a newer one is refused)
+//!      8    4  u32 format version (2; any other is refused — version 1 had no bake
+//!              section, and is refused with a message to re-import)
 //!     12    4  u32 header size H (= the first page's offset)
 //!     16   32  u32 tile size m, page tiles P, levels, width, height (padded), valid width,
 //!              valid height, page count
@@ -41,14 +42,20 @@
 //!              u32 k and k × (u32 index, u32 f32 bits) restoring the exact value of each
 //!              sample that is not an exact i16 (chosen when k ≤ samples / 8); coding 1 = f32
 //!              bits XOR the west neighbour's (south for column 0), as 4 byte planes.
+//!      B       bake section, one zstd frame: f32 ε per tile of levels 1 … L−1, then level
+//!              0's min and max per tile (row-major), each array as bits XOR the previous
+//!              value, in 4 byte planes (`bake_section`)
 //!      I       index, one 32-byte entry per page, level 0 first, pages row-major:
 //!              u32 level, px, py, coding; u64 offset; u32 stored length; u32 CRC-32 of
 //!              the stored bytes
-//! size−32  32  trailer: magic "AERIEIDX", u64 index offset I, u32 page count, u32 CRC-32
-//!              of the index entries, u32 0, u32 CRC-32 of the trailer's first 28 bytes
+//! size−48  48  trailer: magic "AERIEIDX", u64 index offset I, u32 page count, u32 CRC-32
+//!              of the index entries, u64 bake offset B, u64 bake length, u32 CRC-32 of the
+//!              bake section's stored bytes, u32 CRC-32 of the trailer's first 44 bytes
 //! ```
 //!
-//! **Reading.** [`Store::open`] reads the header, the trailer and the index only and refuses
+//! **Reading.** [`Store::open`] reads the header, the trailer and the index only (≈ 1/2000 of
+//! the samples as f32); [`Store::read_bake`] the bake section only (≈ 1/100), which is the
+//! whole [`crate::bake::ErrorBake`] the selection needs. Open refuses
 //! (naming the byte offset and the reason) a bad magic, a newer version, a corrupt header,
 //! trailer or index, a header whose sizes disagree with the index, a truncated file (its end
 //! is not a trailer). [`Store::read_page`] reads
@@ -56,10 +63,13 @@
 //! [`PageError`] naming it, never a panic. [`StoreSource`] serves the host's queries from the
 //! resident pages.
 //!
-//! Files: `format` (bytes of the header, the page layout), `index` (the index entries), `pages` (cutting and coding
-//! a page), `write` (the import writer), `read` (open, page reads), `source` (queries);
+//! Files: `format` (bytes of the header, the page layout), `index` (the index entries and the
+//! trailer), `bake_section`, `pages` (cutting and coding a page), `write` (the import
+//! writer), `read` (open, the bake, page reads), `source` (queries);
 //! tests in `tests` (round trips, queries) and `damage_tests` (damaged files, failed writes).
 
+mod bake_section;
+mod consistency;
 mod error;
 mod format;
 mod index;
@@ -80,6 +90,8 @@ pub use read::Store;
 pub use source::StoreSource;
 pub use write::{write_store, write_store_in, ImportParams, StoreSummary};
 
+#[cfg(test)]
+mod consistency_tests;
 #[cfg(test)]
 mod damage_tests;
 #[cfg(test)]

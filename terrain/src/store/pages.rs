@@ -27,6 +27,50 @@ impl Page {
     pub fn at(&self, i: u32, j: u32) -> f32 {
         self.samples[(j * self.rect.cols + i) as usize]
     }
+
+    /// Bytes the decoded page holds (samples and tables; what a page cache counts).
+    pub fn bytes(&self) -> u64 {
+        (std::mem::size_of::<Page>()
+            + 4 * (self.samples.len() + self.eps.len() + self.min.len() + self.max.len()))
+            as u64
+    }
+
+    /// [`Page::bytes`] of the page that covers `rect`, before it is read.
+    pub fn bytes_of(rect: PageRect) -> u64 {
+        (std::mem::size_of::<Page>() + 4 * (rect.samples() + 3 * rect.tiles())) as u64
+    }
+
+    /// `Err` naming the first tile whose ε, min or max differs (bit for bit) from `bake`'s:
+    /// a page that disagrees with the store's bake section is not drawn.
+    pub fn check_tables(&self, bake: &ErrorBake) -> Result<(), String> {
+        let t = bake
+            .levels
+            .get(self.id.level as usize)
+            .ok_or_else(|| format!("the bake has no level {}", self.id.level))?;
+        let r = self.rect;
+        for j in 0..r.nty {
+            for i in 0..r.ntx {
+                let k = (j * r.ntx + i) as usize;
+                let (tx, ty) = (r.tx0 + i, r.ty0 + j);
+                if tx >= t.tiles_x || ty >= t.tiles_y {
+                    return Err(format!("tile ({tx}, {ty}) is outside the bake's level"));
+                }
+                let b = (ty * t.tiles_x + tx) as usize;
+                for (what, page, bake) in [
+                    ("ε", self.eps[k], t.eps[b]),
+                    ("min", self.min[k], t.min[b]),
+                    ("max", self.max[k], t.max[b]),
+                ] {
+                    if page.to_bits() != bake.to_bits() {
+                        return Err(format!(
+                            "tile ({tx}, {ty}): {what} {page} in the page, {bake} in the bake section"
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The page's level-`L` samples from the padded dataset: the exact power-of-two subsampling.

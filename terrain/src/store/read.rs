@@ -10,13 +10,15 @@ use std::sync::Arc;
 
 use aerie_io::{FileSystem, InFile};
 
+use super::bake_section;
 use super::error::{PageError, PageId, StoreError};
 use super::format::{
     check_fixed, check_layout, decode_header, FieldError, Layout, PageEntry, StoreHeader,
     FIXED_HEADER, INDEX_ENTRY,
 };
-use super::index::{decode_index, decode_trailer, TRAILER};
+use super::index::{decode_index, decode_trailer, Trailer, TRAILER};
 use super::pages::{decode_payload, Page};
+use crate::bake::ErrorBake;
 
 /// An opened store: its header, layout and index in memory, the file open for page reads.
 pub struct Store {
@@ -25,6 +27,7 @@ pub struct Store {
     header: StoreHeader,
     layout: Layout,
     index: Vec<PageEntry>,
+    trailer: Trailer,
     open_bytes: u64,
     file_len: u64,
 }
@@ -87,17 +90,27 @@ impl Store {
         let mut tb = [0u8; TRAILER];
         file.read_exact_at(&mut tb, len - TRAILER as u64)
             .map_err(io)?;
-        let (index_at, index_crc) = decode_trailer(&tb, len, &header).map_err(fmt)?;
+        let trailer = decode_trailer(&tb, len, &header).map_err(fmt)?;
+        let index_at = trailer.index_offset;
         let index_len = INDEX_ENTRY as u64 * u64::from(header.page_count);
         let mut ib = vec![0u8; index_len as usize];
         file.read_exact_at(&mut ib, index_at).map_err(io)?;
-        let index = decode_index(&ib, index_at, index_crc, &header, &layout).map_err(fmt)?;
+        let index = decode_index(
+            &ib,
+            index_at,
+            trailer.index_crc,
+            trailer.bake_offset,
+            &header,
+            &layout,
+        )
+        .map_err(fmt)?;
         Ok(Store {
             path: path.to_path_buf(),
             file,
             header,
             layout,
             index,
+            trailer,
             open_bytes: size + index_len + TRAILER as u64,
             file_len: len,
         })
@@ -129,6 +142,46 @@ impl Store {
     /// samples at m = 17 with 8 × 8-tile pages) and the trailer, never a page.
     pub fn open_bytes(&self) -> u64 {
         self.open_bytes
+    }
+
+    /// Bytes of the bake section as stored (what [`Store::read_bake`] reads).
+    pub fn bake_bytes(&self) -> u64 {
+        self.trailer.bake_len
+    }
+
+    /// Reads, verifies (CRC-32) and decodes the bake section: every level's ε and level 0's
+    /// min/max, the whole [`ErrorBake`] the selection needs, without reading a page. Refuses,
+    /// naming the byte offset and the reason, a section whose bytes fail the checksum, do not
+    /// decompress to the layout's size, or hold no bake numbers.
+    pub fn read_bake(&self) -> Result<ErrorBake, StoreError> {
+        let t = self.trailer;
+        let fmt = |reason: String| StoreError::Format {
+            path: self.path.clone(),
+            offset: t.bake_offset,
+            field: "bake section",
+            reason,
+        };
+        let mut buf = vec![0u8; t.bake_len as usize];
+        self.file
+            .read_exact_at(&mut buf, t.bake_offset)
+            .map_err(|e| StoreError::Io {
+                path: self.path.clone(),
+                reason: format!(
+                    "bake section at bytes {}..{}: {e}",
+                    t.bake_offset,
+                    t.bake_offset + t.bake_len
+                ),
+            })?;
+        let got = crc32fast::hash(&buf);
+        if got != t.bake_crc {
+            return Err(fmt(format!(
+                "{} bytes with CRC-32 {got:#010x}, the trailer says {:#010x}: the bake section is corrupt",
+                t.bake_len, t.bake_crc
+            )));
+        }
+        let raw = zstd::bulk::decompress(&buf, bake_section::raw_len(&self.layout))
+            .map_err(|e| fmt(format!("cannot decompress: {e}")))?;
+        bake_section::decode(&raw, &self.header, &self.layout).map_err(fmt)
     }
 
     /// The index entry of a page.

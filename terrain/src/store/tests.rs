@@ -111,6 +111,8 @@ pub(super) fn import(
 /// Every page read back: its samples are the level's subsampling of the dataset, its tables
 /// the bake's; and every sample of every level lies in some page.
 pub(super) fn check_round_trip(ds: &Dataset, b: &ErrorBake, store: &Store) {
+    // The bake section alone gives the whole bake, table for table.
+    assert_eq!(&store.read_bake().unwrap(), b);
     let layout = store.layout().clone();
     let q = layout.q;
     for (l, lev) in layout.levels.iter().enumerate() {
@@ -196,7 +198,19 @@ fn every_sample_and_every_baked_number_reads_back() {
         // Open reads the header and the index, nothing else.
         assert_eq!(
             store.open_bytes(),
-            h.data_offset + INDEX_ENTRY as u64 * u64::from(h.page_count) + 32
+            h.data_offset
+                + INDEX_ENTRY as u64 * u64::from(h.page_count)
+                + super::index::TRAILER as u64
+        );
+        // The bake section lies between the pages and the index.
+        assert_eq!(s.bake_bytes, store.bake_bytes());
+        assert_eq!(
+            s.file_bytes,
+            h.data_offset
+                + s.page_bytes
+                + s.bake_bytes
+                + INDEX_ENTRY as u64 * u64::from(h.page_count)
+                + super::index::TRAILER as u64
         );
         assert!(s.ratio() > 1.0, "ratio {}", s.ratio());
     }
@@ -420,4 +434,32 @@ fn a_store_can_be_shared_by_reader_threads() {
             s.spawn(|| check_round_trip(&ds, &b, &store));
         }
     });
+}
+
+#[test]
+fn a_page_whose_tables_differ_from_the_bake_section_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let (p, _, _) = small_store(dir.path());
+    let store = Store::open(&p).unwrap();
+    let bake = store.read_bake().unwrap();
+    let id = PageId {
+        level: 1,
+        px: 0,
+        py: 0,
+    };
+    let page = store.read_page(id).unwrap();
+    page.check_tables(&bake).unwrap();
+    for (t, what) in [(0, "ε"), (1, "min"), (2, "max")] {
+        let mut bad = page.clone();
+        match t {
+            0 => bad.eps[1] += 0.5,
+            1 => bad.min[1] -= 0.5,
+            _ => bad.max[1] += 0.5,
+        }
+        let e = bad.check_tables(&bake).unwrap_err();
+        assert!(
+            e.contains("tile (1, 0)") && e.contains(what) && e.contains("bake section"),
+            "{e}"
+        );
+    }
 }

@@ -1,6 +1,6 @@
 //! The import writer: every page of every level cut from a dataset and its bake, coded,
 //! compressed on all cores a batch at a time, and written as they come — header, pages,
-//! index, trailer — atomically (temporary file + rename: an interrupted import leaves
+//! bake section, index, trailer — atomically (temporary file + rename: an interrupted import leaves
 //! nothing under the store's name, and a cut file has no trailer, so it never opens).
 //!
 //! For now the dataset and its bake are in memory (a streamed import that loads the source
@@ -17,11 +17,12 @@ use aerie_io::{AtomicFile, FileSystem};
 use crate::bake::ErrorBake;
 use crate::dataset::Dataset;
 
+use super::bake_section;
 use super::error::{PageId, StoreError};
 use super::format::{
     encode_header, header_len, Coding, Layout, PageEntry, StoreHeader, INDEX_ENTRY, STORE_VERSION,
 };
-use super::index::{encode_entry, encode_trailer, TRAILER};
+use super::index::{encode_entry, encode_trailer, Trailer, TRAILER};
 use super::pages::{cut_samples, cut_tables, encode_payload};
 
 /// What an import is asked for beyond the data.
@@ -51,6 +52,8 @@ pub struct StoreSummary {
     pub f32_pages: u32,
     /// Bytes of the pages as stored (compressed).
     pub page_bytes: u64,
+    /// Bytes of the bake section as stored (compressed).
+    pub bake_bytes: u64,
     /// Bytes of the whole file.
     pub file_bytes: u64,
     /// Max ε over the terrain tiles of each level, metres.
@@ -185,11 +188,20 @@ pub fn write_store_in(
         }
     }
     let page_bytes = offset - header.data_offset;
+    let section = zstd::bulk::compress(&bake_section::encode(bake), params.zstd_level.max(3))
+        .map_err(|e| StoreError::Params {
+            reason: format!("bake section: zstd: {e}"),
+        })?;
+    write(&mut f, &section)?;
+    let trailer = Trailer {
+        index_offset: offset + section.len() as u64,
+        index_crc: crc32fast::hash(&index),
+        bake_offset: offset,
+        bake_len: section.len() as u64,
+        bake_crc: crc32fast::hash(&section),
+    };
     write(&mut f, &index)?;
-    write(
-        &mut f,
-        &encode_trailer(offset, n as u32, crc32fast::hash(&index)),
-    )?;
+    write(&mut f, &encode_trailer(&trailer, n as u32))?;
     f.commit()?;
 
     Ok(StoreSummary {
@@ -200,7 +212,8 @@ pub fn write_store_in(
         exception_pages: counts[Coding::I16Exceptions.code() as usize],
         f32_pages: counts[Coding::F32Xor.code() as usize],
         page_bytes,
-        file_bytes: offset + (INDEX_ENTRY * n + TRAILER) as u64,
+        bake_bytes: section.len() as u64,
+        file_bytes: trailer.index_offset + (INDEX_ENTRY * n + TRAILER) as u64,
         max_eps,
         header,
     })

@@ -66,6 +66,22 @@ impl Terrain {
         )
     }
 
+    /// Geodetic → world metres, where the IG puts a pose (what `GeoMapping::to_world`
+    /// computes): East-North-Up at the grid's south-west sample on the WGS84 ellipsoid.
+    pub fn world(&self, lat: f64, lon: f64, alt: f64) -> DVec3 {
+        let origin = LocalTangentPlane::new(Geodetic::new(self.south, self.west, 0.0));
+        origin.geodetic_to_enu(Geodetic::new(lat, lon, alt))
+    }
+
+    /// A sent attitude (heading, pitch, roll in degrees, taken at the aircraft's own position)
+    /// as the world attitude the IG draws it with, degrees.
+    pub fn world_attitude(&self, lat: f64, lon: f64, hpr: [f64; 3]) -> [f64; 3] {
+        let at = |la: f64, lo: f64| LocalTangentPlane::new(Geodetic::new(la, lo, 0.0)).enu_axes();
+        let frame = at(self.south, self.west).transpose() * at(lat, lon);
+        let a = aerie::camera::Attitude::from_degrees(hpr[0], hpr[1], hpr[2]).in_frame(frame);
+        [a.heading, a.pitch, a.roll].map(f64::to_degrees)
+    }
+
     /// Height of terrain and normal from the query service; `None` where there is no terrain.
     pub fn hot(&self, lat: f64, lon: f64) -> Option<(f64, DVec3)> {
         let p = self.local(lat, lon, 0.0);

@@ -18,24 +18,33 @@
 //! removes what an earlier `bench` wrote there ([`BENCH_FILES`]). A file that cannot be written
 //! does not stop the others: every output is tried, `summary.md` lists the ones that failed
 //! before it, and the command exits 1 naming the first.
+//!
+//! Each baseline can be swept over its own knob (`--clipmap-n`, `--distance-scale`,
+//! `--cdlod-range`), so that it is a curve like `bounded` over τ; `--suite` runs a TOML file of
+//! datasets × flights and writes one combined report (`suite.rs`).
 
 mod config;
+pub mod curves;
+mod flights;
 mod plot;
 mod report;
 mod rows;
+mod suite;
+mod suite_config;
+mod suite_report;
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
 use clap::Args;
 
-use crate::app::args::{read_waypoints, PassArgs};
+use crate::app::args::{read_waypoints, LookArg, PassArgs, StoreArgs, Switch};
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::flight_plan::FlightPlan;
 use crate::app::out_path::{prepare_run_folder, WriteFailures, BENCH_FILES};
-use crate::app::prepare::prepare_terrain;
+use crate::app::prepare::{prepare_source, prepare_terrain, Terrain};
 use crate::app::progress::count_bar;
 use crate::app::renderer_setup::{parse_view, patch_tiles, renderer_desc, RendererChoice, View};
 use crate::render::frame::{FrameStats, RendererDesc, TerrainRenderer};
@@ -48,16 +57,30 @@ use aerie_terrain::camera::Camera;
 use aerie_terrain::clipmap::{place_levels, ClipmapDesc};
 use aerie_terrain::dataset::Dataset;
 use aerie_terrain::select::{select_tiles, LodMode, Selection};
+use aerie_terrain::source::{InMemoryTerrain, TerrainSource};
 
-pub use config::{configurations, mode_name, parse_modes, parse_taus, BenchConfig};
+pub use config::{
+    configurations, mode_name, parse_modes, parse_positive_list, parse_taus, BenchConfig, Sweeps,
+};
 pub use report::{pareto_front, Quantiles};
 use rows::{FrameRow, ImageRow};
 
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, Args)]
 pub struct BenchArgs {
     /// Elevation model (any format `render` reads); its bake is read from or written next to it.
-    #[arg(long)]
-    pub dem: PathBuf,
+    /// A tile store (`<name>.aerie`) is streamed to the measured configurations, and read
+    /// whole besides for the oracles, the image-space error and its `full` reference.
+    #[arg(long, required_unless_present = "suite")]
+    pub dem: Option<PathBuf>,
+    /// A bench suite (TOML: datasets × flights, the run's settings): every flight is benched
+    /// into its own folder under --out, with one combined report (suite.md, ratios.csv).
+    #[arg(long, conflicts_with_all = ["dem", "flight"])]
+    pub suite: Option<PathBuf>,
+    /// Folder the suite's relative dataset paths start from (default: the suite file's folder).
+    #[arg(long, requires = "suite")]
+    pub data: Option<PathBuf>,
+    #[command(flatten)]
+    pub store: StoreArgs,
     /// Output folder (created, with the folders above it): results.csv, summary.csv, summary.md, time_vs_error.png, ...
     /// It must be empty unless --overwrite.
     #[arg(long)]
@@ -82,14 +105,16 @@ pub struct BenchArgs {
     pub fps: f64,
     #[command(flatten)]
     pub pass: PassArgs,
+    #[command(flatten)]
+    pub drape: crate::app::args::DrapeArgs,
     /// Output size, WxH pixels.
     #[arg(long, default_value = "1920x1080")]
     pub size: String,
     /// Horizontal field of view, degrees (0 < fov < 180).
     #[arg(long, default_value_t = 90.0)]
     pub fov: f64,
-    /// LOD modes, comma-separated: bounded, clipmap, distance, full.
-    #[arg(long, default_value = "bounded,clipmap,distance,full")]
+    /// LOD modes, comma-separated: bounded, clipmap, distance, cdlod, full.
+    #[arg(long, default_value = "bounded,clipmap,distance,cdlod,full")]
     pub modes: String,
     /// τ values (px) for `bounded`, comma-separated; the other modes ignore τ and run once.
     #[arg(long, default_value = "0.5,1,2,5,10")]
@@ -97,9 +122,28 @@ pub struct BenchArgs {
     /// Clipmap patch side n in vertices (129 or 257).
     #[arg(long, default_value_t = 129)]
     pub patch: u32,
+    /// Sweep `clipmap` over these patch sides n (comma-separated, each P·16+1 with P even ≥ 8,
+    /// e.g. 129,257,513); empty: once at --patch.
+    #[arg(long, default_value = "")]
+    pub clipmap_n: String,
+    /// Sweep `distance` over these scales of its split distance (e.g. 0.5,1,2,4); empty: once
+    /// at scale 1.
+    #[arg(long, default_value = "")]
+    pub distance_scale: String,
+    /// Sweep `cdlod` over these LOD ranges, in node sides of each level (e.g. 2,4,8,16); empty:
+    /// once at the default (6).
+    #[arg(long, default_value = "")]
+    pub cdlod_range: String,
+    /// Sweep `tess` over these scales of its global tessellation factor (e.g.
+    /// 0.25,0.5,1,2,4); empty: once at scale 1.
+    #[arg(long, default_value = "")]
+    pub tess_density: String,
     /// Draw a flat Earth (no curvature drop).
     #[arg(long)]
     pub no_curvature: bool,
+    /// Bounded: drop tiles hidden behind nearer terrain (a conservative CPU horizon).
+    #[arg(long, value_enum, default_value_t = Switch::Off)]
+    pub horizon_cull: Switch,
     /// Nodes per frame the CPU oracle checks by brute force (0: no oracle).
     #[arg(long, default_value_t = 12)]
     pub oracle_nodes: u32,
@@ -112,6 +156,12 @@ pub struct BenchArgs {
     /// Enable the Khronos validation layer (always on in debug builds; slows every frame).
     #[arg(long)]
     pub validate: bool,
+    /// Shading of every configuration: full, plain (the cost baseline) or classes.
+    #[arg(long, value_enum, default_value_t = LookArg::Full)]
+    pub look: LookArg,
+    /// Normal maps from the full-resolution heights on level tiles (on) or per-vertex normals.
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub normal_maps: Switch,
 }
 
 /// Validated arguments.
@@ -126,6 +176,25 @@ fn plan(a: &BenchArgs) -> Result<Plan, Failure> {
     let view = parse_view(&a.size, a.fov)?;
     let modes = parse_modes(&a.modes).map_err(bad_input)?;
     let taus = parse_taus(&a.tau).map_err(bad_input)?;
+    let sweeps = Sweeps {
+        clipmap_n: parse_positive_list("--clipmap-n", &a.clipmap_n)
+            .map_err(bad_input)?
+            .into_iter()
+            .map(|n| {
+                patch_tiles(n as u32).map(|_| n as u32).map_err(|e| {
+                    bad_input(format!(
+                        "--clipmap-n {}: {}",
+                        a.clipmap_n,
+                        e.message.trim_start_matches("--patch: ")
+                    ))
+                })
+            })
+            .collect::<Result<_, _>>()?,
+        distance_scale: parse_positive_list("--distance-scale", &a.distance_scale)
+            .map_err(bad_input)?,
+        cdlod_range: parse_positive_list("--cdlod-range", &a.cdlod_range).map_err(bad_input)?,
+        tess_density: parse_positive_list("--tess-density", &a.tess_density).map_err(bad_input)?,
+    };
     if a.frames == 0 {
         return Err(bad_input("--frames: must be at least 1"));
     }
@@ -140,7 +209,7 @@ fn plan(a: &BenchArgs) -> Result<Plan, Failure> {
     let waypoints = read_waypoints("--flight", a.flight.as_ref())?;
     Ok(Plan {
         view,
-        configs: configurations(&modes, &taus),
+        configs: configurations(&modes, &taus, &sweeps),
         patch_tiles,
         waypoints,
     })
@@ -148,18 +217,34 @@ fn plan(a: &BenchArgs) -> Result<Plan, Failure> {
 
 /// The renderer of one configuration: `full` gets pools large enough to draw every visible
 /// tile at full resolution (as `aerie render --lod full`).
+/// A swept baseline's knob sets its patch side, split-distance scale or LOD range.
 fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> RendererDesc {
-    renderer_desc(&RendererChoice {
+    let patch = match (config.mode, config.knob) {
+        // Checked in `plan`.
+        (LodMode::Clipmap, Some(n)) => patch_tiles(n as u32).unwrap_or(p.patch_tiles),
+        _ => p.patch_tiles,
+    };
+    let mut desc = renderer_desc(&RendererChoice {
         gpu: a.gpu.clone(),
         validate: a.validate,
         width: p.view.width,
         height: p.view.height,
-        patch_tiles: p.patch_tiles,
+        patch_tiles: patch,
         mode: config.mode,
         tau_px: config.tau_px.unwrap_or(1.0),
         curvature: !a.no_curvature,
         debug_tiles: false,
-    })
+        look: a.look.look(),
+        normal_maps: a.normal_maps.on(),
+        horizon_cull: a.horizon_cull.on(),
+    });
+    match (config.mode, config.knob) {
+        (LodMode::Distance, Some(k)) => desc.select.distance_factor *= k,
+        (LodMode::Cdlod, Some(k)) => desc.select.cdlod_range = k,
+        (LodMode::Tessellation, Some(k)) => desc.select.tess_density *= k,
+        _ => {}
+    }
+    desc
 }
 
 /// A configuration's renderer with its CPU mirror of the selection (for the oracle) and its
@@ -178,19 +263,137 @@ struct Lane {
 }
 
 pub fn run(a: BenchArgs) -> Result<(), Failure> {
+    if let Some(file) = &a.suite {
+        let paths = suite::SuitePaths {
+            file,
+            data: a.data.as_deref(),
+            out: &a.out,
+            overwrite: a.overwrite,
+        };
+        return suite::run(&paths, &mut |job| suite_flight(&a, job));
+    }
+    let Some(dem) = a.dem.clone() else {
+        return Err(bad_input("--dem: required without --suite"));
+    };
     let mut p = plan(&a)?;
-    let removed = prepare_run_folder("--out", &a.out, a.overwrite, &BENCH_FILES)?;
+    let tile_size = RendererDesc::default().tile_size;
+    let source_desc = RendererDesc {
+        patch_tiles: p.patch_tiles,
+        ..RendererDesc::default()
+    };
+    let terrain = prepare_source(&dem, &source_desc, &a.store)?;
+    // The truth the measurements need: the samples themselves, whole.
+    let (ds, bake) = match &terrain.dataset {
+        Some(ds) => (ds.clone(), terrain.bake.clone()),
+        None => prepare_terrain(&dem, tile_size)?,
+    };
+    let total_frames = a.warmup + a.frames;
+    let duration = total_frames as f64 / a.fps;
+    let flight = FlightPlan::new(&terrain, &a.pass, p.waypoints.take(), duration);
+    let described = match &a.flight {
+        Some(f) => format!("waypoints {}", f.display()),
+        None => format!(
+            "built-in straight pass, heading {}°, pitch {}°, {} m/s, {} m {}, {} fps",
+            a.pass.heading,
+            a.pass.pitch,
+            a.pass.speed,
+            a.pass.agl,
+            if a.pass.follow_terrain {
+                "above the ground"
+            } else {
+                "above the highest sample"
+            },
+            a.fps
+        ),
+    };
+    let input = FlightInput {
+        dem: &dem,
+        ds: &ds,
+        bake: &bake,
+        flight: &flight,
+        described,
+        source: terrain.source.clone(),
+    };
+    run_flight(&a, &p, &input, &a.out).map(|_| ())
+}
+
+/// One flight of a suite: the command's arguments with the suite's settings, its waypoints.
+fn suite_flight(
+    a: &BenchArgs,
+    job: &suite::FlightJob,
+) -> Result<(String, Vec<report::Summary>), Failure> {
+    let r = job.run;
+    let join = |v: &[f64]| v.iter().map(f64::to_string).collect::<Vec<_>>().join(",");
+    let mut args = a.clone();
+    args.size = r.size.clone();
+    args.fov = r.fov;
+    args.frames = r.frames;
+    args.warmup = r.warmup;
+    args.fps = r.fps;
+    args.modes = r.modes.clone();
+    args.tau = join(&r.tau);
+    let clipmap_n: Vec<f64> = r.sweeps.clipmap_n.iter().map(|&n| n as f64).collect();
+    args.clipmap_n = join(&clipmap_n);
+    args.distance_scale = join(&r.sweeps.distance_scale);
+    args.cdlod_range = join(&r.sweeps.cdlod_range);
+    args.tess_density = join(&r.sweeps.tess_density);
+    args.oracle_nodes = r.oracle_nodes;
+    args.flight = None;
+    let p = plan(&args)?;
+    let duration = (r.warmup + r.frames) as f64 / r.fps;
+    let terrain = Terrain::in_memory(job.ds.clone(), job.bake.clone());
+    let flight = FlightPlan::new(&terrain, &args.pass, Some(job.waypoints.clone()), duration);
+    let input = FlightInput {
+        dem: job.dem,
+        ds: job.ds,
+        bake: job.bake,
+        flight: &flight,
+        described: job.described.clone(),
+        source: terrain.source.clone(),
+    };
+    let outcome = run_flight(&args, &p, &input, &job.out)?;
+    Ok((outcome.device, outcome.summaries))
+}
+
+/// What one benched flight flies over and along.
+pub(crate) struct FlightInput<'a> {
+    pub dem: &'a Path,
+    pub ds: &'a Arc<Dataset>,
+    pub bake: &'a Arc<aerie_terrain::bake::ErrorBake>,
+    pub flight: &'a FlightPlan,
+    /// The flight in words, for summary.md.
+    pub described: String,
+    /// What the measured configurations draw from (a streamed store, or the dataset).
+    pub source: Arc<dyn TerrainSource>,
+}
+
+/// What one benched flight gives the suite: the device and every configuration's summary.
+pub(crate) struct FlightOutcome {
+    pub device: String,
+    pub summaries: Vec<report::Summary>,
+}
+
+/// Benches every configuration of `p` along one flight into `out` (a `bench` run folder).
+fn run_flight(
+    a: &BenchArgs,
+    p: &Plan,
+    input: &FlightInput,
+    out: &Path,
+) -> Result<FlightOutcome, Failure> {
+    let removed = prepare_run_folder("--out", out, a.overwrite, &BENCH_FILES)?;
     if removed > 0 {
         eprintln!(
             "--overwrite: removed {removed} files of an earlier bench from {}",
-            a.out.display()
+            out.display()
         );
     }
+    let (ds, bake, flight) = (input.ds, input.bake, input.flight);
     let tile_size = RendererDesc::default().tile_size;
-    let (ds, bake) = prepare_terrain(&a.dem, tile_size)?;
     let total_frames = a.warmup + a.frames;
-    let duration = total_frames as f64 / a.fps;
-    let flight = FlightPlan::new(&ds, &a.pass, p.waypoints.take(), duration);
+    let in_memory: Arc<dyn TerrainSource> = Arc::new(InMemoryTerrain::with_checksum(
+        ds.clone(),
+        bake.source_checksum,
+    ));
     let image_error = !a.no_image_error;
     let mut lane_configs: Vec<(BenchConfig, bool)> = p.configs.iter().map(|&c| (c, true)).collect();
     let has_full = p.configs.iter().any(|c| c.mode == LodMode::Full);
@@ -199,6 +402,7 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             BenchConfig {
                 mode: LodMode::Full,
                 tau_px: None,
+                knob: None,
             },
             false,
         ));
@@ -206,11 +410,32 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
     let eye0 = flight.pose_at(0.0).0;
     let t_setup = Instant::now();
     let mut lanes: Vec<Lane> = Vec::new();
+    let geographic = matches!(
+        ds.hf.geo,
+        Some(aerie_terrain::GeoReference::Geographic { .. })
+    );
+    let drape = crate::app::renderer_setup::drape_input(&a.drape)?;
     for &(config, reported) in &lane_configs {
-        let desc = lane_desc(&a, &p, config);
+        if config.mode == LodMode::Tessellation && geographic {
+            // The tessellation baseline draws flat grids only (render/tess_pass.rs).
+            eprintln!(
+                "{}: not run on {}: a geographic grid, which the tessellation baseline does not draw",
+                config.label(),
+                input.dem.display()
+            );
+            continue;
+        }
+        let mut desc = lane_desc(a, p, config);
+        desc.drape = drape.clone();
         let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
+        // Measured configurations draw from the source given; the reference from memory.
+        let source = if reported {
+            input.source.clone()
+        } else {
+            in_memory.clone()
+        };
         renderer
-            .load_terrain(ds.clone(), bake.clone(), eye0)
+            .load_source(source, bake.clone(), eye0)
             .map_err(|e| runtime(format!("{}: {e}", config.label())))?;
         lanes.push(Lane {
             config,
@@ -226,6 +451,12 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
                 ..Default::default()
             },
         });
+    }
+    if lanes.is_empty() {
+        return Err(bad_input(format!(
+            "--modes: no configuration runs on {}",
+            input.dem.display()
+        )));
     }
     let device = lanes[0].renderer.device_name().to_string();
     eprintln!(
@@ -296,7 +527,6 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             bar.inc(1);
         }
         let viewer = [pos.x / ds.hf.spacing_x, pos.y / ds.hf.spacing_y];
-        let placements = place_levels(&clip, viewer);
         let reference_depth = reference.map(|r| std::mem::take(&mut lanes[r].depth));
         for (i, lane) in lanes.iter_mut().enumerate() {
             let (wall_ms, stats) = results[i].expect("rendered");
@@ -308,12 +538,12 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
                     &own
                 };
                 Some(measure_lane(
-                    &ds,
+                    ds,
                     &camera,
                     size,
                     depth,
                     reference_depth.as_deref(),
-                    &a,
+                    a,
                     lane,
                     k,
                     warmup,
@@ -321,10 +551,18 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             } else {
                 None
             };
-            let oracle = if a.oracle_nodes > 0 {
+            // The oracle checks tile selections; the tessellation baseline draws none.
+            let tiles = lane.config.mode != LodMode::Tessellation;
+            let oracle = if a.oracle_nodes > 0 && tiles {
                 let desc = lane.renderer.desc();
+                // Each lane's own patch (a swept clipmap has its own).
+                let clip = ClipmapDesc {
+                    patch_tiles: desc.patch_tiles,
+                    ..clip
+                };
+                let placements = place_levels(&clip, viewer);
                 select_tiles(
-                    &bake,
+                    bake,
                     &clip,
                     &placements,
                     &camera,
@@ -333,7 +571,7 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
                     &mut lane.selection,
                 );
                 Some(oracle_selection(
-                    &ds,
+                    ds,
                     &camera,
                     size,
                     clip.tile_quads,
@@ -384,33 +622,17 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
     let summaries = report::summarize(&configs, &rows, &totals);
     let meta = report::RunInfo {
         device,
-        dem: a.dem.display().to_string(),
+        dem: input.dem.display().to_string(),
         dataset: ds.summary(),
         size,
         fov_deg: a.fov,
         frames: a.frames,
         warmup: a.warmup,
-        flight: match &a.flight {
-            Some(f) => format!("waypoints {}", f.display()),
-            None => format!(
-                "built-in straight pass, heading {}°, pitch {}°, {} m/s, {} m {}, {} fps",
-                a.pass.heading,
-                a.pass.pitch,
-                a.pass.speed,
-                a.pass.agl,
-                if a.pass.follow_terrain {
-                    "above the ground"
-                } else {
-                    "above the highest sample"
-                },
-                a.fps
-            ),
-        },
+        flight: input.described.clone(),
         validation: lanes[0].renderer.desc().validation,
         image_error,
         oracle_nodes: a.oracle_nodes,
     };
-    let out = &a.out;
     // Every output is tried even when one fails; the charts and heat maps go first so that
     // summary.md can list what is missing.
     let mut failures = WriteFailures::default();
@@ -459,7 +681,11 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
         meta.device,
         out.display()
     );
-    failures.verdict(md_written.then_some(path.as_path()))
+    failures.verdict(md_written.then_some(path.as_path()))?;
+    Ok(FlightOutcome {
+        device: meta.device,
+        summaries,
+    })
 }
 
 /// Measures one lane's frame, accumulates it (outside warm-up) and keeps its worst heat map.

@@ -18,28 +18,44 @@ use std::time::Instant;
 
 use aerie_config::{Channel, RenderConfig};
 use clap::Args;
-use glam::DVec3;
 
-use crate::app::args::{read_waypoints, GpuArgs, PassArgs};
+use crate::app::args::{read_waypoints, GpuArgs, PassArgs, StoreArgs};
+use crate::app::commands::flight_files::{
+    csv_row, frames_csv_header, median_max, median_p99_max, write_csv_and_summary,
+};
+use crate::app::commands::fly_no_draw::{fly_no_draw, NoDrawFlight};
+use crate::app::commands::render::stream_json;
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::flight_plan::FlightPlan;
 use crate::app::out_path::{prepare_run_folder, WriteFailures, FLY_FILES};
-use crate::app::prepare::prepare_terrain;
+use crate::app::prepare::prepare_source;
 use crate::app::progress::count_bar;
 use crate::app::renderer_setup::{setup, Setup};
 use crate::render::frame::{FrameStats, TerrainRenderer};
 use crate::sim::channel::channel_camera;
-use crate::tools::output::{write_png, write_text};
+use crate::tools::output::write_png;
 use crate::tools::overlay::{OverlayInfo, OverlayState};
 use crate::tools::panorama::{canvas_for, PanoramaChannel, PanoramaMap, MAX_CANVAS};
 use crate::tools::percentile::percentile;
-use aerie_terrain::camera::{Attitude, Camera};
+use aerie_terrain::camera::Camera;
 
 #[derive(Debug, Args)]
 pub struct FlyArgs {
     /// Elevation model (any format `render` reads); its bake is read from or written next to it.
+    /// A tile store (`<name>.aerie`) is streamed.
     #[arg(long)]
     pub dem: PathBuf,
+    #[command(flatten)]
+    pub store: StoreArgs,
+    /// No drawing and no GPU: the frame thread's selection, streaming and clipmap/pool
+    /// decisions alone, reporting RSS over time, late tiles, the longest terrain-data time per
+    /// frame and the cache hit rate (`frames.csv`, `summary.json`; no PNGs).
+    #[arg(long)]
+    pub no_draw: bool,
+    /// With --no-draw: frames follow the flight's clock sped up this many times (1 = real
+    /// time; 0 = as fast as the frame thread goes, which leaves the page workers no time).
+    #[arg(long, default_value_t = 1.0)]
+    pub pace: f64,
     /// Number of frames.
     #[arg(long, default_value_t = 24)]
     pub frames: u32,
@@ -104,8 +120,18 @@ pub fn run(a: FlyArgs) -> Result<(), Failure> {
             a.out.display()
         );
     }
-    let (ds, b) = prepare_terrain(&a.dem, s.desc.tile_size)?;
-    let flight = FlightPlan::new(&ds, &a.pass, waypoints, a.frames as f64 / a.fps);
+    let terrain = prepare_source(&a.dem, &s.desc, &a.store)?;
+    let flight = FlightPlan::new(&terrain, &a.pass, waypoints, a.frames as f64 / a.fps);
+    if a.no_draw {
+        let job = NoDrawFlight {
+            dem: &a.dem,
+            out: &a.out,
+            frames: a.frames,
+            fps: a.fps,
+            pace: a.pace,
+        };
+        return fly_no_draw(&job, &s, &terrain, &flight);
+    }
     let mut desc = s.desc.clone();
     if let Some((_, chans)) = &channel_plan {
         (desc.width, desc.height) = chans[0].size;
@@ -113,7 +139,11 @@ pub fn run(a: FlyArgs) -> Result<(), Failure> {
     let mut r = TerrainRenderer::new(&desc).map_err(runtime)?;
     let t_upload = Instant::now();
     let up = r
-        .load_terrain(ds, b, flight.pose_at(0.0).0)
+        .load_source(
+            terrain.source.clone(),
+            terrain.bake.clone(),
+            flight.pose_at(0.0).0,
+        )
         .map_err(runtime)?;
     eprintln!(
         "{} clipmap levels filled: {:.1} MB in {} submissions ({:.2} s) on {}",
@@ -151,6 +181,10 @@ fn fly_one_camera(
     let bar = count_bar(a.frames as u64, "frames", "flying");
     let mut csv = frames_csv_header();
     let mut late = 0u64;
+    let mut late_stream = 0u64;
+    let mut drawn = 0u64;
+    let mut data_us = 0f64;
+    let mut last = FrameStats::default();
     let mut refined = 0u64;
     let mut gpu_ms = Vec::new();
     let mut frame_ms = Vec::new();
@@ -172,6 +206,10 @@ fn fly_one_camera(
         gpu_ms.push(stats.gpu_upload_ms + stats.gpu_terrain_ms);
         triangles.push(stats.triangles as f64);
         late += stats.tiles_late as u64;
+        late_stream += stats.tiles_late_stream as u64;
+        drawn += stats.tiles_drawn as u64;
+        data_us = data_us.max(stats.cpu_terrain_data_us);
+        last = stats;
         refined += stats.tiles_drawn as u64 - stats.tiles_by_refinement[0] as u64;
         csv.push_str(&csv_row(&stats, t, pos, att));
         if f % a.every == 0 {
@@ -201,6 +239,10 @@ fn fly_one_camera(
         "tau_px": s.desc.select.tau_px,
         "tiles_refined": refined,
         "tiles_late": late,
+        "tiles_late_stream": late_stream,
+        "tiles_drawn": drawn,
+        "max_terrain_data_us": data_us,
+        "stream": stream_json(&last),
         "validation": {
             "enabled": s.desc.validation,
             "errors": r.validation_counters().errors(),
@@ -233,62 +275,6 @@ fn not_written_note(done: &Result<(), Failure>) -> &'static str {
     } else {
         ""
     }
-}
-
-/// The end of every flight: `frames.csv`, then `summary.json` with `failed_frames` and
-/// `failed_files` (both empty on a clean run), each tried even when files before it failed.
-/// Ok when every file of the run was written, else exit 1 naming the first that was not.
-fn write_csv_and_summary(
-    out: &Path,
-    csv: &str,
-    mut summary: serde_json::Value,
-    failures: &mut WriteFailures,
-) -> Result<(), Failure> {
-    let csv_path = out.join("frames.csv");
-    failures.check(None, &csv_path, write_text(&csv_path, csv));
-    summary["failed_frames"] = serde_json::json!(failures.failed_frames());
-    summary["failed_files"] = failures.json();
-    let path = out.join("summary.json");
-    let written = write_text(&path, &format!("{summary:#}\n"));
-    let written = failures.check(None, &path, written);
-    failures.verdict(written.then_some(path.as_path()))
-}
-
-/// Header of `frames.csv`.
-pub fn frames_csv_header() -> String {
-    format!(
-        "time_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg,{}\n",
-        FrameStats::CSV_HEADER
-    )
-}
-
-/// `summary.json`'s spread of sorted samples: median, p99 and max.
-fn median_p99_max(sorted: &[f64]) -> serde_json::Value {
-    serde_json::json!({
-        "median": percentile(sorted, 0.5),
-        "p99": percentile(sorted, 0.99),
-        "max": percentile(sorted, 1.0),
-    })
-}
-
-/// `summary.json`'s median and max of sorted samples.
-fn median_max(sorted: &[f64]) -> serde_json::Value {
-    serde_json::json!({"median": percentile(sorted, 0.5), "max": percentile(sorted, 1.0)})
-}
-
-/// One CSV row per frame: the pose, then every frame statistic.
-fn csv_row(s: &FrameStats, t: f64, pos: DVec3, att: Attitude) -> String {
-    format!(
-        "{:.4},{:.2},{:.2},{:.2},{:.3},{:.3},{:.3},{}\n",
-        t,
-        pos.x,
-        pos.y,
-        pos.z,
-        att.heading.to_degrees(),
-        att.pitch.to_degrees(),
-        att.roll.to_degrees(),
-        s.csv_row()
-    )
 }
 
 /// One channel as flown: its config, render size and output folder name.

@@ -1,10 +1,12 @@
 //! `aerie gen-dem`: writes a deterministic synthetic terrain ([`aerie_terrain::gen`]) as raw
 //! little-endian f32 plus the JSON sidecar the raw loader reads (`<out>.json`), so the result
 //! loads with `--dem <out>` / `aerie bake <out>` like any other DEM. Rows are south first
-//! (`"north_up": false`). The file is filled through a memory map by all cores (its blocks
-//! reserved first, so a full disk is an error, not `SIGBUS`) and renamed into place when
-//! complete ([`aerie_io::AtomicFile`]); on any failure no temporary is left.
+//! (`"north_up": false`). The rows are generated a band at a time by all cores and written
+//! as each band completes, so memory holds one band (≤ 32 MiB), not the grid, whatever its
+//! size; the file is renamed into place when complete ([`aerie_io::AtomicFile`]); on any
+//! failure no temporary is left.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -37,6 +39,11 @@ pub struct GenDemArgs {
     /// is written next to it.
     #[arg(long)]
     pub out: PathBuf,
+}
+
+/// Rows per band: about 8 Mi samples (32 MiB as f32), at least one row.
+fn band_rows(size: usize) -> usize {
+    ((8 << 20) / size).clamp(1, size)
 }
 
 /// The sidecar path the raw loader looks for.
@@ -88,21 +95,29 @@ pub fn run(a: GenDemArgs) -> Result<(), Failure> {
     let bar = progress_bar(samples, &format!("generating {} {n}×{n}", kind.name()));
     let result = (|| -> Result<(f32, f32), aerie_io::WriteError> {
         let mut file = aerie_io::AtomicFile::create(&a.out)?;
-        let mut map = file.map_preallocated(bytes)?;
-        let heights: &mut [f32] = bytemuck::cast_slice_mut(&mut map[..]);
-        generate_into(&p, 0, heights, &|rows| bar.set_position(rows * n as u64));
-        let (lo, hi) = heights
-            .iter()
-            .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &v| {
-                (l.min(v), h.max(v))
+        let band_rows = band_rows(n);
+        let mut band = vec![0f32; band_rows * n];
+        let mut bytes_out: Vec<u8> = Vec::with_capacity(band.len() * 4);
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for row0 in (0..n).step_by(band_rows) {
+            let rows = band_rows.min(n - row0);
+            let heights = &mut band[..rows * n];
+            generate_into(&p, row0, heights, &|r| {
+                bar.set_position((row0 as u64 + r) * n as u64)
             });
-        if cfg!(target_endian = "big") {
-            for v in heights.iter_mut() {
-                *v = f32::from_bits(v.to_bits().to_le());
+            bytes_out.clear();
+            for &v in heights.iter() {
+                lo = lo.min(v);
+                hi = hi.max(v);
+                bytes_out.extend_from_slice(&v.to_le_bytes());
             }
+            file.write_all(&bytes_out)
+                .map_err(|source| aerie_io::WriteError {
+                    path: a.out.clone(),
+                    step: "write",
+                    source,
+                })?;
         }
-        file.flush_map(&map)?;
-        drop(map);
         file.commit()?;
         Ok((lo, hi))
     })();

@@ -216,7 +216,7 @@ fn summary_line(
 ) -> String {
     let h = &s.header;
     format!(
-        "imported {}: {}×{} samples ({} real), m = {}, {} levels, {} pages ({} i16, {} i16 + exceptions, {} f32) of {}×{} tiles; {} ({} of samples as f32, ratio {:.2}); load {load_s:.2} s, bake {bake_s:.2} s, pages {write_s:.2} s: {:.1} M real samples/s overall; max ε per level (m): {}",
+        "imported {}: {}×{} samples ({} real), m = {}, {} levels, {} pages ({} i16, {} i16 + exceptions, {} f32) of {}×{} tiles; {} ({} of samples as f32, ratio {:.2}; bake section {}); load {load_s:.2} s, bake {bake_s:.2} s, pages {write_s:.2} s: {:.1} M real samples/s overall; max ε per level (m): {}",
         out.display(),
         h.width,
         h.height,
@@ -232,6 +232,7 @@ fn summary_line(
         human_bytes(s.file_bytes),
         human_bytes(h.raw_sample_bytes),
         s.ratio(),
+        human_bytes(s.bake_bytes),
         s.real_samples as f64 / total_s.max(1e-9) / 1e6,
         max_eps_text(s)
     )
@@ -264,6 +265,7 @@ fn summary_json(
         "f32_pages": s.f32_pages,
         "file_bytes": s.file_bytes,
         "page_bytes": s.page_bytes,
+        "bake_bytes": s.bake_bytes,
         "raw_sample_bytes": h.raw_sample_bytes,
         "compression_ratio": s.ratio(),
         "max_eps_m": s.max_eps,

@@ -1,7 +1,10 @@
 //! `aerie info <store>`: what a tile store holds — header, levels, pages, bytes, compression
-//! ratio — from its header and index alone (no page is read); `--json` prints it as JSON.
-//! `--verify` also reads every page (CRC-32, decompression, content) and reports the bad ones
-//! by reason and the read throughput; a bad page makes the exit code 2.
+//! ratio — from its header, index and bake section alone (no page is read), with the time
+//! open and the bake section took (what a renderer's start-up reads); `--json` prints it as
+//! JSON.
+//! `--verify` also reads the bake section and every page (CRC-32, decompression, content, the
+//! page's tables against the bake section) and reports the bad ones by reason and the read
+//! throughput; a bad page or bake section makes the exit code 2.
 
 use std::path::PathBuf;
 
@@ -45,10 +48,19 @@ impl Verify {
     }
 }
 
-/// Reads every page of `store` once, counting what fails by reason.
+/// Reads the bake section and every page of `store` once, counting what fails by reason (a
+/// bake section that cannot be read counts as one content error).
 pub fn verify(store: &Store) -> Verify {
     let t = std::time::Instant::now();
     let mut v = Verify::default();
+    let bake = match store.read_bake() {
+        Ok(b) => Some(b),
+        Err(e) => {
+            v.content_errors += 1;
+            v.first_errors.push(e.to_string());
+            None
+        }
+    };
     for e in store.pages() {
         let id = PageId {
             level: e.level,
@@ -56,7 +68,20 @@ pub fn verify(store: &Store) -> Verify {
             py: e.py,
         };
         v.stored_bytes += u64::from(e.len);
-        match store.read_page(id) {
+        let checked = store.read_page(id).and_then(|p| match &bake {
+            Some(b) => p
+                .check_tables(b)
+                .map(|_| p)
+                .map_err(|reason| PageError::Content {
+                    path: store.path().to_path_buf(),
+                    page: id,
+                    offset: e.offset,
+                    end: e.offset + u64::from(e.len),
+                    reason,
+                }),
+            None => Ok(p),
+        });
+        match checked {
             Ok(p) => {
                 v.pages += 1;
                 v.samples += p.samples.len() as u64;
@@ -167,10 +192,20 @@ fn geo_text(g: &Option<GeoReference>) -> String {
 }
 
 pub fn run(a: InfoArgs) -> Result<(), Failure> {
-    let store = Store::open(&a.store).map_err(|e| match e {
+    let to_failure = |e: StoreError| match e {
         StoreError::Io { .. } => runtime(e),
         _ => bad_input(e),
-    })?;
+    };
+    let t = std::time::Instant::now();
+    let store = Store::open(&a.store).map_err(to_failure)?;
+    let open_ms = t.elapsed().as_secs_f64() * 1e3;
+    let t = std::time::Instant::now();
+    // A bad bake section is reported after the summary (exit 2), as a bad page is.
+    let bake_err = store
+        .read_bake()
+        .and_then(|b| store.check_consistency(&b))
+        .err();
+    let bake_ms = t.elapsed().as_secs_f64() * 1e3;
     let h = store.header();
     let lv = levels(&store);
     let page_bytes: u64 = store.pages().iter().map(|e| u64::from(e.len)).sum();
@@ -199,6 +234,9 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
             "voids_filled": h.voids_filled,
             "sources": h.sources,
             "open_bytes": store.open_bytes(),
+            "open_ms": open_ms,
+            "bake_bytes": store.bake_bytes(),
+            "bake_ms": bake_ms,
             "per_level": lv.iter().map(|l| serde_json::json!({
                 "level": l.level,
                 "tiles": l.tiles,
@@ -210,7 +248,10 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
             "verify": checked.as_ref().map(verify_json),
         });
         println!("{v:#}");
-        return verdict(checked.as_ref());
+        return match bake_err {
+            Some(e) => Err(to_failure(e)),
+            None => verdict(checked.as_ref()),
+        };
     }
     println!(
         "{}: aerie tile store, format version {}",
@@ -227,12 +268,16 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
         h.tile_size, h.page_tiles, h.page_tiles, h.levels, h.page_count
     );
     println!(
-        "  {} ({} of samples as f32, ratio {ratio:.2}); source checksum {:#010x}, {} voids filled; {} read to open",
+        "  {} ({} of samples as f32, ratio {ratio:.2}); source checksum {:#010x}, {} voids filled",
         human_bytes(store.file_len()),
         human_bytes(h.raw_sample_bytes),
         h.source_checksum,
         h.voids_filled,
-        human_bytes(store.open_bytes())
+    );
+    println!(
+        "  open: {} read in {open_ms:.1} ms; bake section: {} read and decoded in {bake_ms:.1} ms",
+        human_bytes(store.open_bytes()),
+        human_bytes(store.bake_bytes())
     );
     let n = h.sources.len();
     match h.sources.as_slice() {
@@ -267,5 +312,8 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
             v.content_errors
         );
     }
-    verdict(checked.as_ref())
+    match bake_err {
+        Some(e) => Err(to_failure(e)),
+        None => verdict(checked.as_ref()),
+    }
 }

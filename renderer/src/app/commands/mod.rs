@@ -3,7 +3,9 @@
 
 pub mod bake;
 pub mod bench;
+pub mod flight_files;
 pub mod fly;
+pub mod fly_no_draw;
 pub mod gen_dem;
 pub mod import;
 pub mod info;

@@ -7,12 +7,12 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 
-use crate::app::args::GpuArgs;
+use crate::app::args::{GpuArgs, StoreArgs};
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::out_path::{prepare_out_file, with_suffix};
-use crate::app::prepare::prepare_terrain;
+use crate::app::prepare::prepare_source;
 use crate::app::renderer_setup::setup;
-use crate::render::frame::TerrainRenderer;
+use crate::render::frame::{Lighting, TerrainRenderer};
 use crate::tools::output::{write_png, write_text};
 use aerie_terrain::camera::{parse_camera_arg, Camera};
 
@@ -20,11 +20,15 @@ use aerie_terrain::camera::{parse_camera_arg, Camera};
 pub struct RenderArgs {
     /// Elevation model: .hgt, .hgt.zip, a folder of SRTM tiles, GeoTIFF, 16-bit .png,
     /// raw .f32/.u16 with a .json sidecar, .npy/.npz. Its error bake is read from (or written
-    /// to) `<name>.aerie-bake` next to it.
+    /// to) `<name>.aerie-bake` next to it. A tile store (`<name>.aerie`) is streamed.
     #[arg(long)]
     pub dem: PathBuf,
+    #[command(flatten)]
+    pub store: StoreArgs,
     /// Camera as x,y,z,heading,pitch,roll: metres from the DEM's south-west sample (z above sea
-    /// level), degrees (heading clockwise from north, pitch nose-up, roll right-wing-down).
+    /// level; geographic data: East-North-Up at that sample on the WGS84 ellipsoid, so far away
+    /// the ground falls below z = its height), degrees (heading clockwise from north, pitch
+    /// nose-up, roll right-wing-down).
     #[arg(long, allow_hyphen_values = true)]
     pub camera: String,
     #[command(flatten)]
@@ -33,20 +37,71 @@ pub struct RenderArgs {
     /// `<out>.json` (frame.png → frame.png.json).
     #[arg(long)]
     pub out: PathBuf,
+    /// The sun as azimuth,elevation in degrees (azimuth clockwise from north, elevation
+    /// negative below the horizon); default 315,40.
+    #[arg(long, allow_hyphen_values = true)]
+    pub sun: Option<String>,
+    /// Meteorological visibility at sea level, metres (default 40 km).
+    #[arg(long)]
+    pub visibility: Option<f64>,
+}
+
+/// `--sun az,el` (degrees) as a unit vector towards the sun (east-north-up).
+fn parse_sun(s: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let nums: Vec<f64> = parts
+        .iter()
+        .map(|p| {
+            p.parse::<f64>()
+                .map_err(|_| format!("{p:?} is not a number"))
+        })
+        .collect::<Result<_, _>>()?;
+    match nums.as_slice() {
+        [az, el] if az.is_finite() && (-90.0..=90.0).contains(el) => {
+            let (az, el) = (az.to_radians(), el.to_radians());
+            Ok([el.cos() * az.sin(), el.cos() * az.cos(), el.sin()])
+        }
+        [_, _] => Err(format!("{s}: elevation must be within -90..=90 degrees")),
+        _ => Err(format!("{s}: expected azimuth,elevation in degrees")),
+    }
 }
 
 pub fn run(a: RenderArgs) -> Result<(), Failure> {
     let s = setup(&a.gpu)?;
+    let sun = match &a.sun {
+        Some(v) => Some(parse_sun(v).map_err(|e| bad_input(format!("--sun: {e}")))?),
+        None => None,
+    };
+    if let Some(v) = a.visibility.filter(|v| !(v.is_finite() && *v > 0.0)) {
+        return Err(bad_input(format!(
+            "--visibility: {v} must be a positive number of metres"
+        )));
+    }
     let (position, attitude) =
         parse_camera_arg(&a.camera).map_err(|e| bad_input(format!("--camera: {e}")))?;
     prepare_out_file("--out", &a.out)?;
     let json_path = with_suffix(&a.out, ".json");
     check_summary_path(&a.out, &json_path)?;
-    let (ds, b) = prepare_terrain(&a.dem, s.desc.tile_size)?;
+    let terrain = prepare_source(&a.dem, &s.desc, &a.store)?;
     let mut r = TerrainRenderer::new(&s.desc).map_err(runtime)?;
-    r.load_terrain(ds, b, position).map_err(runtime)?;
+    let source = terrain.source.clone();
+    r.load_source(source, terrain.bake.clone(), position)
+        .map_err(runtime)?;
+    r.set_lighting(Lighting::from_host(sun, a.visibility));
     let camera = Camera::new(position, attitude, s.view.frustum);
-    let stats = r.render(&camera).map_err(runtime)?;
+    // One still image: frames are drawn until nothing is late for streaming (each frame asks
+    // for what it lacked and never waits; the pause between frames lets the pages arrive).
+    let t = std::time::Instant::now();
+    let mut warm_up_frames = 0u32;
+    let mut stats = r.render(&camera).map_err(runtime)?;
+    while terrain.streamed.is_some()
+        && (stats.tiles_late_stream > 0 || stats.cells_pending > 0)
+        && t.elapsed() < WARM_UP_LIMIT
+    {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+        stats = r.render(&camera).map_err(runtime)?;
+        warm_up_frames += 1;
+    }
     let rgba = r.colour_rgba();
     let device = r.device_name().to_string();
     r.destroy();
@@ -67,13 +122,39 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         "instances": stats.instances,
         "draw_calls": stats.draw_calls,
         "gpu_ms": stats.gpu_upload_ms + stats.gpu_terrain_ms,
+        "gpu_terrain_ms": stats.gpu_terrain_ms,
+        "look": format!("{:?}", s.desc.look).to_lowercase(),
+        "normal_maps": s.desc.normal_maps,
         "cpu_select_us": stats.cpu_select_us,
+        "tiles_late_stream": stats.tiles_late_stream,
+        "warm_up_frames": warm_up_frames,
+        "stream": stream_json(&stats),
         "out": a.out.display().to_string(),
     });
     let line = summary.to_string();
     write_text(&json_path, &format!("{line}\n")).map_err(runtime)?;
     println!("{line}");
     Ok(())
+}
+
+/// How long a still image of a streamed store waits for its pages (frames drawn meanwhile).
+const WARM_UP_LIMIT: std::time::Duration = std::time::Duration::from_secs(30);
+
+/// The source's totals after a frame, for the commands' JSON summaries.
+pub fn stream_json(s: &crate::render::frame::FrameStats) -> serde_json::Value {
+    serde_json::json!({
+        "hits": s.stream_hits,
+        "misses": s.stream_misses,
+        "hit_rate": if s.stream_hits + s.stream_misses > 0 {
+            s.stream_hits as f64 / (s.stream_hits + s.stream_misses) as f64
+        } else {
+            1.0
+        },
+        "loaded": s.stream_loaded,
+        "failed": s.stream_failed,
+        "resident_bytes": s.stream_resident_bytes,
+        "budget_bytes": s.stream_budget_bytes,
+    })
 }
 
 /// The keys every render summary has: a file with all of them is an earlier render's.
@@ -140,5 +221,17 @@ mod tests {
         std::fs::create_dir(&json).unwrap();
         let e = check_summary_path(&out, &json).unwrap_err();
         assert!(e.message.contains("not a regular file"), "{}", e.message);
+    }
+
+    #[test]
+    fn sun_argument_is_azimuth_and_elevation_in_degrees() {
+        let s = parse_sun("90,0").unwrap();
+        assert!((s[0] - 1.0).abs() < 1e-12 && s[1].abs() < 1e-12 && s[2].abs() < 1e-12);
+        let s = parse_sun("180, -30").unwrap();
+        assert!((s[1] + 30f64.to_radians().cos()).abs() < 1e-12);
+        assert!((s[2] + 0.5).abs() < 1e-12);
+        for bad in ["", "90", "90,0,1", "x,10", "0,91", "inf,10"] {
+            assert!(parse_sun(bad).is_err(), "{bad:?}");
+        }
     }
 }

@@ -1,13 +1,30 @@
-//! The configurations of a bench run: LOD modes × τ, parsed from `--modes` and `--tau`.
+//! The configurations of a bench run: LOD modes × their knobs (τ for `bounded`, the patch side
+//! for `clipmap`, a range scale for `distance`, the LOD range for `cdlod`, a scale of the global
+//! factor for `tess`), parsed from `--modes`, `--tau`, `--clipmap-n`, `--distance-scale`,
+//! `--cdlod-range` and `--tess-density`.
 
 use aerie_terrain::select::LodMode;
 
-/// One configuration of the run: a mode, and τ for `bounded`.
+/// One configuration of the run: a mode, τ for `bounded`, the knob of a swept baseline.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BenchConfig {
     pub mode: LodMode,
     /// τ (px) for `bounded`; None for the modes that do not use it.
     pub tau_px: Option<f64>,
+    /// The baseline's own knob when swept: `clipmap` patch side n (vertices), `distance` range
+    /// scale (× the default split distance), `cdlod` LOD range (node sides); None: the
+    /// command's `--patch` / scale 1 / the default range.
+    pub knob: Option<f64>,
+}
+
+/// The values each baseline is swept over (empty: one configuration at its default).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Sweeps {
+    pub clipmap_n: Vec<u32>,
+    pub distance_scale: Vec<f64>,
+    pub cdlod_range: Vec<f64>,
+    /// `tess`: scales of the global tessellation factor.
+    pub tess_density: Vec<f64>,
 }
 
 impl BenchConfig {
@@ -15,19 +32,22 @@ impl BenchConfig {
         mode_name(self.mode)
     }
 
-    /// "bounded τ=0.5", "clipmap".
+    /// "bounded τ=0.5", "clipmap", "clipmap n=257", "distance ×2", "cdlod k=4".
     pub fn label(&self) -> String {
-        match self.tau_px {
-            Some(t) => format!("{} τ={t}", self.mode_name()),
-            None => self.mode_name().to_string(),
+        match (self.tau_px, self.knob) {
+            (Some(t), _) => format!("{} τ={t}", self.mode_name()),
+            (None, Some(k)) => format!("{} {}{k}", self.mode_name(), knob_word(self.mode).0),
+            (None, None) => self.mode_name().to_string(),
         }
     }
 
-    /// ASCII key for CSV cells and file names: "bounded_tau0.5", "clipmap".
+    /// ASCII key for CSV cells and file names: "bounded_tau0.5", "clipmap", "clipmap_n257",
+    /// "distance_x2", "cdlod_k4".
     pub fn key(&self) -> String {
-        match self.tau_px {
-            Some(t) => format!("{}_tau{t}", self.mode_name()),
-            None => self.mode_name().to_string(),
+        match (self.tau_px, self.knob) {
+            (Some(t), _) => format!("{}_tau{t}", self.mode_name()),
+            (None, Some(k)) => format!("{}_{}{k}", self.mode_name(), knob_word(self.mode).1),
+            (None, None) => self.mode_name().to_string(),
         }
     }
 
@@ -44,6 +64,19 @@ pub fn mode_name(mode: LodMode) -> &'static str {
         LodMode::Clipmap => "clipmap",
         LodMode::Full => "full",
         LodMode::Distance => "distance",
+        LodMode::Cdlod => "cdlod",
+        LodMode::Tessellation => "tess",
+    }
+}
+
+/// How a mode's knob reads in a label and in a key.
+fn knob_word(mode: LodMode) -> (&'static str, &'static str) {
+    match mode {
+        LodMode::Clipmap => ("n=", "n"),
+        LodMode::Distance => ("×", "x"),
+        LodMode::Cdlod => ("k=", "k"),
+        LodMode::Tessellation => ("×", "x"),
+        LodMode::Bounded | LodMode::Full => ("", ""),
     }
 }
 
@@ -56,10 +89,12 @@ pub fn parse_modes(s: &str) -> Result<Vec<LodMode>, String> {
             "clipmap" => LodMode::Clipmap,
             "distance" => LodMode::Distance,
             "full" => LodMode::Full,
+            "cdlod" => LodMode::Cdlod,
+            "tess" => LodMode::Tessellation,
             "" => return Err(format!("--modes {s:?}: empty mode name")),
             other => {
                 return Err(format!(
-                "--modes {s:?}: unknown mode {other:?} (expected bounded, clipmap, distance, full)"
+                "--modes {s:?}: unknown mode {other:?} (expected bounded, clipmap, distance, cdlod, tess, full)"
             ))
             }
         };
@@ -89,18 +124,59 @@ pub fn parse_taus(s: &str) -> Result<Vec<f64>, String> {
     Ok(out)
 }
 
-/// Every mode × τ for `bounded`, each other mode once, in the order of `modes`.
-pub fn configurations(modes: &[LodMode], taus: &[f64]) -> Vec<BenchConfig> {
+/// Parses a comma-separated list of positive numbers for `flag` (empty: none), duplicates
+/// dropped, order kept.
+pub fn parse_positive_list(flag: &str, s: &str) -> Result<Vec<f64>, String> {
+    let mut out: Vec<f64> = Vec::new();
+    if s.trim().is_empty() {
+        return Ok(out);
+    }
+    for part in s.split(',').map(str::trim) {
+        let v: f64 = part
+            .parse()
+            .map_err(|_| format!("{flag} {s:?}: {part:?} is not a number"))?;
+        if !(v.is_finite() && v > 0.0) {
+            return Err(format!("{flag} {s:?}: {part} must be a positive number"));
+        }
+        if !out.contains(&v) {
+            out.push(v);
+        }
+    }
+    Ok(out)
+}
+
+/// Every mode × its knob values, in the order of `modes`: `bounded` × τ, a baseline × its
+/// sweep (once at its default when the sweep is empty), `full` once.
+pub fn configurations(modes: &[LodMode], taus: &[f64], sweeps: &Sweeps) -> Vec<BenchConfig> {
     let mut out = Vec::new();
     for &mode in modes {
-        if mode == LodMode::Bounded {
-            out.extend(taus.iter().map(|&t| BenchConfig {
+        let knobs: Vec<f64> = match mode {
+            LodMode::Bounded => {
+                out.extend(taus.iter().map(|&t| BenchConfig {
+                    mode,
+                    tau_px: Some(t),
+                    knob: None,
+                }));
+                continue;
+            }
+            LodMode::Clipmap => sweeps.clipmap_n.iter().map(|&n| n as f64).collect(),
+            LodMode::Distance => sweeps.distance_scale.clone(),
+            LodMode::Cdlod => sweeps.cdlod_range.clone(),
+            LodMode::Tessellation => sweeps.tess_density.clone(),
+            LodMode::Full => Vec::new(),
+        };
+        if knobs.is_empty() {
+            out.push(BenchConfig {
                 mode,
-                tau_px: Some(t),
-            }));
-        } else {
-            out.push(BenchConfig { mode, tau_px: None });
+                tau_px: None,
+                knob: None,
+            });
         }
+        out.extend(knobs.into_iter().map(|k| BenchConfig {
+            mode,
+            tau_px: None,
+            knob: Some(k),
+        }));
     }
     out
 }
@@ -118,12 +194,46 @@ mod tests {
         );
         let taus = parse_taus("0.5,1,2,1").unwrap();
         assert_eq!(taus, vec![0.5, 1.0, 2.0]);
-        let c = configurations(&modes, &taus);
+        let c = configurations(&modes, &taus, &Sweeps::default());
         assert_eq!(c.len(), 5);
         assert_eq!(c[0].label(), "bounded τ=0.5");
         assert_eq!(c[0].key(), "bounded_tau0.5");
         assert_eq!(c[3].key(), "clipmap");
         assert_eq!(c[4].tau_for_error(), 1.0);
+        let sweeps = Sweeps {
+            clipmap_n: vec![129, 257],
+            distance_scale: vec![0.5],
+            cdlod_range: vec![4.0, 8.0],
+            tess_density: vec![0.5, 2.0],
+        };
+        let modes = parse_modes("clipmap,distance,cdlod,tess,full").unwrap();
+        let keys: Vec<String> = configurations(&modes, &[1.0], &sweeps)
+            .iter()
+            .map(BenchConfig::key)
+            .collect();
+        assert_eq!(
+            keys,
+            [
+                "clipmap_n129",
+                "clipmap_n257",
+                "distance_x0.5",
+                "cdlod_k4",
+                "cdlod_k8",
+                "tess_x0.5",
+                "tess_x2",
+                "full"
+            ]
+        );
+        assert_eq!(
+            configurations(&modes[2..3], &[], &sweeps)[1].label(),
+            "cdlod k=8"
+        );
+        assert_eq!(parse_positive_list("--x", " ").unwrap(), Vec::<f64>::new());
+        let e = parse_positive_list("--distance-scale", "1,-2").unwrap_err();
+        assert!(
+            e.contains("--distance-scale") && e.contains("positive"),
+            "{e}"
+        );
         for (bad, word) in [("bounded,fast", "fast"), ("", "empty"), ("full,,", "empty")] {
             let e = parse_modes(bad).unwrap_err();
             assert!(e.contains(word) && e.contains("--modes"), "{e}");

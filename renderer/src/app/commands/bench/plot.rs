@@ -57,6 +57,8 @@ fn colour(mode: LodMode) -> RGBColor {
         LodMode::Clipmap => RGBColor(255, 127, 14),
         LodMode::Distance => RGBColor(44, 160, 44),
         LodMode::Full => RGBColor(214, 39, 40),
+        LodMode::Cdlod => RGBColor(148, 103, 189),
+        LodMode::Tessellation => RGBColor(140, 86, 75),
     }
 }
 
@@ -153,6 +155,8 @@ where
                 LodMode::Bounded,
                 LodMode::Clipmap,
                 LodMode::Distance,
+                LodMode::Cdlod,
+                LodMode::Tessellation,
                 LodMode::Full,
             ] {
                 let col = colour(mode);
@@ -175,7 +179,7 @@ where
                     let s = &summaries[p.2];
                     let label = match s.config.tau_px {
                         Some(t) => format!("τ={t}"),
-                        None => s.config.mode_name().to_string(),
+                        None => s.config.label(),
                     };
                     let label = if s.error_px() < ERROR_FLOOR_PX {
                         format!("{label} (≤{ERROR_FLOOR_PX} px)")

@@ -107,6 +107,10 @@ pub(crate) struct Summary {
     pub bytes_uploaded_mean: f64,
     pub tiles_drawn: u64,
     pub tiles_late: u64,
+    /// The part of `tiles_late` due to streaming (samples not resident yet).
+    pub tiles_late_stream: u64,
+    /// The longest time the frame thread spent gathering terrain samples in one frame, µs.
+    pub terrain_data_us_max: f64,
     pub tiles_unbounded: u64,
     pub image: Option<ImageSummary>,
     pub oracle_max_px: Option<f64>,
@@ -185,6 +189,11 @@ pub(crate) fn summarize(
                 bytes_uploaded_mean: bytes.iter().sum::<f64>() / bytes.len().max(1) as f64,
                 tiles_drawn: mine.iter().map(|r| r.stats.tiles_drawn as u64).sum(),
                 tiles_late: mine.iter().map(|r| r.stats.tiles_late as u64).sum(),
+                tiles_late_stream: mine.iter().map(|r| r.stats.tiles_late_stream as u64).sum(),
+                terrain_data_us_max: mine
+                    .iter()
+                    .map(|r| r.stats.cpu_terrain_data_us)
+                    .fold(0.0, f64::max),
                 tiles_unbounded: mine.iter().map(|r| r.stats.tiles_unbounded as u64).sum(),
                 image,
                 oracle_max_px: (!oracle.is_empty())
@@ -265,7 +274,7 @@ pub(crate) fn results_csv(configs: &[BenchConfig], rows: &[FrameRow]) -> String 
 /// `summary.csv`: one row per configuration.
 pub(crate) fn summary_csv(summaries: &[Summary]) -> String {
     let mut s = String::from(
-        "config,mode,tau_px,frames,frame_ms_median,frame_ms_p95,frame_ms_p99,frame_ms_max,cpu_ms_median,cpu_ms_p95,cpu_ms_p99,cpu_ms_max,gpu_ms_median,gpu_ms_p95,gpu_ms_p99,gpu_ms_max,triangles_median,triangles_max,instances_median,instances_max,draw_calls_median,bytes_uploaded_mean,bytes_uploaded_max,tiles_drawn,tiles_late,late_fraction,tiles_unbounded,img_confirmed_max_px,img_max_px,img_p99_px,img_mean_px,img_frac_over_tau,img_holes_px,img_hole_max_px,frames_over_tau_plus_half,img_frame_max_median_px,oracle_max_px,bound_max_px\n",
+        "config,mode,tau_px,frames,frame_ms_median,frame_ms_p95,frame_ms_p99,frame_ms_max,cpu_ms_median,cpu_ms_p95,cpu_ms_p99,cpu_ms_max,gpu_ms_median,gpu_ms_p95,gpu_ms_p99,gpu_ms_max,triangles_median,triangles_max,instances_median,instances_max,draw_calls_median,bytes_uploaded_mean,bytes_uploaded_max,tiles_drawn,tiles_late,late_fraction,tiles_unbounded,img_confirmed_max_px,img_max_px,img_p99_px,img_mean_px,img_frac_over_tau,img_holes_px,img_hole_max_px,frames_over_tau_plus_half,img_frame_max_median_px,oracle_max_px,bound_max_px,tiles_late_stream,terrain_data_us_max\n",
     );
     for m in summaries {
         let q = |q: &Quantiles| format!("{:.3},{:.3},{:.3},{:.3}", q.median, q.p95, q.p99, q.max);
@@ -309,7 +318,14 @@ pub(crate) fn summary_csv(summaries: &[Summary]) -> String {
             }
             None => s.push_str(",,,,,,,,,"),
         }
-        let _ = writeln!(s, "{},{}", opt(m.oracle_max_px, 4), opt(m.bound_max_px, 4));
+        let _ = writeln!(
+            s,
+            "{},{},{},{:.1}",
+            opt(m.oracle_max_px, 4),
+            opt(m.bound_max_px, 4),
+            m.tiles_late_stream,
+            m.terrain_data_us_max
+        );
     }
     s
 }
@@ -601,7 +617,11 @@ mod tests {
             max: v,
         };
         Summary {
-            config: BenchConfig { mode, tau_px: tau },
+            config: BenchConfig {
+                mode,
+                tau_px: tau,
+                knob: None,
+            },
             frames: 1,
             frame_ms: q(ms),
             cpu_ms: q(0.0),
@@ -613,6 +633,8 @@ mod tests {
             bytes_uploaded_mean: 0.0,
             tiles_drawn: 1,
             tiles_late: 0,
+            tiles_late_stream: 0,
+            terrain_data_us_max: 0.0,
             tiles_unbounded: 0,
             image: Some(ImageSummary {
                 max_px: err,

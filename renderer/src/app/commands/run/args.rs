@@ -19,8 +19,13 @@ pub struct RunArgs {
     #[arg(long = "channel", value_name = "NAME")]
     pub channels: Vec<String>,
     /// Elevation model (as for `aerie render`); its bake is read from or written next to it.
+    /// A tile store (`<name>.aerie`) is streamed.
     #[arg(long)]
     pub dem: PathBuf,
+    #[command(flatten)]
+    pub store: crate::app::args::StoreArgs,
+    #[command(flatten)]
+    pub drape: crate::app::args::DrapeArgs,
     /// Stop after this many frames (default: run until Esc or a window is closed).
     #[arg(long)]
     pub frames: Option<u64>,
@@ -83,6 +88,11 @@ pub struct RunArgs {
     /// jitter between machines at the price of K host frames of latency.
     #[arg(long, value_name = "K", help_heading = "Pose input")]
     pub sync_frames: Option<u32>,
+    /// The datum of the host's geodetic altitudes: msl (above mean sea level, as CIGI sends
+    /// them and the terrain is) or ellipsoidal (above WGS84, GNSS heights: the EGM96 geoid
+    /// undulation is taken off). Default: input.host_heights, else msl.
+    #[arg(long, value_name = "DATUM", help_heading = "Pose input")]
+    pub host_heights: Option<crate::sim::pose_input::HostHeights>,
     /// Headless: how long to wait for the first pose before giving up (exit 1), seconds.
     /// Default: input.wait_pose_s, else 10.
     #[arg(

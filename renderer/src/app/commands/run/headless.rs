@@ -16,7 +16,7 @@ use crate::app::commands::run::ig::{ig_driver, IgDriver};
 use crate::app::commands::run::plan::{plan, renderer_desc, Plan};
 use crate::app::commands::run::poses::{open_input, open_stats, RunPoses, StraightPassSource};
 use crate::app::failure::{bad_input, runtime, Failure};
-use crate::app::prepare::prepare_terrain;
+use crate::app::prepare::{prepare_source, Terrain};
 use crate::app::window::pose_source::PoseSource;
 use crate::render::frame::TerrainRenderer;
 use crate::sim::channel::AircraftPose;
@@ -25,7 +25,7 @@ use crate::sim::pose_input::{counters_text, GeoMapping, SimInput};
 use crate::tools::output::write_text;
 use crate::tools::overlay::{OverlayInfo, OverlayState};
 use crate::tools::percentile::percentile;
-use crate::tools::stats_csv::FrameRow;
+use crate::tools::stats_csv::{FrameRow, TerrainColumns};
 use aerie_config::parse_size;
 use aerie_terrain::select::SelectParams;
 
@@ -97,17 +97,19 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
         .transpose()
         .map_err(|e| bad_input(format!("--size: {e}")))?;
     let sizes = channel_sizes(&plan.channels, size, (cfg.width, cfg.height));
-    let (ds, bake) = prepare_terrain(&a.dem, cfg.tile_size)?;
+    let mut desc = renderer_desc(a, &plan, sizes[0], None);
+    desc.drape = crate::app::renderer_setup::drape_input(&a.drape)?;
+    let terrain = prepare_source(&a.dem, &desc, &a.store)?;
     let period_s = a
         .seconds
         .or(a.frames.map(|n| n as f64 / plan.settings.fps))
         .unwrap_or(60.0)
         .max(1.0);
-    let pass = StraightPass::over(&ds, a.heading, a.pitch, a.speed, a.agl, period_s);
+    let pass = straight_pass(&terrain, a, period_s);
     // The port is bound before the (slow) device creation, so a sender may start right away.
-    let input = open_input(&plan.settings, &ds)?;
-    let geo = GeoMapping::of_dataset(&ds).ok();
-    let ig = ig_driver(a, &plan, input.as_ref(), &ds, &bake);
+    let input = open_input(&plan.settings, terrain.grid())?;
+    let geo = GeoMapping::of_source(terrain.grid()).ok();
+    let ig = ig_driver(a, &plan, input.as_ref(), &terrain)?;
     let mut poses = RunPoses::new(
         input,
         StraightPassSource { pass, period_s },
@@ -115,7 +117,6 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
         open_stats(a, geo)?,
     );
     poses.ig = ig;
-    let desc = renderer_desc(a, &plan, sizes[0], None);
     let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
     let result = (|| {
         let start = match &mut poses.input {
@@ -128,7 +129,7 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
             None => poses.default_view(),
         };
         renderer
-            .load_terrain(ds, bake, start.position)
+            .load_source(terrain.source.clone(), terrain.bake.clone(), start.position)
             .map_err(runtime)?;
         frame_loop(a, &plan, &sizes, &mut renderer, &mut poses)
     })();
@@ -282,6 +283,7 @@ fn frame_loop(
             Vec::new()
         });
         let mut tri = 0u64;
+        let mut terrain = TerrainColumns::default();
         for (k, (camera, (w, h), tau)) in views.iter().enumerate() {
             renderer.resize(*w, *h).map_err(runtime)?;
             if renderer.desc().select.tau_px != *tau {
@@ -300,6 +302,7 @@ fn frame_loop(
                 OverlayInfo::from_stats(&stats, *tau),
             );
             tri += stats.triangles;
+            terrain.add(&stats);
         }
         renderer.set_overlay(None);
         let ms = started.elapsed().as_secs_f64() * 1e3;
@@ -312,6 +315,7 @@ fn frame_loop(
             origin,
             triangles: Some(tri),
             frame_ms: Some(ms),
+            terrain: Some(terrain),
         })?;
         frame += 1;
         if last_line.elapsed() >= Duration::from_secs(if tty { 1 } else { 5 }) {
@@ -345,6 +349,22 @@ fn frame_loop(
         triangles,
         overlay_frames,
     })
+}
+
+/// The built-in pass over `terrain` (its highest sample from memory, else from the bake).
+pub(crate) fn straight_pass(terrain: &Terrain, a: &RunArgs, period_s: f64) -> StraightPass {
+    match &terrain.dataset {
+        Some(ds) => StraightPass::over(ds, a.heading, a.pitch, a.speed, a.agl, period_s),
+        None => {
+            let g = terrain.grid();
+            let extent = [
+                (g.valid_width - 1) as f64 * g.spacing_x,
+                (g.valid_height - 1) as f64 * g.spacing_y,
+            ];
+            let top = terrain.top_height();
+            StraightPass::over_extent(extent, top, a.heading, a.pitch, a.speed, a.agl, period_s)
+        }
+    }
 }
 
 #[cfg(test)]

@@ -15,6 +15,10 @@ use aerie_sim_bridge::timing::monotonic_s;
 use aerie_terrain::bake::ErrorBake;
 use aerie_terrain::dataset::Dataset;
 use aerie_terrain::query::InMemorySource;
+use aerie_terrain::source::{SampleRect, SampleWant};
+
+/// A host's question waits on a tile: ask for it before anything the renderer draws.
+const HOST_QUESTION_PRIORITY: f32 = 1.0e9;
 use glam::DVec3;
 use std::sync::Arc;
 
@@ -23,21 +27,30 @@ use crate::app::commands::run::database::{
     DatabaseAction, DatabaseChoice, DatabaseLoader, DatabaseReport, LoadedTerrain,
 };
 use crate::app::commands::run::plan::Plan;
+use crate::app::failure::{bad_input, Failure};
+use crate::app::prepare::Terrain;
+use crate::render::entity_lod::LodParams;
 use crate::render::frame::{Lighting, TerrainRenderer};
 use crate::sim::pose_input::{GeoMapping, SimInput};
 use crate::sim::terrain_queries::DatasetQueries;
+use crate::sim::traffic::{model_library, Traffic};
 use crate::tools::percentile::percentile;
+use aerie_sim_bridge::query::Answer;
+use aerie_sim_bridge::PosePosition;
 
 /// The IG of a run whose input is UDP (CIGI and native queries arrive there); `None` for
-/// shared memory or no input. `[databases]` paths are relative to the config file's folder.
+/// shared memory or no input. `[databases]` and `[entities.types]` paths are relative to the
+/// config file's folder; a model that cannot be read is bad input.
 pub(crate) fn ig_driver(
     a: &RunArgs,
     plan: &Plan,
     input: Option<&SimInput>,
-    ds: &Arc<Dataset>,
-    bake: &Arc<ErrorBake>,
-) -> Option<IgDriver> {
-    let link = input?.ig_link()?;
+    terrain: &Terrain,
+) -> Result<Option<IgDriver>, Failure> {
+    let Some(link) = input.and_then(SimInput::ig_link) else {
+        return Ok(None);
+    };
+    let host_heights = input.map(SimInput::host_heights).unwrap_or_default();
     let dir = a
         .config
         .as_deref()
@@ -55,15 +68,37 @@ pub(crate) fn ig_driver(
             );
         }
     }
-    Some(IgDriver::new(
+    let entities = &plan.config.entities;
+    let library =
+        model_library(entities, &dir).map_err(|e| bad_input(format!("{}: {e}", plan.source)))?;
+    let mut ig = IgDriver::new(
         link,
-        ds,
-        bake,
+        terrain,
         plan.config.databases.clone(),
         &dir,
         &a.dem,
         plan.config.render.tile_size,
-    ))
+    );
+    ig.host_heights = host_heights;
+    ig.queries = ig.queries.take().map(|q| q.with_host_heights(host_heights));
+    ig.traffic = Some(TrafficDriver {
+        traffic: Traffic::new(library).with_host_heights(host_heights),
+        scale: entities.scale,
+        lod: LodParams::from(entities),
+        models_set: false,
+        started_s: None,
+    });
+    Ok(Some(ig))
+}
+
+/// Other traffic of the run: the entity table drawn each frame.
+struct TrafficDriver {
+    traffic: Traffic,
+    scale: f64,
+    lod: LodParams,
+    models_set: bool,
+    /// The IG clock at the first frame drawn (for switches per second).
+    started_s: Option<f64>,
 }
 
 /// The IG side of one run.
@@ -87,6 +122,24 @@ pub struct IgDriver {
     host_light: (bool, bool),
     /// Database loads: (number, path, outcome).
     loads: Vec<(i8, String, Result<(), String>)>,
+    /// Other traffic (set by [`ig_driver`]).
+    traffic: Option<TrafficDriver>,
+    /// The datum of the host's geodetic heights, for its terrain queries (set by
+    /// [`ig_driver`]).
+    host_heights: crate::sim::pose_input::HostHeights,
+}
+
+/// The query service of the terrain drawn: on its samples in memory, or on the resident pages
+/// of a streamed store (questions over tiles not resident are pending, and asked for).
+fn queries_of(terrain: &Terrain) -> Option<DatasetQueries> {
+    match (&terrain.dataset, &terrain.streamed) {
+        (Some(ds), _) => queries_for(ds, &terrain.bake),
+        (None, Some(store)) => Some(DatasetQueries::streamed(
+            store.clone(),
+            GeoMapping::of_source(terrain.grid()).ok(),
+        )),
+        (None, None) => None,
+    }
 }
 
 /// The query service of a dataset, or why there is none (a bake that does not match).
@@ -104,8 +157,7 @@ impl IgDriver {
     /// The IG for `link`, drawing `ds` (the `--dem`, database `choice`'s current one).
     pub fn new(
         link: IgLink,
-        ds: &Arc<Dataset>,
-        bake: &Arc<ErrorBake>,
+        terrain: &Terrain,
         databases: Databases,
         config_dir: &Path,
         dem: &Path,
@@ -113,8 +165,8 @@ impl IgDriver {
     ) -> Self {
         Self {
             link,
-            queries: queries_for(ds, bake),
-            geo: GeoMapping::of_dataset(ds).ok(),
+            queries: queries_of(terrain),
+            geo: GeoMapping::of_source(terrain.grid()).ok(),
             choice: DatabaseChoice::new(databases, config_dir, dem),
             loader: None,
             tile_size,
@@ -125,6 +177,8 @@ impl IgDriver {
             lighting: Lighting::default(),
             host_light: (false, false),
             loads: Vec::new(),
+            traffic: None,
+            host_heights: Default::default(),
         }
     }
 
@@ -184,8 +238,24 @@ impl IgDriver {
             }
         }
         match self.queries.take() {
-            Some(q) => {
+            Some(mut q) => {
+                q.refresh();
                 self.step(&q);
+                // What the host asked over tiles not resident comes with the next request.
+                let q0 = self.tile_size - 1;
+                let wants: Vec<SampleWant> = q
+                    .take_pending()
+                    .into_iter()
+                    .map(|[tx, ty]| SampleWant {
+                        rect: SampleRect {
+                            level: 0,
+                            origin: [(tx * q0) as i64, (ty * q0) as i64],
+                            size: [q0 + 1; 2],
+                        },
+                        priority: HOST_QUESTION_PRIORITY,
+                    })
+                    .collect();
+                renderer.want_samples(&wants);
                 self.queries = Some(q);
             }
             None => self.step(&NoTerrain),
@@ -193,8 +263,11 @@ impl IgDriver {
         // The host's light, at the eye's latitude and longitude.
         let env = state.environment;
         let sun = self.geo.as_ref().and_then(|g| {
-            let (lat, lon, _) = g.to_geodetic(eye);
-            env.sun_direction_enu(monotonic_s(), lat, lon)
+            let (lat, lon, _) = g.world_to_geodetic(eye);
+            let local = env.sun_direction_enu(monotonic_s(), lat, lon)?;
+            // The terrain is lit in world axes (ENU at the dataset's origin): the sun's
+            // direction at the eye, turned into them.
+            Some((g.grid().local_enu_axes(lat, lon) * DVec3::from_array(local)).to_array())
         });
         let visibility = env.visibility_m();
         self.host_light = (sun.is_some(), visibility.is_some());
@@ -203,6 +276,39 @@ impl IgDriver {
             self.lighting = lighting;
             renderer.set_lighting(lighting);
         }
+        self.update_traffic(renderer)
+    }
+
+    /// The host's entities handed to the renderer for this frame (the last frame's drawing
+    /// counted first).
+    fn update_traffic(&mut self, renderer: &mut TerrainRenderer) -> Result<(), String> {
+        let (Some(t), Some(geo)) = (self.traffic.as_mut(), self.geo.as_ref()) else {
+            return Ok(());
+        };
+        if !t.models_set {
+            renderer
+                .set_entity_models(t.traffic.library(), t.scale, t.lod)
+                .map_err(|e| format!("entity models: {e}"))?;
+            t.models_set = true;
+        } else if let Some(s) = renderer.entity_stats() {
+            t.traffic.record(&s);
+        }
+        let now = monotonic_s();
+        t.started_s.get_or_insert(now);
+        let q = self.queries.as_ref();
+        let ground = |lat_deg, lon_deg| {
+            q.map_or(Answer::NoTerrain, |q| {
+                q.height_of_terrain(&PosePosition::Geodetic {
+                    lat_deg,
+                    lon_deg,
+                    alt_m: 0.0,
+                })
+            })
+        };
+        let mut draws = Vec::new();
+        t.traffic
+            .scene(&self.link.entities(), now, geo, &ground, &mut draws);
+        renderer.set_entities(draws);
         Ok(())
     }
 
@@ -228,7 +334,10 @@ impl IgDriver {
                     .load_terrain(ds.clone(), bake, eye)
                     .map_err(|e| format!("database {n} ({path}): {e}"))?;
                 self.queries = match queries {
-                    Ok(src) => Some(DatasetQueries::new(src, GeoMapping::of_dataset(&ds).ok())),
+                    Ok(src) => Some(
+                        DatasetQueries::new(src, GeoMapping::of_dataset(&ds).ok())
+                            .with_host_heights(self.host_heights),
+                    ),
                     Err(e) => {
                         tracing::error!("database {n}: terrain queries unavailable: {e}");
                         None
@@ -311,6 +420,10 @@ impl IgDriver {
             },
             "resets": self.link.state().resets,
             "entities": self.link.state().entities,
+            "traffic": self.traffic.as_ref().map(|t| {
+                let seconds = t.started_s.map_or(0.0, |s| monotonic_s() - s);
+                t.traffic.summary_json(seconds)
+            }),
         })
     }
 

@@ -286,6 +286,7 @@ impl PoseSource for RunPoses {
                     origin,
                     triangles: None,
                     frame_ms,
+                    terrain: None,
                 });
                 pose
             })
@@ -324,12 +325,12 @@ impl PoseSource for RunPoses {
 /// Opens the simulator input of the arguments (if any) for dataset `ds`.
 pub fn open_input(
     settings: &RunSettings,
-    ds: &aerie_terrain::dataset::Dataset,
+    grid: &aerie_terrain::source::SourceGrid,
 ) -> Result<Option<SimInput>, Failure> {
     let Some(spec) = &settings.input else {
         return Ok(None);
     };
-    let input = SimInput::open(spec, GeoMapping::of_dataset(ds)).map_err(runtime)?;
+    let input = SimInput::open(spec, GeoMapping::of_source(grid)).map_err(runtime)?;
     eprintln!(
         "pose input: {}{}",
         input.what,

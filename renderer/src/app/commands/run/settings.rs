@@ -11,7 +11,7 @@ use aerie_sim_bridge::shm::DEFAULT_SHM_NAME;
 use crate::app::commands::input_args::InputArgs;
 use crate::app::commands::run::args::RunArgs;
 use crate::app::failure::{bad_input, Failure};
-use crate::sim::pose_input::{InputProtocol, InputSpec};
+use crate::sim::pose_input::{HostHeights, InputProtocol, InputSpec};
 
 /// Default `--max-extrapolation-ms` / `input.max_extrapolation_ms`.
 pub const DEFAULT_MAX_EXTRAPOLATION_MS: f64 = 100.0;
@@ -52,6 +52,10 @@ pub fn resolve_settings(a: &RunArgs, config: &RenderConfig) -> Result<RunSetting
         .unwrap_or(DEFAULT_WAIT_POSE_S);
     let fps = a.fps.or(config.render.fps).unwrap_or(DEFAULT_FPS);
     let sync_frames = a.sync_frames.or(c.sync_frames);
+    let host_heights = a
+        .host_heights
+        .or(c.host_heights.map(HostHeights::of_config))
+        .unwrap_or_default();
     let world_bound_m = a
         .input
         .world_bound_m
@@ -70,6 +74,11 @@ pub fn resolve_settings(a: &RunArgs, config: &RenderConfig) -> Result<RunSetting
         if sync_frames.is_some() {
             return Err(bad_input(
                 "--sync-frames: needs a pose input (--listen, --protocol, --multicast or --shm-name, or an [input] protocol in the config)",
+            ));
+        }
+        if a.host_heights.is_some() {
+            return Err(bad_input(
+                "--host-heights: needs a pose input (--listen, --protocol, --multicast or --shm-name, or an [input] protocol in the config)",
             ));
         }
         return Ok(RunSettings {
@@ -125,6 +134,7 @@ pub fn resolve_settings(a: &RunArgs, config: &RenderConfig) -> Result<RunSetting
             sync_frames,
             world_bound_m,
             xplane_rpos: a.input.rpos_request(),
+            host_heights,
         }),
         max_extrapolation_ms,
         wait_pose_s,

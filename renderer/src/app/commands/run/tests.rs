@@ -330,6 +330,7 @@ fn stream_source_waits_then_follows_then_fails_on_unplaceable_poses() {
         sync_frames: None,
         world_bound_m: 1.0e7,
         xplane_rpos: None,
+        host_heights: Default::default(),
     };
     let input = SimInput::open(&spec, GeoMapping::of_dataset(&ds)).unwrap();
     let to = input.local_addr().unwrap();
@@ -453,4 +454,37 @@ fn run_takes_the_shared_input_flags_and_their_old_spellings() {
     for old in ["--bind", "--cap-ms", "--shm "] {
         assert!(!help.contains(old), "{old} shown in\n{help}");
     }
+}
+
+/// The host heights' datum: msl by default, else `input.host_heights`, else `--host-heights`;
+/// a bad value is refused by the parser, the flag without a pose input by the settings.
+#[test]
+fn host_heights_come_from_the_flag_the_config_or_the_default() {
+    use crate::sim::pose_input::HostHeights;
+    let heights = |cfg: &str, extra: &[&str]| {
+        settings_of(cfg, extra)
+            .unwrap()
+            .input
+            .expect("an input")
+            .host_heights
+    };
+    let udp = "[input]\nprotocol = \"cigi\"\n";
+    assert_eq!(heights(udp, &[]), HostHeights::Msl);
+    let cfg = "[input]\nprotocol = \"cigi\"\nhost_heights = \"ellipsoidal\"\n";
+    assert_eq!(heights(cfg, &[]), HostHeights::Ellipsoidal);
+    assert_eq!(heights(cfg, &["--host-heights", "msl"]), HostHeights::Msl);
+    assert_eq!(
+        heights(udp, &["--host-heights", "ELLIPSOIDAL"]),
+        HostHeights::Ellipsoidal
+    );
+    use clap::Parser;
+    let Err(e) = Cli::try_parse_from(["run", "--dem", "x", "--host-heights", "wgs84"]) else {
+        panic!("--host-heights wgs84 accepted");
+    };
+    assert!(e.to_string().contains("msl, ellipsoidal"), "{e}");
+    let e = settings_of("", &["--host-heights", "ellipsoidal"]).unwrap_err();
+    assert!(
+        format!("{e:?}").contains("--host-heights: needs a pose input"),
+        "{e:?}"
+    );
 }

@@ -4,16 +4,16 @@
 use winit::event_loop::EventLoop;
 
 use crate::app::commands::run::args::RunArgs;
+use crate::app::commands::run::headless::straight_pass;
 use crate::app::commands::run::ig::{ig_driver, IgDriver};
 use crate::app::commands::run::plan::{plan, renderer_desc, Plan};
 use crate::app::commands::run::poses::{open_input, open_stats, RunPoses, StraightPassSource};
 use crate::app::failure::{bad_input, runtime, Failure};
-use crate::app::prepare::prepare_terrain;
+use crate::app::prepare::prepare_source;
 use crate::app::window::display::required_instance_extensions;
 use crate::app::window::report::{RunOptions, RunReport, WindowError};
 use crate::app::window::session::run_channels;
 use crate::render::frame::{RendererDesc, TerrainRenderer};
-use crate::sim::flight::StraightPass;
 use crate::sim::pose_input::GeoMapping;
 use crate::tools::output::write_text;
 use crate::tools::percentile::percentile;
@@ -23,21 +23,22 @@ use crate::tools::percentile::percentile;
 pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json::Value, Failure> {
     let plan = plan(a)?;
     let cfg = &plan.config.render;
-    let (ds, bake) = prepare_terrain(&a.dem, cfg.tile_size)?;
     let extensions = required_instance_extensions(&*event_loop).map_err(runtime)?;
     let (width, height) = plan.channels[0]
         .nominal_size()
         .unwrap_or((cfg.width, cfg.height));
-    let desc = renderer_desc(a, &plan, (width, height), Some(extensions));
+    let mut desc = renderer_desc(a, &plan, (width, height), Some(extensions));
+    desc.drape = crate::app::renderer_setup::drape_input(&a.drape)?;
+    let terrain = prepare_source(&a.dem, &desc, &a.store)?;
     let period_s = a
         .seconds
         .or(a.frames.map(|n| n as f64 / 60.0))
         .unwrap_or(60.0)
         .max(1.0);
-    let pass = StraightPass::over(&ds, a.heading, a.pitch, a.speed, a.agl, period_s);
-    let input = open_input(&plan.settings, &ds)?;
-    let geo = GeoMapping::of_dataset(&ds).ok();
-    let ig = ig_driver(a, &plan, input.as_ref(), &ds, &bake);
+    let pass = straight_pass(&terrain, a, period_s);
+    let input = open_input(&plan.settings, terrain.grid())?;
+    let geo = GeoMapping::of_source(terrain.grid()).ok();
+    let ig = ig_driver(a, &plan, input.as_ref(), &terrain)?;
     // Predicted display: one frame after the frame starts (FIFO, frames in flight).
     let lead_s = 1.0 / 60.0;
     let mut source = RunPoses::new(
@@ -49,7 +50,9 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
     source.ig = ig;
     let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
     let start = source.default_view().position;
-    renderer.load_terrain(ds, bake, start).map_err(runtime)?;
+    renderer
+        .load_source(terrain.source.clone(), terrain.bake.clone(), start)
+        .map_err(runtime)?;
     let opts = RunOptions {
         max_frames: a.frames,
         max_seconds: a.seconds,

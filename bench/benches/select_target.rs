@@ -1,0 +1,92 @@
+//! Issue 15's selection target: one channel at 1280×720, τ = 1 px, 300 m above the ground, on
+//! a generated 16385² dataset (`AERIE_BENCH_SIZE` overrides) on the flat plane and on the
+//! ellipsoid (a 1″ geographic grid). Besides criterion's figures, each frame of the flight is
+//! timed once more on its own (after criterion's passes; thread CPU time, the least of three
+//! runs) for the per-frame median and p99.
+
+use std::hint::black_box;
+
+use aerie::camera::Camera;
+use aerie::terrain::clipmap::place_levels;
+use aerie::terrain::select::{select_tiles, SelectParams, Selection};
+use aerie_bench::{selection_size, TargetScene};
+use criterion::{criterion_group, criterion_main, Criterion};
+
+/// This thread's CPU time, microseconds.
+fn thread_cpu_us() -> f64 {
+    let mut t = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `t` is a valid, writable timespec; CLOCK_THREAD_CPUTIME_ID exists on Linux.
+    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
+    t.tv_sec as f64 * 1e6 + t.tv_nsec as f64 * 1e-3
+}
+
+fn selection_target(c: &mut Criterion) {
+    let size = selection_size();
+    let viewport = (1280, 720);
+    let mut group = c.benchmark_group(format!("select_target_{size}_720p_agl300"));
+    for geographic in [false, true] {
+        eprintln!("generating and baking a {size}² dataset (geographic: {geographic})...");
+        let scene = TargetScene::new(size, geographic);
+        let cams = scene.flight_agl(600, viewport.0, viewport.1, 300.0);
+        let params = SelectParams {
+            earth: scene.earth,
+            ..SelectParams::default()
+        };
+        let mut sel = Selection::default();
+        let run = |cam: &Camera, sel: &mut Selection| {
+            let placements = place_levels(&scene.clip, scene.viewer(cam));
+            select_tiles(
+                &scene.bake,
+                &scene.clip,
+                &placements,
+                cam,
+                viewport,
+                &params,
+                sel,
+            );
+            sel.items.len()
+        };
+        let mut k = 0;
+        group.bench_function(format!("bounded_tau1_{}", scene.name), |b| {
+            b.iter(|| {
+                k += 1;
+                black_box(run(&cams[k % cams.len()], &mut sel))
+            })
+        });
+        // Thread CPU time, the least of three runs per frame: on a loaded machine the wall
+        // clock's p99 is the scheduler's time slice, not the selection's.
+        let mut times: Vec<f64> = cams
+            .iter()
+            .map(|cam| {
+                (0..3)
+                    .map(|_| {
+                        let t = thread_cpu_us();
+                        black_box(run(cam, &mut sel));
+                        thread_cpu_us() - t
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect();
+        times.sort_by(f64::total_cmp);
+        let at = |q: f64| times[((times.len() - 1) as f64 * q).round() as usize];
+        eprintln!(
+            "select_target {}: per frame (thread CPU time) median {:.1} µs, p99 {:.1} µs, max {:.1} µs, {} items",
+            scene.name,
+            at(0.5),
+            at(0.99),
+            at(1.0),
+            sel.items.len()
+        );
+    }
+    group.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().sample_size(30);
+    targets = selection_target
+}
+criterion_main!(benches);

@@ -1,0 +1,233 @@
+//! Each mode's sweep read as a curve of cost (triangles, frame time) against measured error,
+//! and the ratio of two curves at equal error. Pure: numbers in, numbers out.
+//!
+//! A curve keeps only its efficient settings (no other setting of the mode has both ≤ error and
+//! ≤ cost): the baseline "at its best setting" for every error it reaches. Between two settings
+//! the cost is interpolated piecewise-linearly in log error and log cost (work falls roughly
+//! as a power of the error). Outside the errors a curve measured nothing is read: a reading
+//! there is `Below`/`Above`, never an extrapolation.
+
+/// One measured setting: (error px, cost).
+pub type CurvePoint = (f64, f64);
+
+/// A mode's efficient settings, error ascending (so cost strictly descending).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Curve {
+    pub points: Vec<CurvePoint>,
+}
+
+/// A curve read at one error.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Reading {
+    Value(f64),
+    /// Below the curve's smallest measured error (that error given).
+    Below(f64),
+    /// Above its largest.
+    Above(f64),
+    /// No usable point.
+    Empty,
+}
+
+impl Curve {
+    /// The curve of `points`: non-finite or non-positive values dropped (a zero error has no
+    /// logarithm: such a setting shows no error at all and is left off the curve), then only the
+    /// efficient ones kept.
+    pub fn new(points: &[CurvePoint]) -> Self {
+        let mut p: Vec<CurvePoint> = points
+            .iter()
+            .copied()
+            .filter(|&(e, c)| e.is_finite() && c.is_finite() && e > 0.0 && c > 0.0)
+            .collect();
+        p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        let mut out: Vec<CurvePoint> = Vec::new();
+        for q in p {
+            if out.last().is_none_or(|last| q.1 < last.1) {
+                out.push(q);
+            }
+        }
+        Self { points: out }
+    }
+
+    /// The smallest and largest error measured.
+    pub fn range(&self) -> Option<(f64, f64)> {
+        Some((self.points.first()?.0, self.points.last()?.0))
+    }
+
+    /// The cost at `error`: exact at a point, interpolated between the two around it.
+    pub fn at(&self, error: f64) -> Reading {
+        let Some((lo, hi)) = self.range() else {
+            return Reading::Empty;
+        };
+        if error < lo {
+            return Reading::Below(lo);
+        }
+        if error > hi {
+            return Reading::Above(hi);
+        }
+        let k = self.points.partition_point(|p| p.0 < error);
+        let b = self.points[k];
+        if b.0 == error || k == 0 {
+            return Reading::Value(b.1);
+        }
+        let a = self.points[k - 1];
+        let t = (error.ln() - a.0.ln()) / (b.0.ln() - a.0.ln());
+        Reading::Value((a.1.ln() + t * (b.1.ln() - a.1.ln())).exp())
+    }
+}
+
+/// Ours over a baseline at equal error.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Ratio {
+    /// The largest ratio over the errors both curves reach (the baseline at the error that
+    /// suits it best), and that error.
+    Value { ratio: f64, at_error_px: f64 },
+    /// No error both curves reach; why.
+    OutOfRange(String),
+}
+
+impl Ratio {
+    pub fn value(&self) -> Option<f64> {
+        match self {
+            Ratio::Value { ratio, .. } => Some(*ratio),
+            Ratio::OutOfRange(_) => None,
+        }
+    }
+}
+
+/// `ours` over `base` at equal error, over the errors both measured. Both costs are
+/// piecewise-linear in log–log between their points, so their log-ratio is linear between the
+/// union of the points and its largest value is at one of them: the largest over those points
+/// in the common range is the largest anywhere in it.
+pub fn ratio_at_equal_error(ours: &Curve, base: &Curve) -> Ratio {
+    let (Some((olo, ohi)), Some((blo, bhi))) = (ours.range(), base.range()) else {
+        return Ratio::OutOfRange("no measured error".into());
+    };
+    let (lo, hi) = (olo.max(blo), ohi.min(bhi));
+    if lo > hi {
+        return Ratio::OutOfRange(format!(
+            "out of range (ours {} px, baseline {} px)",
+            span(olo, ohi),
+            span(blo, bhi)
+        ));
+    }
+    let mut best: Option<(f64, f64)> = None;
+    for &(e, _) in ours.points.iter().chain(&base.points) {
+        if e < lo || e > hi {
+            continue;
+        }
+        if let (Reading::Value(a), Reading::Value(b)) = (ours.at(e), base.at(e)) {
+            let r = a / b;
+            if best.is_none_or(|(br, _)| r > br) {
+                best = Some((r, e));
+            }
+        }
+    }
+    match best {
+        Some((ratio, at_error_px)) => Ratio::Value { ratio, at_error_px },
+        None => Ratio::OutOfRange("no common error".into()),
+    }
+}
+
+fn span(lo: f64, hi: f64) -> String {
+    let px = |e: f64| {
+        if e < 0.1 {
+            format!("{e:.2e}")
+        } else {
+            format!("{e:.2}")
+        }
+    };
+    if lo == hi {
+        px(lo)
+    } else {
+        format!("{}–{}", px(lo), px(hi))
+    }
+}
+
+/// Geometric mean of the positive finite values; None when there is none.
+pub fn geometric_mean(values: &[f64]) -> Option<f64> {
+    let v: Vec<f64> = values
+        .iter()
+        .copied()
+        .filter(|x| x.is_finite() && *x > 0.0)
+        .collect();
+    if v.is_empty() {
+        return None;
+    }
+    Some((v.iter().map(|x| x.ln()).sum::<f64>() / v.len() as f64).exp())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn curve_keeps_the_efficient_points_in_error_order() {
+        let c = Curve::new(&[
+            (4.0, 100.0),
+            (1.0, 800.0),
+            (2.0, 900.0), // dominated by (1, 800)
+            (0.0, 5000.0),
+            (f64::NAN, 1.0),
+            (8.0, 100.0), // dominated by (4, 100)
+            (1.0, 700.0),
+        ]);
+        assert_eq!(c.points, vec![(1.0, 700.0), (4.0, 100.0)]);
+        assert_eq!(c.range(), Some((1.0, 4.0)));
+    }
+
+    #[test]
+    fn reading_interpolates_log_log_and_never_extrapolates() {
+        let c = Curve::new(&[(1.0, 1000.0), (4.0, 10.0)]);
+        assert_eq!(c.at(1.0), Reading::Value(1000.0));
+        assert_eq!(c.at(4.0), Reading::Value(10.0));
+        // Half way in log error: half way in log cost, √(1000·10) = 100.
+        let Reading::Value(v) = c.at(2.0) else {
+            panic!()
+        };
+        assert!((v - 100.0).abs() < 1e-9, "{v}");
+        assert_eq!(c.at(0.5), Reading::Below(1.0));
+        assert_eq!(c.at(5.0), Reading::Above(4.0));
+        assert_eq!(Curve::new(&[]).at(1.0), Reading::Empty);
+        assert_eq!(Curve::new(&[(2.0, 3.0)]).at(2.0), Reading::Value(3.0));
+    }
+
+    #[test]
+    fn ratio_is_the_largest_over_the_common_errors() {
+        // Ours: cost 100 at 1 px … 10 at 4 px. Base: 400 at 2 px, 40 at 8 px.
+        let ours = Curve::new(&[(1.0, 100.0), (4.0, 10.0)]);
+        let base = Curve::new(&[(2.0, 400.0), (8.0, 100.0)]);
+        // Common range 2..4. At 2: ours √(100·10) ≈ 31.6 over 400 = 0.079; at 4: 10 over
+        // base(4) = √(400·100) = 200, 0.05. The larger is at 2 px.
+        let Ratio::Value { ratio, at_error_px } = ratio_at_equal_error(&ours, &base) else {
+            panic!()
+        };
+        assert!((ratio - 1000f64.sqrt() / 400.0).abs() < 1e-12, "{ratio}");
+        assert_eq!(at_error_px, 2.0);
+        let flipped = ratio_at_equal_error(&base, &ours).value().unwrap();
+        assert!((flipped - 20.0).abs() < 1e-9, "{flipped}");
+        // Disjoint ranges are out of range, saying both.
+        let far = Curve::new(&[(10.0, 5.0), (20.0, 1.0)]);
+        let r = ratio_at_equal_error(&ours, &far);
+        assert!(
+            matches!(&r, Ratio::OutOfRange(s) if s.contains("ours 1.00–4.00 px") && s.contains("baseline 10.00–20.00 px")),
+            "{r:?}"
+        );
+        assert_eq!(r.value(), None);
+        // A single baseline point inside our range: read exactly there.
+        let one = Curve::new(&[(2.0, 50.0)]);
+        let Ratio::Value { ratio, at_error_px } = ratio_at_equal_error(&ours, &one) else {
+            panic!()
+        };
+        assert!((ratio - 1000f64.sqrt() / 50.0).abs() < 1e-12 && at_error_px == 2.0);
+    }
+
+    #[test]
+    fn geometric_mean_of_the_positive_values() {
+        assert_eq!(geometric_mean(&[]), None);
+        assert_eq!(geometric_mean(&[f64::NAN, 0.0]), None);
+        let g = geometric_mean(&[0.25, 4.0, 1.0, f64::NAN]).unwrap();
+        assert!((g - 1.0).abs() < 1e-12);
+        let g = geometric_mean(&[2.0, 8.0]).unwrap();
+        assert!((g - 4.0).abs() < 1e-12);
+    }
+}

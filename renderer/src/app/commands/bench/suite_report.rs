@@ -1,0 +1,335 @@
+//! The suite's combined report: per flight, every mode's curve and `bounded`'s ratio to each
+//! baseline at equal measured error ([`super::curves`]); `suite.md` (the ratio table, the
+//! geometric means, DESIGN.md's targets flight by flight), `ratios.csv`, `curves.csv`. Each
+//! flight's own folder holds its `bench` report and charts.
+
+use std::path::Path;
+
+use super::curves::{geometric_mean, ratio_at_equal_error, Curve, Ratio};
+use super::report::Summary;
+use crate::app::failure::{runtime, Failure};
+use crate::tools::output::write_text;
+use aerie_terrain::select::LodMode;
+
+/// One benched (dataset, flight).
+pub(crate) struct FlightResult {
+    pub dataset: String,
+    pub flight: String,
+    pub dataset_summary: String,
+    pub summaries: Vec<Summary>,
+}
+
+impl FlightResult {
+    pub fn key(&self) -> String {
+        format!("{}-{}", self.dataset, self.flight)
+    }
+}
+
+/// How the suite ran.
+pub(crate) struct SuiteInfo {
+    pub source: String,
+    pub device: String,
+    pub size: String,
+    pub fov: f64,
+    pub frames: u32,
+    pub warmup: u32,
+    pub fps: f64,
+}
+
+/// A cost read against an error.
+pub(crate) struct Metric {
+    pub key: &'static str,
+    pub title: &'static str,
+    pub error: fn(&Summary) -> f64,
+    pub cost: fn(&Summary) -> f64,
+}
+
+fn max_px(s: &Summary) -> f64 {
+    s.error_px()
+}
+fn p99_px(s: &Summary) -> f64 {
+    s.image.map_or(f64::NAN, |i| i.p99_px)
+}
+fn triangles(s: &Summary) -> f64 {
+    s.triangles.median
+}
+fn frame_ms(s: &Summary) -> f64 {
+    s.frame_ms.median
+}
+
+pub(crate) const METRICS: [Metric; 3] = [
+    Metric {
+        key: "triangles_at_max_error",
+        title: "triangles at equal max error",
+        error: max_px,
+        cost: triangles,
+    },
+    Metric {
+        key: "triangles_at_p99_error",
+        title: "triangles at equal p99 error",
+        error: p99_px,
+        cost: triangles,
+    },
+    Metric {
+        key: "frame_ms_at_max_error",
+        title: "frame time at equal max error",
+        error: max_px,
+        cost: frame_ms,
+    },
+];
+
+pub(crate) const BASELINES: [LodMode; 4] = [
+    LodMode::Clipmap,
+    LodMode::Distance,
+    LodMode::Cdlod,
+    LodMode::Tessellation,
+];
+
+/// The curve of `mode` in one flight for `metric`.
+pub(crate) fn curve_of(summaries: &[Summary], mode: LodMode, metric: &Metric) -> Curve {
+    let pts: Vec<(f64, f64)> = summaries
+        .iter()
+        .filter(|s| s.config.mode == mode)
+        .map(|s| ((metric.error)(s), (metric.cost)(s)))
+        .collect();
+    Curve::new(&pts)
+}
+
+/// `bounded` over `base` for `metric` in one flight; None when the flight ran no `base`.
+pub(crate) fn flight_ratio(summaries: &[Summary], base: LodMode, metric: &Metric) -> Option<Ratio> {
+    if !summaries.iter().any(|s| s.config.mode == base) {
+        return None;
+    }
+    let ours = curve_of(summaries, LodMode::Bounded, metric);
+    Some(ratio_at_equal_error(
+        &ours,
+        &curve_of(summaries, base, metric),
+    ))
+}
+
+fn mode_word(m: LodMode) -> &'static str {
+    super::config::mode_name(m)
+}
+
+fn cell(r: &Ratio) -> String {
+    match r {
+        Ratio::Value { ratio, at_error_px } => format!("{ratio:.2}× @{} px", px(*at_error_px)),
+        Ratio::OutOfRange(why) => why.clone(),
+    }
+}
+
+/// `curves.csv`: every configuration's point of every flight.
+pub(crate) fn curves_csv(results: &[FlightResult]) -> String {
+    let mut s = String::from(
+        "dataset,flight,mode,config,max_error_px,p99_error_px,triangles_median,frame_ms_median,gpu_ms_median,frames_over_tau_plus_half\n",
+    );
+    for r in results {
+        for m in &r.summaries {
+            s.push_str(&format!(
+                "{},{},{},{},{},{},{},{},{},{}\n",
+                r.dataset,
+                r.flight,
+                m.config.mode_name(),
+                m.config.key(),
+                max_px(m),
+                p99_px(m),
+                m.triangles.median,
+                m.frame_ms.median,
+                m.gpu_ms.median,
+                m.image
+                    .map_or(String::new(), |i| i.frames_over_target.to_string()),
+            ));
+        }
+    }
+    s
+}
+
+/// `ratios.csv`: one row per flight × baseline × metric.
+pub(crate) fn ratios_csv(results: &[FlightResult]) -> String {
+    let mut s = String::from("dataset,flight,baseline,metric,ratio,at_error_px,note\n");
+    for r in results {
+        for base in BASELINES {
+            for m in &METRICS {
+                let Some(ratio) = flight_ratio(&r.summaries, base, m) else {
+                    continue;
+                };
+                let (v, at, note) = match &ratio {
+                    Ratio::Value { ratio, at_error_px } => {
+                        (ratio.to_string(), at_error_px.to_string(), String::new())
+                    }
+                    Ratio::OutOfRange(why) => (String::new(), String::new(), why.replace(',', ";")),
+                };
+                s.push_str(&format!(
+                    "{},{},{},{},{v},{at},{note}\n",
+                    r.dataset,
+                    r.flight,
+                    mode_word(base),
+                    m.key
+                ));
+            }
+        }
+    }
+    s
+}
+
+/// `suite.md`.
+pub(crate) fn suite_md(info: &SuiteInfo, results: &[FlightResult]) -> String {
+    let bases: Vec<LodMode> = BASELINES
+        .into_iter()
+        .filter(|b| {
+            results
+                .iter()
+                .any(|r| r.summaries.iter().any(|s| s.config.mode == *b))
+        })
+        .collect();
+    let mut md = format!(
+        "# Bench suite {}\n\n{} flights on {}, {} px, {}° horizontal field of view, {} measured frames \
+         after {} warm-up at {} fps per flight. Every mode renders the same frames; errors are \
+         measured in the image against a full-resolution render of the same camera.\n\n",
+        info.source,
+        results.len(),
+        info.device,
+        info.size,
+        info.fov,
+        info.frames,
+        info.warmup,
+        info.fps
+    );
+    md.push_str(
+        "## Ratios: bounded over each baseline at equal measured error\n\n\
+         Each cell is bounded's cost over the baseline's at the same error, read off the two \
+         curves (each mode's efficient settings, piecewise-linear in log error and log cost), \
+         the largest ratio over the errors both curves reach (the baseline at the error that \
+         suits it best), and that error. *out of range*: the curves share no error (never \
+         extrapolated).\n\n",
+    );
+    let legend: Vec<String> = METRICS
+        .iter()
+        .map(|m| format!("*{}*: {}", short(m), m.title))
+        .collect();
+    md.push_str(&format!("Columns per baseline: {}.\n\n", legend.join("; ")));
+    md.push_str("| flight |");
+    for b in &bases {
+        for m in &METRICS {
+            md.push_str(&format!(" {} {} |", mode_word(*b), short(m)));
+        }
+    }
+    md.push_str("\n|---|");
+    for _ in 0..bases.len() * METRICS.len() {
+        md.push_str("---|");
+    }
+    md.push('\n');
+    let mut columns: Vec<Vec<f64>> = vec![Vec::new(); bases.len() * METRICS.len()];
+    for r in results {
+        md.push_str(&format!("| {} |", r.key()));
+        for (bi, b) in bases.iter().enumerate() {
+            for (mi, m) in METRICS.iter().enumerate() {
+                let c = match flight_ratio(&r.summaries, *b, m) {
+                    Some(ratio) => {
+                        if let Some(v) = ratio.value() {
+                            columns[bi * METRICS.len() + mi].push(v);
+                        }
+                        cell(&ratio)
+                    }
+                    None => "—".into(),
+                };
+                md.push_str(&format!(" {c} |"));
+            }
+        }
+        md.push('\n');
+    }
+    md.push_str("| **geometric mean** |");
+    for col in &columns {
+        match geometric_mean(col) {
+            Some(g) => md.push_str(&format!(" **{g:.2}×** ({}/{}) |", col.len(), results.len())),
+            None => md.push_str(" — |"),
+        }
+    }
+    md.push_str("\n\n");
+    md.push_str(&targets(results));
+    md.push_str("\n## Flights\n\n");
+    for r in results {
+        md.push_str(&format!(
+            "- **{}**: {} — [`{k}/summary.md`]({k}/summary.md), [`triangles_vs_error.png`]({k}/triangles_vs_error.png), [`time_vs_error.png`]({k}/time_vs_error.png), waypoints [`flights/{k}.csv`](flights/{k}.csv)\n",
+            r.key(),
+            r.dataset_summary,
+            k = r.key()
+        ));
+    }
+    md.push_str(
+        "\nFiles: `ratios.csv` (every cell above, with the error it was read at), `curves.csv` \
+         (every configuration's point of every flight).\n",
+    );
+    md
+}
+
+/// An error in pixels with two decimals, three significant digits below 0.1 px.
+fn px(e: f64) -> String {
+    if e < 0.1 {
+        format!("{e:.2e}")
+    } else {
+        format!("{e:.2}")
+    }
+}
+
+fn short(m: &Metric) -> &'static str {
+    match m.key {
+        "triangles_at_max_error" => "tri @max",
+        "triangles_at_p99_error" => "tri @p99",
+        _ => "time @max",
+    }
+}
+
+/// DESIGN.md's per-flight targets for `bounded`: every frame within τ + 0.5 px, late tiles ≤
+/// 0.1 %, worst frame ≤ 1.5× the median.
+fn targets(results: &[FlightResult]) -> String {
+    let mut md = String::from(
+        "## Targets, flight by flight (bounded, every τ)\n\n\
+         | flight | frames over τ + 0.5 px | late tiles (worst τ) | worst / median frame time (worst τ) |\n|---|---|---|---|\n",
+    );
+    for r in results {
+        let b: Vec<&Summary> = r
+            .summaries
+            .iter()
+            .filter(|s| s.config.mode == LodMode::Bounded)
+            .collect();
+        let over: usize = b
+            .iter()
+            .filter_map(|s| s.image.map(|i| i.frames_over_target))
+            .sum();
+        let frames: usize = b.iter().map(|s| s.frames).sum();
+        let late = b.iter().map(|s| s.late_fraction()).fold(0.0, f64::max);
+        let spread = b
+            .iter()
+            .map(|s| s.frame_ms.max / s.frame_ms.median.max(1e-9))
+            .fold(0.0, f64::max);
+        md.push_str(&format!(
+            "| {} | {over} of {frames} {} | {:.3} % {} | {spread:.2}× {} |\n",
+            r.key(),
+            if over == 0 { "✓" } else { "✗" },
+            late * 100.0,
+            if late <= 0.001 { "✓" } else { "✗" },
+            if spread <= 1.5 { "✓" } else { "✗" },
+        ));
+    }
+    md
+}
+
+/// Writes `suite.md`, `ratios.csv`, `curves.csv` into `out` and prints the table.
+pub(crate) fn write_report(
+    out: &Path,
+    info: &SuiteInfo,
+    results: &[FlightResult],
+) -> Result<(), Failure> {
+    let md = suite_md(info, results);
+    for (name, text) in [
+        ("ratios.csv", ratios_csv(results)),
+        ("curves.csv", curves_csv(results)),
+        ("suite.md", md.clone()),
+    ] {
+        let path = out.join(name);
+        write_text(&path, &text).map_err(|e| runtime(format!("{}: {e}", path.display())))?;
+    }
+    println!("{md}");
+    Ok(())
+}

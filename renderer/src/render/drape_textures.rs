@@ -1,0 +1,504 @@
+//! Rasters draped on the terrain, on the GPU (issue 17): the imagery as one RGBA8 sRGB texture
+//! with its full mip chain (set 0 binding 5, trilinear) and the land-cover classes as one
+//! R8_UINT texture (binding 6, read with texelFetch), both registered to the terrain's grid by
+//! `aerie_terrain::drape` and uploaded once when the terrain is loaded. Without rasters each is
+//! a 1×1 placeholder (transparent; "no class"), so the pipeline layout never changes.
+
+use std::sync::Arc;
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use aerie_terrain::drape::mips::{mip_chain, mip_count};
+use aerie_terrain::drape::{
+    drape_codes, drape_rgba, DrapeSize, DrapeStats, GeoRaster, TerrainGrid, CODE_NONE,
+};
+use aerie_terrain::source::SourceGrid;
+
+use crate::vk::access::Access;
+use crate::vk::conv::map_barrier;
+use crate::vk::frame_context::FrameRing;
+use crate::vk::{Buffer, Device, VkError, VkResultExt};
+
+/// The largest draped texture side asked of any device (the device's own limit may be lower).
+pub const MAX_DRAPE_SIDE: u32 = 8192;
+
+/// What the user gave to drape: the imagery files (later ones on top), the land-cover raster
+/// and its code → class table ([`CODE_NONE`]: keep the derived classes).
+#[derive(Clone)]
+pub struct DrapeInput {
+    pub imagery: Vec<GeoRaster>,
+    pub landcover: Option<GeoRaster>,
+    pub table: [u8; 256],
+}
+
+impl std::fmt::Debug for DrapeInput {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let names: Vec<&str> = self.imagery.iter().map(|r| r.path.as_str()).collect();
+        f.debug_struct("DrapeInput")
+            .field("imagery", &names)
+            .field(
+                "landcover",
+                &self.landcover.as_ref().map(|r| r.path.as_str()),
+            )
+            .finish()
+    }
+}
+
+/// The draped rasters, registered to a terrain's grid (CPU side).
+#[derive(Debug, Clone, Default)]
+pub struct DrapedRasters {
+    /// RGBA8 sRGB texels, row 0 south.
+    pub imagery: Option<(DrapeSize, Vec<u8>)>,
+    /// One class per texel ([`CODE_NONE`] = derived), row 0 south.
+    pub classes: Option<(DrapeSize, Vec<u8>)>,
+    /// The land-cover raster's texels per raw code.
+    pub code_counts: Option<DrapeStats>,
+}
+
+impl DrapedRasters {
+    /// Land-cover texels whose code the table does not know (drawn with the derived classes).
+    pub fn unknown_code_texels(&self, table: &[u8; 256]) -> u64 {
+        self.code_counts.as_ref().map_or(0, |s| {
+            s.codes
+                .iter()
+                .enumerate()
+                .filter(|(c, _)| table[*c] == CODE_NONE)
+                .map(|(_, n)| n)
+                .sum()
+        })
+    }
+}
+
+/// Registers `input` onto `grid`'s real extent under a texture side of `max_side`; errors name
+/// the file and the reason (CRS unsupported, no overlap, terrain without geo-reference).
+pub fn register(
+    input: &DrapeInput,
+    grid: &SourceGrid,
+    max_side: u32,
+) -> Result<DrapedRasters, String> {
+    let first = input
+        .imagery
+        .first()
+        .or(input.landcover.as_ref())
+        .map(|r| r.path.clone())
+        .unwrap_or_default();
+    let terrain = TerrainGrid::new(
+        grid.valid_width as usize,
+        grid.valid_height as usize,
+        grid.spacing_x,
+        grid.spacing_y,
+        grid.geo.as_ref(),
+    )
+    .map_err(|why| format!("{first}: {why}"))?;
+    let mut out = DrapedRasters::default();
+    if !input.imagery.is_empty() {
+        let refs: Vec<&GeoRaster> = input.imagery.iter().collect();
+        let size = DrapeSize::choose(&terrain, &refs, max_side);
+        let mut texels = vec![0u8; size.texels() * 4];
+        for r in &input.imagery {
+            drape_rgba(&terrain, &size, r, &mut texels).map_err(|e| e.to_string())?;
+        }
+        out.imagery = Some((size, texels));
+    }
+    if let Some(r) = &input.landcover {
+        let size = DrapeSize::choose(&terrain, &[r], max_side);
+        let mut texels = vec![CODE_NONE; size.texels()];
+        let stats = drape_codes(&terrain, &size, r, &input.table, &mut texels)
+            .map_err(|e| e.to_string())?;
+        out.classes = Some((size, texels));
+        out.code_counts = Some(stats);
+    }
+    Ok(out)
+}
+
+/// One sampled 2-D image with its mip chain, memory and view.
+struct MipImage {
+    raw: vk::Image,
+    view: vk::ImageView,
+    allocation: Option<Allocation>,
+    extent: (u32, u32),
+    mips: u32,
+    bytes: u64,
+}
+
+impl MipImage {
+    fn new(
+        d: &Device,
+        name: &str,
+        extent: (u32, u32),
+        format: vk::Format,
+        mips: u32,
+    ) -> Result<Self, VkError> {
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(vk::Extent3D {
+                width: extent.0,
+                height: extent.1,
+                depth: 1,
+            })
+            .mip_levels(mips)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: the device is live and the create-info is complete (2-D, ≥ 1 mip and layer).
+        let raw = unsafe { d.raw.create_image(&info, None) }.call("vkCreateImage")?;
+        // SAFETY: `raw` was just created on this device.
+        let requirements = unsafe { d.raw.get_image_memory_requirements(raw) };
+        let allocation = match d.allocator().allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location: MemoryLocation::GpuOnly,
+            linear: false,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        }) {
+            Ok(a) => a,
+            Err(source) => {
+                // SAFETY: `raw` is unbound and unused by any command.
+                unsafe { d.raw.destroy_image(raw, None) };
+                return Err(VkError::Allocation {
+                    what: name.into(),
+                    source,
+                });
+            }
+        };
+        let mut image = Self {
+            raw,
+            view: vk::ImageView::null(),
+            allocation: None,
+            extent,
+            mips,
+            bytes: requirements.size,
+        };
+        // SAFETY: the allocation was made for this image's requirements and is bound once.
+        let bound = unsafe {
+            d.raw
+                .bind_image_memory(raw, allocation.memory(), allocation.offset())
+        };
+        image.allocation = Some(allocation);
+        if let Err(result) = bound {
+            image.destroy(d);
+            return Err(VkError::Call {
+                call: "vkBindImageMemory",
+                result,
+            });
+        }
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(raw)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(format)
+            .subresource_range(image.range());
+        // SAFETY: `raw` is live and bound; the view matches its format and mips.
+        match unsafe { d.raw.create_image_view(&view_info, None) } {
+            Ok(v) => image.view = v,
+            Err(result) => {
+                image.destroy(d);
+                return Err(VkError::Call {
+                    call: "vkCreateImageView",
+                    result,
+                });
+            }
+        }
+        Ok(image)
+    }
+
+    fn range(&self) -> vk::ImageSubresourceRange {
+        vk::ImageSubresourceRange {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            base_mip_level: 0,
+            level_count: self.mips,
+            base_array_layer: 0,
+            layer_count: 1,
+        }
+    }
+
+    /// Records a barrier over every mip from the `prev` uses to the `next` (named by use).
+    fn barrier(
+        &self,
+        d: &Device,
+        cmd: vk::CommandBuffer,
+        prev: &[Access],
+        next: &[Access],
+        discard: bool,
+    ) {
+        let b = map_barrier(prev, next, discard);
+        let barrier = vk::ImageMemoryBarrier::default()
+            .old_layout(b.old_layout)
+            .new_layout(b.new_layout)
+            .src_access_mask(b.src_access)
+            .dst_access_mask(b.dst_access)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(self.raw)
+            .subresource_range(self.range());
+        // SAFETY: `cmd` is recording on this device and the image is live; the barrier outlives the call.
+        unsafe {
+            d.raw.cmd_pipeline_barrier(
+                cmd,
+                b.src_stage,
+                b.dst_stage,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &[barrier],
+            )
+        };
+    }
+
+    fn destroy(&mut self, d: &Device) {
+        if self.view != vk::ImageView::null() {
+            // SAFETY: created on this device by `new`, no command using it is pending (owners destroy after wait_idle), nulled below.
+            unsafe { d.raw.destroy_image_view(self.view, None) };
+            self.view = vk::ImageView::null();
+        }
+        if let Some(a) = self.allocation.take() {
+            // SAFETY: as for the view; the memory is freed after the image bound to it.
+            unsafe { d.raw.destroy_image(self.raw, None) };
+            let _ = d.allocator().free(a);
+            self.raw = vk::Image::null();
+        }
+    }
+}
+
+/// The draped textures and their samplers.
+pub struct DrapeTextures {
+    imagery: MipImage,
+    classes: MipImage,
+    /// Trilinear, clamped: the imagery.
+    pub linear: vk::Sampler,
+    /// Nearest: the classes (an integer format is never filtered).
+    pub nearest: vk::Sampler,
+    /// The draped sizes (None: placeholder).
+    pub imagery_size: Option<DrapeSize>,
+    pub classes_size: Option<DrapeSize>,
+}
+
+impl DrapeTextures {
+    /// Creates the textures for `rasters` (placeholders without) and uploads them in one
+    /// submission through a temporary staging buffer, waiting for it (load time only).
+    pub fn new(
+        d: &Device,
+        ring: &mut FrameRing,
+        rasters: Option<&DrapedRasters>,
+    ) -> Result<Self, VkError> {
+        let mut this = Self {
+            imagery: MipImage::new(d, "imagery", (1, 1), vk::Format::R8G8B8A8_SRGB, 1)?,
+            classes: MipImage {
+                raw: vk::Image::null(),
+                view: vk::ImageView::null(),
+                allocation: None,
+                extent: (1, 1),
+                mips: 1,
+                bytes: 0,
+            },
+            linear: vk::Sampler::null(),
+            nearest: vk::Sampler::null(),
+            imagery_size: None,
+            classes_size: None,
+        };
+        if let Err(e) = this.create(d, ring, rasters) {
+            this.destroy(d);
+            return Err(e);
+        }
+        Ok(this)
+    }
+
+    fn create(
+        &mut self,
+        d: &Device,
+        ring: &mut FrameRing,
+        rasters: Option<&DrapedRasters>,
+    ) -> Result<(), VkError> {
+        let sampler = |filter: vk::Filter, mip: vk::SamplerMipmapMode, max_lod: f32| {
+            vk::SamplerCreateInfo::default()
+                .mag_filter(filter)
+                .min_filter(filter)
+                .mipmap_mode(mip)
+                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .max_lod(max_lod)
+        };
+        let info = sampler(
+            vk::Filter::LINEAR,
+            vk::SamplerMipmapMode::LINEAR,
+            vk::LOD_CLAMP_NONE,
+        );
+        // SAFETY: the device is live; the create-info is complete.
+        self.linear = unsafe { d.raw.create_sampler(&info, None) }.call("vkCreateSampler")?;
+        let info = sampler(vk::Filter::NEAREST, vk::SamplerMipmapMode::NEAREST, 0.0);
+        // SAFETY: as above.
+        self.nearest = unsafe { d.raw.create_sampler(&info, None) }.call("vkCreateSampler")?;
+
+        let max = d.properties.limits.max_image_dimension2_d;
+        let check = |s: &DrapeSize, what: &str| {
+            if s.width as u32 > max || s.height as u32 > max {
+                return Err(VkError::Other(format!(
+                    "{what} texture {}×{} exceeds this device's {max}² limit",
+                    s.width, s.height
+                )));
+            }
+            Ok(())
+        };
+        // (image, level sizes and bytes) to upload.
+        let mut imagery_levels: Vec<(usize, usize, Vec<u8>)> = vec![(1, 1, vec![0, 0, 0, 0])];
+        let mut class_level: (usize, usize, Vec<u8>) = (1, 1, vec![CODE_NONE]);
+        if let Some((s, texels)) = rasters.and_then(|r| r.imagery.as_ref()) {
+            check(s, "imagery")?;
+            self.imagery.destroy(d);
+            let mips = mip_count(s.width, s.height);
+            self.imagery = MipImage::new(
+                d,
+                "imagery",
+                (s.width as u32, s.height as u32),
+                vk::Format::R8G8B8A8_SRGB,
+                mips,
+            )?;
+            imagery_levels = vec![(s.width, s.height, texels.clone())];
+            imagery_levels.extend(mip_chain(s.width, s.height, texels));
+            self.imagery_size = Some(*s);
+        }
+        if let Some((s, texels)) = rasters.and_then(|r| r.classes.as_ref()) {
+            check(s, "land-cover")?;
+            class_level = (s.width, s.height, texels.clone());
+            self.classes_size = Some(*s);
+        }
+        self.classes = MipImage::new(
+            d,
+            "land-cover classes",
+            (class_level.0 as u32, class_level.1 as u32),
+            vk::Format::R8_UINT,
+            1,
+        )?;
+        let padded = |n: usize| n.div_ceil(4) * 4;
+        let total: usize = imagery_levels
+            .iter()
+            .map(|l| padded(l.2.len()))
+            .sum::<usize>()
+            + padded(class_level.2.len());
+        let mut staging = Buffer::new(
+            d,
+            "drape staging",
+            total as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let result = self.upload(d, ring, &mut staging, &imagery_levels, &class_level);
+        d.wait_idle();
+        staging.destroy(d);
+        result
+    }
+
+    fn upload(
+        &self,
+        d: &Device,
+        ring: &mut FrameRing,
+        staging: &mut Buffer,
+        imagery: &[(usize, usize, Vec<u8>)],
+        classes: &(usize, usize, Vec<u8>),
+    ) -> Result<(), VkError> {
+        let Some(map) = staging.mapped_mut() else {
+            return Err(VkError::Other(
+                "drape staging buffer is not host-visible".into(),
+            ));
+        };
+        let mut offset = 0usize;
+        let mut copies: Vec<(vk::Image, vk::BufferImageCopy)> = Vec::new();
+        let levels = imagery
+            .iter()
+            .enumerate()
+            .map(|(m, l)| (self.imagery.raw, m as u32, l));
+        for (image, mip, (w, h, bytes)) in levels.chain([(self.classes.raw, 0, classes)]) {
+            map[offset..offset + bytes.len()].copy_from_slice(bytes);
+            copies.push((
+                image,
+                vk::BufferImageCopy {
+                    buffer_offset: offset as u64,
+                    buffer_row_length: 0,
+                    buffer_image_height: 0,
+                    image_subresource: vk::ImageSubresourceLayers {
+                        aspect_mask: vk::ImageAspectFlags::COLOR,
+                        mip_level: mip,
+                        base_array_layer: 0,
+                        layer_count: 1,
+                    },
+                    image_offset: vk::Offset3D::default(),
+                    image_extent: vk::Extent3D {
+                        width: *w as u32,
+                        height: *h as u32,
+                        depth: 1,
+                    },
+                },
+            ));
+            // Copies start at multiples of 4 bytes (the texel size of RGBA8; R8 needs 1).
+            offset += bytes.len().div_ceil(4) * 4;
+        }
+        let mut frame = ring.begin_frame(d)?;
+        let cmd = frame.begin_recording(d)?;
+        for image in [&self.imagery, &self.classes] {
+            image.barrier(d, cmd, &[Access::Nothing], &[Access::TransferWrite], true);
+        }
+        for (image, copy) in &copies {
+            // SAFETY: `cmd` is recording; the staging buffer holds these bytes at the offsets, and each region lies inside its live image (TRANSFER_DST layout after the barrier).
+            unsafe {
+                d.raw.cmd_copy_buffer_to_image(
+                    cmd,
+                    staging.raw,
+                    *image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    std::slice::from_ref(copy),
+                )
+            };
+        }
+        for image in [&self.imagery, &self.classes] {
+            image.barrier(
+                d,
+                cmd,
+                &[Access::TransferWrite],
+                &[Access::FragmentShaderReadSampledImage],
+                false,
+            );
+        }
+        let _in_flight = frame.submit(d)?;
+        Ok(())
+    }
+
+    pub fn imagery_view(&self) -> vk::ImageView {
+        self.imagery.view
+    }
+
+    pub fn classes_view(&self) -> vk::ImageView {
+        self.classes.view
+    }
+
+    /// Device bytes of both textures (the imagery's whole mip chain).
+    pub fn bytes(&self) -> u64 {
+        self.imagery.bytes + self.classes.bytes
+    }
+
+    /// Imagery extent and mip count.
+    pub fn imagery_extent(&self) -> ((u32, u32), u32) {
+        (self.imagery.extent, self.imagery.mips)
+    }
+
+    /// Call after the device is idle. Idempotent.
+    pub fn destroy(&mut self, d: &Device) {
+        self.classes.destroy(d);
+        self.imagery.destroy(d);
+        // SAFETY: null or created by `create` on this device; no pending command uses them; nulled below.
+        unsafe {
+            d.raw.destroy_sampler(self.nearest, None);
+            d.raw.destroy_sampler(self.linear, None);
+        }
+        self.nearest = vk::Sampler::null();
+        self.linear = vk::Sampler::null();
+    }
+}
+
+/// The input shared by every renderer a command makes.
+pub type SharedDrapeInput = Arc<DrapeInput>;

@@ -1,0 +1,385 @@
+//! Relative-to-eye frames of the nodes of a geographic dataset drawn on the WGS84 ellipsoid
+//! (issue 14; DESIGN.md "Precision"), pure.
+//!
+//! A sample's position is ECEF(φ, λ, h) minus the eye's: millions of metres on both sides, so
+//! it cannot be formed in f32. Per drawn node the CPU computes in f64 the node's centre vertex
+//! (height 0) relative to the eye, in world axes, and the world axes of the meridian frame
+//! there (radial, east, polar); the vertex shader adds the vertex's offset from that centre,
+//! which it forms in f32 from the *differences* of latitude and longitude alone — products of
+//! small, well-conditioned factors (cos φ − cos φ0 = −2 sin((φ+φ0)/2) sin((φ−φ0)/2), and the
+//! like), sines of small angles by their series (GPU `sin`/`cos` are allowed 2^-11 absolute
+//! error: kilometres at the Earth's radius). Every rounding is then relative to the offset or to
+//! the eye distance, never to the Earth's radius.
+//!
+//! A projected (UTM) grid has no constant latitude/longitude step per sample: its node carries
+//! cubic polynomials in the vertex's normalised offset (u, v) for its position and normal
+//! (`aerie_terrain::geodesy::projected::NodePolynomial`, fitted in f64 on the CPU, its error
+//! bounded in the node's box and ε), rotated to world axes; the shader evaluates them in f32
+//! (`projected_offset`). Offsets stay within half a node, so every rounding is relative to it.
+//!
+//! [`emulate_vertex`] is the shader's arithmetic written again in f32, operation for
+//! operation, so that its precision is tested on the CPU against the f64 reference
+//! (`tests/tests/geodesy.rs`). Keep the two in step.
+
+use glam::{DMat3, DVec2, DVec3, Mat3, Vec3};
+
+use aerie_terrain::geodesy::projected::ProjectedGrid;
+use aerie_terrain::geodesy::wgs84::{WGS84_A, WGS84_E2};
+use aerie_terrain::geodesy::{GeoGrid, Geodetic};
+
+use crate::render::gpu::TileInstance;
+
+/// The instance fields of one node (see `shaders/gpu_types.glsl`); all zero on the flat path
+/// (`geo_origin.w == 0` tells the shader so).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GeoFields {
+    pub geo_origin: [f32; 4],
+    pub geo_axis_r: [f32; 4],
+    pub geo_axis_t: [f32; 4],
+    pub geo_axis_z: [f32; 4],
+    pub geo_radius: [f32; 4],
+    pub geo_s: [[f32; 4]; 9],
+    pub geo_n: [[f32; 4]; 10],
+}
+
+/// The eye of a frame over a geographic grid: what every node's frame is computed from.
+#[derive(Debug, Clone, Copy)]
+pub struct GeoEye {
+    grid: GeoGrid,
+    eye_ecef: DVec3,
+    to_world: DMat3,
+    dlat_rad: f64,
+    dlon_rad: f64,
+}
+
+impl GeoEye {
+    /// The eye at `eye_world` (world metres: ENU at the grid's south-west sample).
+    pub fn new(grid: &GeoGrid, eye_world: DVec3) -> Self {
+        Self {
+            grid: *grid,
+            eye_ecef: grid.world.enu_to_ecef(eye_world),
+            to_world: grid.ecef_to_world_rotation(),
+            dlat_rad: grid.dlat_deg.to_radians(),
+            dlon_rad: grid.dlon_deg.to_radians(),
+        }
+    }
+
+    /// The fields of the node whose south-west vertex is sample `origin` (col, row), drawn
+    /// with `q` quads per side of `step` samples: its frame sits at the centre vertex, so
+    /// offsets stay within half a node.
+    pub fn node_fields(&self, origin: [i64; 2], step: u32, q: u32) -> GeoFields {
+        let half = (q / 2) as i64 * step as i64;
+        if let Some(p) = &self.grid.projected {
+            return self.projected_fields(p, origin, half);
+        }
+        let (col, row) = ((origin[0] + half) as f64, (origin[1] + half) as f64);
+        let lat_deg = self.grid.south_lat_deg + row * self.grid.dlat_deg;
+        let lon_deg = self.grid.west_lon_deg + col * self.grid.dlon_deg;
+        let centre = aerie_terrain::geodesy::geodetic_to_ecef(Geodetic::new(lat_deg, lon_deg, 0.0));
+        let rel = self.to_world * (centre - self.eye_ecef);
+        let (sp, cp) = lat_deg.to_radians().sin_cos();
+        let (sl, cl) = lon_deg.to_radians().sin_cos();
+        let axis_r = self.to_world * DVec3::new(cl, sl, 0.0);
+        let axis_t = self.to_world * DVec3::new(-sl, cl, 0.0);
+        let axis_z = self.to_world * DVec3::Z;
+        let w0 = (1.0 - WGS84_E2 * sp * sp).sqrt();
+        let r0 = WGS84_A * cp / w0;
+        let r0_hi = r0 as f32;
+        let r0_lo = (r0 - r0_hi as f64) as f32;
+        let v4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
+        GeoFields {
+            geo_origin: v4(rel, self.dlat_rad),
+            geo_axis_r: v4(axis_r, sp),
+            geo_axis_t: v4(axis_t, cp),
+            geo_axis_z: v4(axis_z, w0),
+            geo_radius: [self.dlon_rad as f32, r0_hi, r0_lo, 0.0],
+            ..Default::default()
+        }
+    }
+
+    /// A projected grid's node (see the module documentation): `half` samples from its
+    /// south-west vertex `origin` to its centre.
+    fn projected_fields(&self, p: &ProjectedGrid, origin: [i64; 2], half: i64) -> GeoFields {
+        let (sx, sy) = (self.grid.spacing_x, self.grid.spacing_y);
+        let centre = DVec2::new(
+            (origin[0] + half) as f64 * sx,
+            (origin[1] + half) as f64 * sy,
+        );
+        let half_m = DVec2::new(half as f64 * sx, half as f64 * sy);
+        let poly = p.node_polynomial(centre, half_m);
+        let rel = self.to_world * (poly.centre_ecef - self.eye_ecef);
+        let north = self
+            .grid
+            .local_enu_axes(poly.lat0_deg, poly.lon0_deg)
+            .y_axis;
+        let v = |d: DVec3, w: f64| {
+            let d = self.to_world * d;
+            [d.x as f32, d.y as f32, d.z as f32, w as f32]
+        };
+        let mut geo_s = [[0.0f32; 4]; 9];
+        let mut geo_n = [[0.0f32; 4]; 10];
+        let north = north.to_array();
+        for k in 0..9 {
+            geo_s[k] = v(poly.pos[k], north.get(k).copied().unwrap_or(0.0));
+            geo_n[k + 1] = v(poly.normal[k], 0.0);
+        }
+        geo_n[0] = v(poly.normal0, 0.0);
+        GeoFields {
+            geo_origin: [
+                rel.x as f32,
+                rel.y as f32,
+                rel.z as f32,
+                (1.0 / half.max(1) as f64) as f32,
+            ],
+            geo_radius: [0.0, 0.0, 0.0, 1.0],
+            geo_s,
+            geo_n,
+            ..Default::default()
+        }
+    }
+}
+
+/// Whether a renderer drawing with `curvature` (off: `--no-curvature`) may draw a dataset
+/// with this geo-reference: a geographic or UTM grid is always drawn on the exact ellipsoid, so
+/// a flat Earth there is refused, naming why, rather than silently ignored.
+pub fn check_curvature_choice(
+    curvature: bool,
+    geo: Option<&aerie_terrain::GeoReference>,
+) -> Result<(), String> {
+    if curvature || GeoGrid::of(geo, 1.0, 1.0).is_none() {
+        return Ok(());
+    }
+    let what = match geo {
+        Some(aerie_terrain::GeoReference::Projected { crs, .. }) => {
+            format!("projected ({crs}, UTM on WGS84)")
+        }
+        _ => "geographic (latitude/longitude on WGS84)".to_string(),
+    };
+    Err(format!(
+        "--no-curvature: this dataset is {what}, and such a grid is always drawn on the exact \
+         ellipsoid (README \"On the ellipsoid\"); there is no flat Earth to draw it on. Drop \
+         the flag (it applies to local grids and projected ones in other CRSs, whose curvature \
+         is the d²/2R drop)"
+    ))
+}
+
+/// WGS84 as the shader has it (f32 constants).
+const A_F32: f32 = 6_378_137.0;
+const E2_F32: f32 = 0.006_694_38;
+
+/// sin x and 1 − cos x by their series, as `sincos_small` in `shaders/terrain.vert`: exact to
+/// f32 rounding for |x| < 1 (a node spans less).
+pub fn sincos_small(x: f32) -> (f32, f32) {
+    let x2 = x * x;
+    let s = x
+        * (1.0
+            - x2 * (1.0 / 6.0
+                - x2 * (1.0 / 120.0
+                    - x2 * (1.0 / 5040.0 - x2 * (1.0 / 362_880.0 - x2 * (1.0 / 39_916_800.0))))));
+    let omc = x2
+        * (0.5
+            - x2 * (1.0 / 24.0
+                - x2 * (1.0 / 720.0 - x2 * (1.0 / 40_320.0 - x2 * (1.0 / 3_628_800.0)))));
+    (s, omc)
+}
+
+/// A vertex of a geographic node as the vertex shader computes it (f32): `ij` the vertex in
+/// the node (0..=q), `h` its height (skirt already subtracted). Returns the position relative
+/// to the eye in world axes.
+pub fn emulate_vertex(t: &TileInstance, ij: [i32; 2], q: i32, h: f32) -> Vec3 {
+    if t.geo_radius[3] != 0.0 {
+        return emulate_projected_vertex(t, ij, q, h);
+    }
+    let c = q / 2;
+    let step = t.step as i32;
+    let d = [((ij[0] - c) * step) as f32, ((ij[1] - c) * step) as f32];
+    let dphi = d[1] * t.geo_origin[3];
+    let dlam = d[0] * t.geo_radius[0];
+    let (sp0, cp0, w0) = (t.geo_axis_r[3], t.geo_axis_t[3], t.geo_axis_z[3]);
+    let (sh, omch) = sincos_small(0.5 * dphi);
+    let (sd, omcd) = sincos_small(dphi);
+    let (sl, omcl) = sincos_small(dlam);
+    let (ch, cd) = (1.0 - omch, 1.0 - omcd);
+    let sinp = sp0 * cd + cp0 * sd;
+    let cosp = cp0 * cd - sp0 * sd;
+    let sm = sp0 * ch + cp0 * sh;
+    let cm = cp0 * ch - sp0 * sh;
+    let dcos = -2.0 * sm * sh;
+    let dsin = 2.0 * cm * sh;
+    let dw2 = -E2_F32 * dsin * (sinp + sp0);
+    let w = (w0 * w0 + dw2).sqrt();
+    let dinv = -dw2 / (w * w0 * (w + w0));
+    let dr = A_F32 * (dcos / w + cp0 * dinv) + h * cosp;
+    let dz = (A_F32 * (1.0 - E2_F32)) * (dsin / w + sp0 * dinv) + h * sinp;
+    let rs = t.geo_radius[2] + dr;
+    let x = dr - (t.geo_radius[1] * omcl + rs * omcl);
+    let y = t.geo_radius[1] * sl + rs * sl;
+    let axes = Mat3::from_cols(
+        Vec3::from_slice(&t.geo_axis_r[..3]),
+        Vec3::from_slice(&t.geo_axis_t[..3]),
+        Vec3::from_slice(&t.geo_axis_z[..3]),
+    );
+    Vec3::from_slice(&t.geo_origin[..3]) + axes * Vec3::new(x, y, dz)
+}
+
+/// A vertex of a projected node as `projected_offset` in `shaders/terrain.vert` computes it
+/// (f32, same order of operations): the position relative to the eye in world axes.
+pub fn emulate_projected_vertex(t: &TileInstance, ij: [i32; 2], q: i32, h: f32) -> Vec3 {
+    let c = q / 2;
+    let step = t.step as i32;
+    let u = ((ij[0] - c) * step) as f32 * t.geo_origin[3];
+    let v = ((ij[1] - c) * step) as f32 * t.geo_origin[3];
+    let b = [
+        u,
+        v,
+        u * u,
+        u * v,
+        v * v,
+        u * u * u,
+        u * u * v,
+        u * v * v,
+        v * v * v,
+    ];
+    let mut s = Vec3::ZERO;
+    let mut nrm = Vec3::from_slice(&t.geo_n[0][..3]);
+    for (k, bk) in b.iter().enumerate() {
+        s += Vec3::from_slice(&t.geo_s[k][..3]) * *bk;
+        nrm += Vec3::from_slice(&t.geo_n[k + 1][..3]) * *bk;
+    }
+    Vec3::from_slice(&t.geo_origin[..3]) + (s + nrm * h)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aerie_terrain::GeoReference;
+
+    fn grid(lat: f64, lon: f64, d: f64) -> GeoGrid {
+        GeoGrid::of(
+            Some(&GeoReference::Geographic {
+                south_lat_deg: lat,
+                west_lon_deg: lon,
+                dlat_deg: d,
+                dlon_deg: d,
+            }),
+            30.0,
+            30.0,
+        )
+        .unwrap()
+    }
+
+    fn instance(f: GeoFields, step: u32) -> TileInstance {
+        TileInstance {
+            step,
+            geo_origin: f.geo_origin,
+            geo_axis_r: f.geo_axis_r,
+            geo_axis_t: f.geo_axis_t,
+            geo_axis_z: f.geo_axis_z,
+            geo_radius: f.geo_radius,
+            geo_s: f.geo_s,
+            geo_n: f.geo_n,
+            ..bytemuck::Zeroable::zeroed()
+        }
+    }
+
+    #[test]
+    fn a_flat_earth_is_refused_only_on_data_placed_on_the_ellipsoid() {
+        let geo = GeoReference::Geographic {
+            south_lat_deg: 47.0,
+            west_lon_deg: 11.0,
+            dlat_deg: 0.01,
+            dlon_deg: 0.01,
+        };
+        let why = check_curvature_choice(false, Some(&geo)).unwrap_err();
+        assert!(
+            why.contains("--no-curvature") && why.contains("ellipsoid"),
+            "{why}"
+        );
+        assert_eq!(check_curvature_choice(true, Some(&geo)), Ok(()));
+        assert_eq!(check_curvature_choice(false, None), Ok(()));
+        let utm = GeoReference::Projected {
+            crs: "EPSG:32632".into(),
+            easting: 500_000.0,
+            northing: 5_200_000.0,
+        };
+        let why = check_curvature_choice(false, Some(&utm)).unwrap_err();
+        assert!(why.contains("EPSG:32632"), "{why}");
+        let lv95 = GeoReference::Projected {
+            crs: "EPSG:2056".into(),
+            easting: 2_600_000.0,
+            northing: 1_200_000.0,
+        };
+        assert_eq!(check_curvature_choice(false, Some(&lv95)), Ok(()));
+    }
+
+    #[test]
+    fn series_match_f64_trigonometry() {
+        for x in [-0.9f64, -0.2, -1e-3, 0.0, 1e-7, 0.05, 0.3, 0.9] {
+            let (s, omc) = sincos_small(x as f32);
+            let xf = x as f32 as f64;
+            assert!(
+                (s as f64 - xf.sin()).abs() <= 2e-7 * xf.abs().max(1e-30),
+                "{x}"
+            );
+            let want = 2.0 * (xf / 2.0).sin().powi(2);
+            assert!(
+                (omc as f64 - want).abs() <= 3e-7 * want.max(1e-30),
+                "{x}: {omc} vs {want}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_centre_vertex_is_the_node_origin_and_the_far_corner_is_close() {
+        let g = grid(47.0, 11.0, 1.0 / 1200.0);
+        let eye_world = g.world_of_grid(glam::DVec2::new(40_000.0, 60_000.0), 3000.0);
+        let eye = GeoEye::new(&g, eye_world);
+        let (origin, step, q) = ([512i64, 768], 4u32, 16u32);
+        let t = instance(eye.node_fields(origin, step, q), step);
+        let eye_ecef = g.world.enu_to_ecef(eye_world);
+        for (ij, h) in [
+            ([8, 8], 0.0f32),
+            ([0, 0], 1234.5),
+            ([16, 16], 3000.0),
+            ([3, 11], -50.0),
+        ] {
+            let col = origin[0] as f64 + (ij[0] as u32 * step) as f64;
+            let row = origin[1] as f64 + (ij[1] as u32 * step) as f64;
+            let want =
+                g.ecef_to_world_rotation() * (g.ecef_of_sample(col, row, h as f64) - eye_ecef);
+            let got = emulate_vertex(&t, ij, q as i32, h).as_dvec3();
+            assert!((got - want).length() < 0.01, "{ij:?}: {got:?} vs {want:?}");
+        }
+    }
+
+    /// A UTM node at a zone's edge (zone 32N, 170 km easting, 47° N): the emulated f32 vertex
+    /// is within 1 cm of the f64 ECEF − eye at its corners, centre and inside, heights included.
+    #[test]
+    fn projected_vertices_match_the_f64_reference() {
+        let geo = GeoReference::Projected {
+            crs: "EPSG:32632".into(),
+            easting: 170_000.0,
+            northing: 5_200_000.0,
+        };
+        let g = GeoGrid::of(Some(&geo), 30.0, 30.0).unwrap();
+        let eye_world = g.world_of_grid(glam::DVec2::new(40_000.0, 60_000.0), 3000.0);
+        let eye = GeoEye::new(&g, eye_world);
+        let eye_ecef = g.world.enu_to_ecef(eye_world);
+        let (origin, step, q) = ([1024i64, 2048], 32u32, 16u32);
+        let t = instance(eye.node_fields(origin, step, q), step);
+        for (ij, h) in [
+            ([8, 8], 0.0f32),
+            ([0, 0], 1234.5),
+            ([16, 16], 3000.0),
+            ([3, 11], -50.0),
+            ([16, 0], 4500.0),
+        ] {
+            let col = origin[0] as f64 + (ij[0] as u32 * step) as f64;
+            let row = origin[1] as f64 + (ij[1] as u32 * step) as f64;
+            let want =
+                g.ecef_to_world_rotation() * (g.ecef_of_sample(col, row, h as f64) - eye_ecef);
+            let got = emulate_vertex(&t, ij, q as i32, h).as_dvec3();
+            assert!((got - want).length() < 0.01, "{ij:?}: {got:?} vs {want:?}");
+        }
+    }
+}

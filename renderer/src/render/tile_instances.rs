@@ -1,0 +1,117 @@
+//! The frame plan's draw records (pure): where a node lies in its pool slot, one
+//! `TileInstance` per drawn node (relative to the eye, grouped by refinement) and one indexed
+//! indirect command per group.
+
+use glam::DVec3;
+
+use aerie_terrain::geodesy::GeoGrid;
+use aerie_terrain::select::{neighbour_eps, DrawItem};
+
+use crate::render::geo_instances::{GeoEye, GeoFields};
+use crate::render::gpu::{DrawIndexedIndirect, TileInstance};
+use crate::render::stats::RESOLUTIONS;
+
+/// What the instance records need from the frame: the clipmap's tile size, the grid spacing,
+/// the ellipsoid placement of a geographic or UTM grid, the eye and the skirt rule.
+pub struct InstanceFrame<'a> {
+    pub tile_quads: u32,
+    pub spacing: [f64; 2],
+    pub earth: Option<&'a GeoGrid>,
+    pub eye: DVec3,
+    pub skirt_factor: f32,
+    pub skirt_min_m: f32,
+}
+
+/// Where a node lies in its pool slot: the slot holds the ring tile at level L − r, so a node
+/// at `node_level` starts `(slot_x, slot_y)` slot texels in and steps `slot_stride` texels per
+/// vertex. Unrefined nodes (r = 0) read the clipmap: (0, 0, 1).
+pub fn slot_placement(item: &DrawItem, tile_quads: u32) -> (u32, u32, u32) {
+    let r = item.refinement;
+    if r == 0 {
+        return (0, 0, 1);
+    }
+    let q = tile_quads as i64;
+    let node = q << item.node_level;
+    let origin = [item.node_tx as i64 * node, item.node_ty as i64 * node];
+    let tile = q << item.level;
+    let slot_step = 1i64 << (item.level - r);
+    (
+        ((origin[0] - item.tx as i64 * tile) / slot_step) as u32,
+        ((origin[1] - item.ty as i64 * tile) / slot_step) as u32,
+        1u32 << (item.node_level - (item.level - r)),
+    )
+}
+
+/// Per-instance data grouped by refinement (unrefined first, then r = 1..): node origin
+/// relative to the eye (f64 → f32), sample origin, vertex step, level, pool slot and the node's
+/// place in it, skirt depth. Returns the concatenated records and each group's size.
+pub fn build_instances(
+    f: &InstanceFrame,
+    draw_list: &[(DrawItem, u32)],
+) -> (Vec<TileInstance>, [u32; RESOLUTIONS]) {
+    let q = f.tile_quads;
+    let eye = f.eye;
+    let mut groups: [Vec<TileInstance>; RESOLUTIONS] = Default::default();
+    let nodes: Vec<(u32, u32, u32, f32)> = draw_list
+        .iter()
+        .map(|(i, _)| (i.node_level, i.node_tx, i.node_ty, i.eps_m))
+        .collect();
+    let reach = neighbour_eps(&nodes);
+    let geo = f.earth.map(|g| GeoEye::new(g, eye));
+    for (&(item, slot), &reach_m) in draw_list.iter().zip(&reach) {
+        let node = (q as i64) << item.node_level;
+        let origin = [item.node_tx as i64 * node, item.node_ty as i64 * node];
+        let (slot_x, slot_y, slot_stride) = slot_placement(&item, q);
+        let g = geo.map_or(GeoFields::default(), |e| {
+            e.node_fields(origin, 1 << item.node_level, q)
+        });
+        groups[item.refinement as usize].push(TileInstance {
+            origin_rel: [
+                (origin[0] as f64 * f.spacing[0] - eye.x) as f32,
+                (origin[1] as f64 * f.spacing[1] - eye.y) as f32,
+            ],
+            origin_sample: [origin[0] as i32, origin[1] as i32],
+            step: 1 << item.node_level,
+            level: item.level,
+            refinement: item.refinement,
+            slot,
+            // ε + max(ε, neighbours' ε) at the default factor 2 (see neighbour_eps).
+            skirt_m: 0.5 * f.skirt_factor * (item.eps_m + reach_m) + f.skirt_min_m,
+            slot_x,
+            slot_y,
+            slot_stride,
+            geo_origin: g.geo_origin,
+            geo_axis_r: g.geo_axis_r,
+            geo_axis_t: g.geo_axis_t,
+            geo_axis_z: g.geo_axis_z,
+            geo_radius: g.geo_radius,
+            geo_s: g.geo_s,
+            geo_n: g.geo_n,
+        });
+    }
+    let sizes = groups.each_ref().map(|g| g.len() as u32);
+    (groups.concat(), sizes)
+}
+
+/// One indexed indirect command per refinement group, each starting where the previous ended,
+/// and the triangles they draw. A tile without indices draws nothing.
+pub fn indirect_draws(
+    group_sizes: &[u32; RESOLUTIONS],
+    (first_index, index_count): (u32, u32),
+) -> ([DrawIndexedIndirect; RESOLUTIONS], u64) {
+    let mut draws = [DrawIndexedIndirect::default(); RESOLUTIONS];
+    let mut first_instance = 0u32;
+    let mut triangles = 0u64;
+    for (draw, &n) in draws.iter_mut().zip(group_sizes) {
+        *draw = DrawIndexedIndirect {
+            index_count,
+            instance_count: if index_count == 0 { 0 } else { n },
+            first_index,
+            vertex_offset: 0,
+            first_instance,
+        };
+        first_instance += n;
+        triangles += n as u64 * (index_count as u64 / 3);
+    }
+    (draws, triangles)
+}

@@ -1,0 +1,212 @@
+//! The tessellation baseline's pipeline (document 001): vertex, tessellation control and
+//! evaluation, and the terrain's own fragment shader; patch lists of three control points; its
+//! own set layout (frame uniforms, patch records, level-0 heights). The states other than the
+//! stages and the topology are those of `graphics_pipeline.rs` (two-sided fill, reversed-Z
+//! GREATER with writes, dynamic viewport and scissor, dynamic rendering into the offscreen
+//! target's formats). Made in [`TessPipeline::new`], destroyed in reverse by
+//! [`TessPipeline::destroy`].
+
+use ash::vk;
+
+use super::conv::{COLOUR_FORMAT, DEPTH_FORMAT};
+use super::device::Device;
+use super::error::{VkError, VkResultExt};
+use super::graphics_pipeline::{map_depth_use, DepthUse};
+use super::pipeline::{BINDING_CLASSES, BINDING_IMAGERY, BINDING_NORMAL_MAPS};
+use super::shader::shader_module;
+
+const TESS_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/terrain_tess.vert.spv"));
+const TESS_TESC: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/terrain_tess.tesc.spv"));
+const TESS_TESE: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/terrain_tess.tese.spv"));
+const TERRAIN_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/terrain.frag.spv"));
+
+/// Bindings of the tessellation set (see shaders/terrain_tess.tese).
+pub const TESS_BINDING_FRAME: u32 = 0;
+pub const TESS_BINDING_PATCHES: u32 = 1;
+pub const TESS_BINDING_HEIGHTS: u32 = 2;
+
+pub struct TessPipeline {
+    pub set_layout: vk::DescriptorSetLayout,
+    pub layout: vk::PipelineLayout,
+    pub raw: vk::Pipeline,
+}
+
+impl TessPipeline {
+    /// Fails with a named reason on a device without `tessellationShader`.
+    pub fn new(device: &Device) -> Result<Self, VkError> {
+        if !device.tessellation {
+            return Err(VkError::Other(format!(
+                "--lod tess: {} does not offer tessellationShader",
+                device.name
+            )));
+        }
+        let mut this = Self {
+            set_layout: vk::DescriptorSetLayout::null(),
+            layout: vk::PipelineLayout::null(),
+            raw: vk::Pipeline::null(),
+        };
+        if let Err(e) = this.create(device) {
+            this.destroy(device);
+            return Err(e);
+        }
+        Ok(this)
+    }
+
+    fn create(&mut self, device: &Device) -> Result<(), VkError> {
+        use vk::ShaderStageFlags as S;
+        let binding = |b: u32, ty: vk::DescriptorType, stages: S| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(b)
+                .descriptor_type(ty)
+                .descriptor_count(1)
+                .stage_flags(stages)
+        };
+        let bindings = [
+            binding(
+                TESS_BINDING_FRAME,
+                vk::DescriptorType::UNIFORM_BUFFER,
+                S::TESSELLATION_EVALUATION | S::FRAGMENT,
+            ),
+            binding(
+                TESS_BINDING_PATCHES,
+                vk::DescriptorType::STORAGE_BUFFER,
+                S::VERTEX | S::TESSELLATION_CONTROL | S::TESSELLATION_EVALUATION,
+            ),
+            binding(
+                TESS_BINDING_HEIGHTS,
+                vk::DescriptorType::STORAGE_BUFFER,
+                S::TESSELLATION_EVALUATION,
+            ),
+            // terrain.frag's textures, at the terrain set's numbers.
+            binding(
+                BINDING_NORMAL_MAPS,
+                vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                S::FRAGMENT,
+            ),
+            binding(
+                BINDING_IMAGERY,
+                vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                S::FRAGMENT,
+            ),
+            binding(
+                BINDING_CLASSES,
+                vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                S::FRAGMENT,
+            ),
+        ];
+        let set_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+        // SAFETY: the device is live; `bindings` outlives the call and has distinct numbers.
+        self.set_layout = unsafe { device.raw.create_descriptor_set_layout(&set_info, None) }
+            .call("vkCreateDescriptorSetLayout")?;
+        let set_layouts = [self.set_layout];
+        let layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        // SAFETY: the device is live; the set layout was just created on it.
+        self.layout = unsafe { device.raw.create_pipeline_layout(&layout_info, None) }
+            .call("vkCreatePipelineLayout")?;
+        let mut modules = Vec::new();
+        let made = [TESS_VERT, TESS_TESC, TESS_TESE, TERRAIN_FRAG]
+            .iter()
+            .try_for_each(|spv| {
+                modules.push(shader_module(device, spv)?);
+                Ok::<(), VkError>(())
+            });
+        let result = made.and_then(|()| create(device, self.layout, &modules));
+        // A pipeline does not need its modules after creation.
+        for m in modules {
+            // SAFETY: each module is live and ours, and no creation is using it any more.
+            unsafe { device.raw.destroy_shader_module(m, None) };
+        }
+        self.raw = result?;
+        Ok(())
+    }
+
+    /// Pipeline, pipeline layout, set layout (reverse of creation). Idempotent; commands using
+    /// them must have completed.
+    pub fn destroy(&mut self, device: &Device) {
+        // Each handle is null or was created by `new` on this device and is destroyed once (all
+        // are nulled below); no command using them is pending (the contract above).
+        // SAFETY: live-or-null handles of this device, destroyed once, unused by the GPU.
+        unsafe {
+            device.raw.destroy_pipeline(self.raw, None);
+            device.raw.destroy_pipeline_layout(self.layout, None);
+            device
+                .raw
+                .destroy_descriptor_set_layout(self.set_layout, None);
+        }
+        *self = Self {
+            set_layout: vk::DescriptorSetLayout::null(),
+            layout: vk::PipelineLayout::null(),
+            raw: vk::Pipeline::null(),
+        };
+    }
+}
+
+fn create(
+    device: &Device,
+    layout: vk::PipelineLayout,
+    modules: &[vk::ShaderModule],
+) -> Result<vk::Pipeline, VkError> {
+    let stage = |s: vk::ShaderStageFlags, m: vk::ShaderModule| {
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(s)
+            .module(m)
+            .name(c"main")
+    };
+    let stages = [
+        stage(vk::ShaderStageFlags::VERTEX, modules[0]),
+        stage(vk::ShaderStageFlags::TESSELLATION_CONTROL, modules[1]),
+        stage(vk::ShaderStageFlags::TESSELLATION_EVALUATION, modules[2]),
+        stage(vk::ShaderStageFlags::FRAGMENT, modules[3]),
+    ];
+    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
+    let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+        .topology(vk::PrimitiveTopology::PATCH_LIST);
+    let tessellation = vk::PipelineTessellationStateCreateInfo::default().patch_control_points(3);
+    let viewport = vk::PipelineViewportStateCreateInfo::default()
+        .viewport_count(1)
+        .scissor_count(1);
+    let raster = vk::PipelineRasterizationStateCreateInfo::default()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(vk::CullModeFlags::NONE)
+        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+        .line_width(1.0);
+    let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+        .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let depth = map_depth_use(DepthUse::NearestWrites);
+    let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
+        .color_write_mask(vk::ColorComponentFlags::RGBA)];
+    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+    let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+    let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+    let colour_formats = [COLOUR_FORMAT];
+    let mut rendering = vk::PipelineRenderingCreateInfo::default()
+        .color_attachment_formats(&colour_formats)
+        .depth_attachment_format(DEPTH_FORMAT);
+    let info = vk::GraphicsPipelineCreateInfo::default()
+        .stages(&stages)
+        .vertex_input_state(&vertex_input)
+        .input_assembly_state(&input_assembly)
+        .tessellation_state(&tessellation)
+        .viewport_state(&viewport)
+        .rasterization_state(&raster)
+        .multisample_state(&multisample)
+        .depth_stencil_state(&depth)
+        .color_blend_state(&blend)
+        .dynamic_state(&dynamic)
+        .layout(layout)
+        .push_next(&mut rendering);
+    // The modules and the layout are live on this device; every state struct, array and the
+    // chained rendering info outlive the call; the formats match the offscreen target's; the
+    // device has tessellationShader enabled (checked in `new`).
+    // SAFETY: the device is live.
+    unsafe {
+        device
+            .raw
+            .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+    }
+    .map(|p| p[0])
+    .map_err(|(_, result)| VkError::Call {
+        call: "vkCreateGraphicsPipelines",
+        result,
+    })
+}

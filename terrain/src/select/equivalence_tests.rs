@@ -1,0 +1,213 @@
+//! The fast selection (cached node values kept across frames, reused vectors, the fused corner
+//! pass) selects exactly what the reference evaluation does, on random cameras over flat and
+//! geographic data, one and two channels, with one `Selection` kept across all of them (so the
+//! cache also meets dataset changes).
+
+use glam::DVec3;
+
+use super::quadtree::reference::with_reference;
+use super::*;
+use crate::bake::{bake, BakeParams, ErrorBake};
+use crate::camera::{Attitude, Camera, Frustum};
+use crate::clipmap::{place_levels, ClipmapDesc};
+use crate::dataset::Dataset;
+use crate::gen::{generate, DemKind, GenParams};
+use crate::geodesy::{GeoGrid, Geodetic};
+use crate::GeoReference;
+
+const N: usize = 513;
+const W: u32 = 256;
+const H: u32 = 144;
+
+/// splitmix64, so failures reproduce.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+}
+
+struct Scene {
+    ds: Dataset,
+    bake: ErrorBake,
+    clip: ClipmapDesc,
+    earth: Option<GeoGrid>,
+}
+
+/// A ridged terrain on the plane, or its samples on a 3″ grid at 60°N (nodes up to 0.4° wide,
+/// so the coarse ones take the lattice boxes).
+fn scene(geographic: bool) -> Scene {
+    let mut hf = generate(&GenParams {
+        size: N,
+        spacing: 30.0,
+        kind: DemKind::Ridged,
+        seed: 15,
+    });
+    let mut earth = None;
+    if geographic {
+        let d = 3.0 / 3600.0;
+        let (sx, sy) = crate::load::geographic_spacing_m(60.2, d, d);
+        let geo = GeoReference::Geographic {
+            south_lat_deg: 60.0,
+            west_lon_deg: 10.0,
+            dlat_deg: d,
+            dlon_deg: d,
+        };
+        earth = GeoGrid::of(Some(&geo), sx, sy);
+        (hf.spacing_x, hf.spacing_y, hf.geo) = (sx, sy, Some(geo));
+    }
+    let ds = Dataset::from_heightfield(hf, "equivalence".into());
+    let bake = bake(
+        &ds,
+        BakeParams {
+            tile_size: 17,
+            levels: 0,
+        },
+        &|_, _| {},
+    );
+    let clip = ClipmapDesc {
+        tile_quads: 16,
+        patch_tiles: 8,
+        margin_tiles: 2,
+        width: N as u32,
+        height: N as u32,
+    };
+    Scene {
+        ds,
+        bake,
+        clip,
+        earth,
+    }
+}
+
+fn random_camera(rng: &mut Rng, s: &Scene) -> Camera {
+    let hf = &s.ds.hf;
+    let (ex, ey) = hf.extent_m();
+    let (x, y) = (
+        rng.range(-0.2 * ex, 1.2 * ex),
+        rng.range(-0.2 * ey, 1.2 * ey),
+    );
+    let agl = if rng.next() < 0.4 {
+        rng.range(2.0, 300.0)
+    } else {
+        rng.range(300.0, 9000.0)
+    };
+    let alt = hf.height_at_m(x, y) + agl;
+    let attitude = Attitude::from_degrees(
+        rng.range(0.0, 360.0),
+        rng.range(-89.0, 20.0),
+        rng.range(-60.0, 60.0),
+    );
+    let frustum = Frustum::symmetric(rng.range(30.0, 120.0).to_radians(), W, H);
+    match &s.earth {
+        Some(g) => {
+            let (lat, lon) = g.lat_lon_of_grid(glam::DVec2::new(x, y));
+            Camera::new(
+                g.world_of_geodetic(Geodetic::new(lat, lon, alt)),
+                attitude.in_frame(g.local_enu_axes(lat, lon)),
+                frustum,
+            )
+        }
+        None => Camera::new(DVec3::new(x, y, alt), attitude, frustum),
+    }
+}
+
+fn select(s: &Scene, cams: &[Camera], params: &SelectParams, out: &mut Selection) {
+    let eye = match &s.earth {
+        Some(g) => g.grid_of_world(cams[0].position),
+        None => cams[0].position,
+    };
+    let viewer = [eye.x / s.ds.hf.spacing_x, eye.y / s.ds.hf.spacing_y];
+    let placements = place_levels(&s.clip, viewer);
+    let views: Vec<View> = cams
+        .iter()
+        .map(|camera| View {
+            camera,
+            viewport: (W, H),
+            tau_px: params.tau_px,
+        })
+        .collect();
+    select_tiles_multi(&s.bake, &s.clip, &placements, &views, params, out);
+}
+
+fn assert_same(fast: &Selection, reference: &Selection, what: &str) {
+    assert_eq!(fast.items, reference.items, "{what}: draw items");
+    assert_eq!(fast.levels, reference.levels, "{what}: level statistics");
+    assert_eq!(fast.unbounded, reference.unbounded, "{what}: unbounded");
+    assert_eq!(fast.finest_level, reference.finest_level, "{what}: finest");
+    assert_eq!(fast.stream_late, reference.stream_late, "{what}: late");
+    assert_eq!(fast.wants, reference.wants, "{what}: wants");
+}
+
+#[test]
+fn the_fast_selection_equals_the_reference_on_random_cameras_flat_and_geographic() {
+    let scenes = [scene(false), scene(true)];
+    let modes = [
+        ("bounded", true, LodMode::Bounded),
+        ("bounded rings", false, LodMode::Bounded),
+        ("clipmap", false, LodMode::Clipmap),
+    ];
+    let mut rng = Rng(0x15_04);
+    // One selection for everything: its cache must follow the dataset it is given.
+    let mut fast = Selection::default();
+    let mut drawn = 0;
+    for k in 0..240 {
+        let s = &scenes[k % 2];
+        let (name, coarsen, mode) = modes[(k / 2) % modes.len()];
+        let params = SelectParams {
+            mode,
+            coarsen,
+            tau_px: [0.5, 1.0, 3.0][k % 3],
+            max_refinement: 5,
+            earth: s.earth,
+            ..SelectParams::default()
+        };
+        let channels = 1 + (k / 6) % 2;
+        let cams: Vec<Camera> = (0..channels).map(|_| random_camera(&mut rng, s)).collect();
+        select(s, &cams, &params, &mut fast);
+        let mut reference = Selection::default();
+        with_reference(|| select(s, &cams, &params, &mut reference));
+        let what = format!(
+            "camera {k} ({name}, geographic {}, {channels} views)",
+            k % 2
+        );
+        assert_same(&fast, &reference, &what);
+        assert!(
+            reference.node_cache.is_empty(),
+            "{what}: reference used the cache"
+        );
+        drawn += fast.items.len();
+    }
+    assert!(drawn > 1000, "the cameras saw too little: {drawn} items");
+    assert!(!fast.node_cache.is_empty());
+}
+
+/// Copying a selection copies what was selected, never the node cache: a clone starts with
+/// none and `clone_from` keeps the target's own.
+#[test]
+fn a_copied_selection_keeps_its_own_node_cache() {
+    let s = scene(false);
+    let mut rng = Rng(7);
+    let params = SelectParams::default();
+    let mut warm = Selection::default();
+    let mut target = Selection::default();
+    for _ in 0..4 {
+        select(&s, &[random_camera(&mut rng, &s)], &params, &mut warm);
+        select(&s, &[random_camera(&mut rng, &s)], &params, &mut target);
+    }
+    assert!(!warm.node_cache.is_empty() && !target.node_cache.is_empty());
+    let kept = target.node_cache.len();
+    let copy = warm.clone();
+    assert_same(&copy, &warm, "clone");
+    assert!(copy.node_cache.is_empty());
+    target.clone_from(&warm);
+    assert_same(&target, &warm, "clone_from");
+    assert_eq!(target.node_cache.len(), kept);
+}

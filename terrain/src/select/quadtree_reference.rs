@@ -1,0 +1,71 @@
+//! The selection's reference evaluation (tests only): every node's ε and box computed afresh,
+//! one view at a time with the bound's plain functions — what the fast path (cached fixed
+//! values, one pass over the corners) must reproduce exactly.
+
+use std::cell::Cell;
+
+use super::super::bound::{
+    frustum_spread_gain, min_depth_of, outside_of, projected_error_px, spread_gain_of,
+    vertical_gain_of,
+};
+use super::{Frame, NodeEval};
+
+thread_local! {
+    static REFERENCE: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Whether selections on this thread take the reference path now.
+pub(super) fn active() -> bool {
+    REFERENCE.with(|r| r.get())
+}
+
+/// Runs `f` with the selections on this thread on the reference path.
+pub(crate) fn with_reference<T>(f: impl FnOnce() -> T) -> T {
+    REFERENCE.with(|r| r.set(true));
+    let t = f();
+    REFERENCE.with(|r| r.set(false));
+    t
+}
+
+impl Frame<'_> {
+    /// [`Frame::evaluate`] without the cache and without the fused corner pass.
+    pub(super) fn evaluate_reference(
+        &self,
+        level: u32,
+        tx: u32,
+        ty: u32,
+        cull: bool,
+    ) -> Option<NodeEval> {
+        let node = self.compute_fixed(level, tx, ty);
+        let (eps, geo, slack) = (node.eps, node.geo, node.slack);
+        let mut seen = false;
+        let (mut rho_px, mut rho_norm) = (0.0f64, 0.0f64);
+        for v in &self.views {
+            let aabb = match &geo {
+                Some(n) => n.aabb,
+                None => self.aabb(level, &node, v.camera.position),
+            };
+            let corners = aabb.corners().map(|c| v.to_view.transform_point3(c));
+            let f = &v.camera.frustum;
+            if cull && outside_of(&corners, f, v.camera.near) {
+                continue;
+            }
+            seen = true;
+            let z_min = min_depth_of(&corners, v.camera.near);
+            let c = match (&geo, cull) {
+                (Some(n), true) => spread_gain_of(&corners, f, v.rotation * n.up, slack),
+                (Some(n), false) => frustum_spread_gain(f, v.rotation * n.up, slack),
+                (None, true) => vertical_gain_of(&corners, f, v.up),
+                (None, false) => v.vertical_gain,
+            };
+            let rho = projected_error_px(eps, z_min, v.focal, c);
+            rho_px = rho_px.max(rho);
+            rho_norm = rho_norm.max(rho / v.tau);
+        }
+        seen.then_some(NodeEval {
+            eps,
+            rho_px,
+            rho_norm,
+        })
+    }
+}

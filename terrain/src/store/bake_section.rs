@@ -1,0 +1,140 @@
+//! The bake section (format version 2): the measured part of the store's error bake — ε per
+//! tile of every level ≥ 1 and level 0's min/max per tile — in one zstd frame between the
+//! pages and the index, located by the trailer, so a reader has the whole [`ErrorBake`] the
+//! selection needs after reading ≈ 1 % of the file, without touching a page.
+//!
+//! Payload before compression: the arrays ε(level 1), …, ε(level L−1), min0, max0, each as
+//! f32 bits XOR the previous value of the same array (0 before the first), split into 4
+//! byte planes (neighbouring tiles have close values, so the high planes are nearly
+//! constant: zstd compresses them to almost nothing). The lengths follow from the layout.
+//! Pure: tables in, bytes out, and back.
+
+use crate::bake::{BakeParams, ErrorBake, MeasuredBake};
+
+use super::format::{Layout, StoreHeader};
+
+/// Tiles of level `l`.
+fn tiles(layout: &Layout, l: usize) -> usize {
+    let g = layout.levels[l];
+    g.tiles_x as usize * g.tiles_y as usize
+}
+
+/// Bytes of the payload before compression.
+pub fn raw_len(layout: &Layout) -> usize {
+    let eps: usize = (1..layout.levels.len()).map(|l| tiles(layout, l)).sum();
+    4 * (eps + 2 * tiles(layout, 0))
+}
+
+fn put_planes(values: &[f32], out: &mut Vec<u8>) {
+    let n = values.len();
+    let base = out.len();
+    out.resize(base + 4 * n, 0);
+    let mut prev = 0u32;
+    for (k, v) in values.iter().enumerate() {
+        let x = (v.to_bits() ^ prev).to_le_bytes();
+        prev = v.to_bits();
+        for (b, &byte) in x.iter().enumerate() {
+            out[base + b * n + k] = byte;
+        }
+    }
+}
+
+fn get_planes(b: &[u8]) -> Vec<f32> {
+    let n = b.len() / 4;
+    let mut prev = 0u32;
+    (0..n)
+        .map(|k| {
+            let x = u32::from_le_bytes([b[k], b[n + k], b[2 * n + k], b[3 * n + k]]) ^ prev;
+            prev = x;
+            f32::from_bits(x)
+        })
+        .collect()
+}
+
+/// The payload of `bake` (made for `layout`), before compression.
+pub fn encode(bake: &ErrorBake) -> Vec<u8> {
+    let mut out = Vec::new();
+    for t in bake.levels.iter().skip(1) {
+        put_planes(&t.eps, &mut out);
+    }
+    put_planes(&bake.levels[0].min, &mut out);
+    put_planes(&bake.levels[0].max, &mut out);
+    out
+}
+
+/// The bake back from its decompressed payload; `Err` says what disagrees with the header's
+/// layout or is not a bake number (ε negative or not finite, min > max), naming the tile.
+pub fn decode(b: &[u8], h: &StoreHeader, layout: &Layout) -> Result<ErrorBake, String> {
+    let want = raw_len(layout);
+    if b.len() != want {
+        return Err(format!(
+            "decompressed to {} bytes, the layout says {want}",
+            b.len()
+        ));
+    }
+    let mut at = 0;
+    let mut take = |n: usize| {
+        let v = get_planes(&b[at..at + 4 * n]);
+        at += 4 * n;
+        v
+    };
+    let mut eps = vec![Vec::new()];
+    for l in 1..layout.levels.len() {
+        let e = take(tiles(layout, l));
+        if let Some(k) = e.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+            let tx = layout.levels[l].tiles_x as usize;
+            return Err(format!(
+                "level {l} tile ({}, {}): ε {} is not a finite number ≥ 0",
+                k % tx,
+                k / tx,
+                e[k]
+            ));
+        }
+        eps.push(e);
+    }
+    let n0 = tiles(layout, 0);
+    let (min0, max0) = (take(n0), take(n0));
+    if let Some(k) =
+        (0..n0).find(|&k| !(min0[k].is_finite() && max0[k].is_finite() && min0[k] <= max0[k]))
+    {
+        let tx = layout.levels[0].tiles_x as usize;
+        return Err(format!(
+            "level 0 tile ({}, {}): min {} and max {} are not finite with min ≤ max",
+            k % tx,
+            k / tx,
+            min0[k],
+            max0[k]
+        ));
+    }
+    Ok(ErrorBake::from_measured(MeasuredBake {
+        params: BakeParams {
+            tile_size: h.tile_size,
+            levels: h.levels,
+        },
+        width: h.width,
+        height: h.height,
+        valid_width: h.valid_width,
+        valid_height: h.valid_height,
+        spacing_x: h.spacing_x,
+        spacing_y: h.spacing_y,
+        source_checksum: h.source_checksum,
+        min0,
+        max0,
+        eps,
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn planes_round_trip_bit_for_bit() {
+        let v = [0.0f32, -0.0, 1.5, 1.5, f32::MAX, -3.25e-7, 1234.5];
+        let mut b = Vec::new();
+        put_planes(&v, &mut b);
+        assert_eq!(b.len(), 4 * v.len());
+        let back = get_planes(&b);
+        assert!(v.iter().zip(&back).all(|(a, b)| a.to_bits() == b.to_bits()));
+    }
+}

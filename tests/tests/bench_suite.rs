@@ -1,0 +1,226 @@
+//! `aerie bench --suite`: a tiny suite (one generated dataset, one short flight, two settings
+//! per mode, 160×90) runs end to end on lavapipe; its combined report has the ratio table, a
+//! row per baseline × metric, a curve point per configuration, a folder per flight; and every
+//! ratio in it is what the two curves in `curves.csv` give — recomputed here independently
+//! (efficient points, log–log interpolation, largest ratio over the common errors).
+
+use std::collections::HashMap;
+use std::path::Path;
+
+const SUITE: &str = r#"
+[run]
+size = "160x90"
+fov = 90.0
+frames = 3
+warmup = 1
+fps = 10.0
+modes = ["bounded", "clipmap", "distance", "cdlod"]
+tau = [1.0, 4.0]
+clipmap_n = [129, 257]
+distance_scale = [0.5, 2.0]
+cdlod_range = [2.0, 8.0]
+
+[[dataset]]
+name = "mixed"
+generate = { kind = "mixed", size = 513, spacing = 30.0, seed = 3 }
+
+[[flight]]
+name = "follow"
+kind = "follow"
+agl = 150.0
+speed = 80.0
+pitch = -10.0
+"#;
+
+fn aerie(args: &[&str]) -> Result<(), aerie::app::failure::Failure> {
+    use clap::Parser as _;
+    let mut v = vec!["aerie"];
+    v.extend_from_slice(args);
+    let cli = aerie::app::cli::Cli::try_parse_from(v).expect("arguments parse");
+    aerie::app::cli::run(cli)
+}
+
+/// CSV text → rows of column name → cell.
+fn table(path: &Path) -> Vec<HashMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let head: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines
+        .map(|l| {
+            let cells: Vec<&str> = l.split(',').collect();
+            assert_eq!(cells.len(), head.len(), "{}: {l}", path.display());
+            head.iter()
+                .cloned()
+                .zip(cells.iter().map(|c| c.to_string()))
+                .collect()
+        })
+        .collect()
+}
+
+/// The efficient points of (error, cost), error ascending.
+fn efficient(mut p: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+    p.retain(|&(e, c)| e.is_finite() && c.is_finite() && e > 0.0 && c > 0.0);
+    p.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    for q in p {
+        if out.last().is_none_or(|l| q.1 < l.1) {
+            out.push(q);
+        }
+    }
+    out
+}
+
+/// Cost at `e` by log–log interpolation; None outside the points.
+fn read(c: &[(f64, f64)], e: f64) -> Option<f64> {
+    if c.is_empty() || e < c[0].0 || e > c[c.len() - 1].0 {
+        return None;
+    }
+    for w in c.windows(2) {
+        if e >= w[0].0 && e <= w[1].0 {
+            let t = (e.ln() - w[0].0.ln()) / (w[1].0.ln() - w[0].0.ln());
+            return Some((w[0].1.ln() + t * (w[1].1.ln() - w[0].1.ln())).exp());
+        }
+    }
+    c.iter().find(|p| p.0 == e).map(|p| p.1)
+}
+
+#[test]
+fn a_tiny_suite_reports_ratios_read_off_its_curves() {
+    let dir = tempfile::tempdir().unwrap();
+    let suite = dir.path().join("tiny.toml");
+    std::fs::write(&suite, SUITE).unwrap();
+    let out = dir.path().join("out");
+    aerie(&[
+        "bench",
+        "--suite",
+        suite.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .map_err(|f| f.message)
+    .unwrap();
+
+    // One folder per flight with its own bench report, and the flight's waypoints.
+    for f in [
+        "summary.md",
+        "summary.csv",
+        "triangles_vs_error.png",
+        "time_vs_error.png",
+    ] {
+        assert!(out.join("mixed-follow").join(f).is_file(), "{f}");
+    }
+    let waypoints = std::fs::read_to_string(out.join("flights/mixed-follow.csv")).unwrap();
+    assert_eq!(waypoints.lines().filter(|l| !l.starts_with('#')).count(), 5);
+
+    // A curve point per configuration: 2 per mode.
+    let curves = table(&out.join("curves.csv"));
+    assert_eq!(curves.len(), 8);
+    for mode in ["bounded", "clipmap", "distance", "cdlod"] {
+        assert_eq!(
+            curves.iter().filter(|r| r["mode"] == mode).count(),
+            2,
+            "{mode}"
+        );
+    }
+    let points = |mode: &str, err: &str, cost: &str| -> Vec<(f64, f64)> {
+        curves
+            .iter()
+            .filter(|r| r["mode"] == mode)
+            .map(|r| (r[err].parse().unwrap_or(f64::NAN), r[cost].parse().unwrap()))
+            .collect()
+    };
+
+    // A row per baseline × metric, each the interpolation of its two curves.
+    let ratios = table(&out.join("ratios.csv"));
+    assert_eq!(ratios.len(), 9);
+    let mut in_range = 0;
+    for r in &ratios {
+        let (err, cost) = match r["metric"].as_str() {
+            "triangles_at_max_error" => ("max_error_px", "triangles_median"),
+            "triangles_at_p99_error" => ("p99_error_px", "triangles_median"),
+            "frame_ms_at_max_error" => ("max_error_px", "frame_ms_median"),
+            m => panic!("unknown metric {m}"),
+        };
+        let ours = efficient(points("bounded", err, cost));
+        let base = efficient(points(&r["baseline"], err, cost));
+        let (lo, hi) = (
+            ours[0].0.max(base[0].0),
+            ours[ours.len() - 1].0.min(base[base.len() - 1].0),
+        );
+        let expect = ours
+            .iter()
+            .chain(&base)
+            .filter(|p| p.0 >= lo && p.0 <= hi)
+            .filter_map(|p| Some((read(&ours, p.0)? / read(&base, p.0)?, p.0)))
+            .max_by(|a, b| a.0.partial_cmp(&b.0).unwrap());
+        match expect {
+            Some((ratio, at)) => {
+                let got: f64 = r["ratio"].parse().expect("a ratio in range");
+                let got_at: f64 = r["at_error_px"].parse().unwrap();
+                assert!(
+                    (got - ratio).abs() <= 1e-9 * ratio && got_at == at,
+                    "{r:?}: expected {ratio} at {at}"
+                );
+                in_range += 1;
+            }
+            None => {
+                assert!(r["ratio"].is_empty(), "{r:?}: no common error");
+                assert!(r["note"].contains("out of range"), "{r:?}");
+            }
+        }
+    }
+
+    // The table: a column per baseline × metric, the flight's row and the geometric means.
+    let md = std::fs::read_to_string(out.join("suite.md")).unwrap();
+    for col in ["clipmap tri @max", "distance tri @p99", "cdlod time @max"] {
+        assert!(md.contains(col), "{col}");
+    }
+    let row = md
+        .lines()
+        .find(|l| l.starts_with("| mixed-follow |"))
+        .expect("the flight's row");
+    assert_eq!(row.matches('|').count(), 11, "{row}");
+    assert_eq!(row.matches('×').count(), in_range, "{row}");
+    assert!(md.contains("| **geometric mean** |"));
+    assert!(md.contains("frames over τ + 0.5 px"));
+
+    // A used folder is refused without --overwrite, naming it.
+    let e = aerie(&[
+        "bench",
+        "--suite",
+        suite.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .unwrap_err();
+    assert_eq!(e.code, 2);
+    assert!(
+        e.message.contains("--out") && e.message.contains("not empty"),
+        "{}",
+        e.message
+    );
+}
+
+/// A bad suite is refused before anything runs, naming the file, line and key.
+#[test]
+fn a_bad_suite_names_its_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let suite = dir.path().join("bad.toml");
+    std::fs::write(&suite, SUITE.replace("agl = 150.0", "agl = -150.0")).unwrap();
+    let out = dir.path().join("out");
+    let e = aerie(&[
+        "bench",
+        "--suite",
+        suite.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .unwrap_err();
+    assert_eq!(e.code, 2);
+    assert!(
+        e.message.contains("bad.toml:21:7: flight[0].agl"),
+        "{}",
+        e.message
+    );
+    assert!(!out.exists(), "nothing written");
+}
