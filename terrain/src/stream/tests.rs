@@ -175,10 +175,52 @@ impl GateFs {
     fn release(&self) {
         self.allow(u64::MAX);
     }
+    /// Waits until `n` workers are stuck inside a read (panics after `WAIT`: a test must fail,
+    /// never hang).
     fn wait_blocked(&self, n: usize) {
+        let start = std::time::Instant::now();
         while self.blocked.load(Ordering::SeqCst) < n {
-            std::thread::yield_now();
+            assert!(
+                start.elapsed() < WAIT,
+                "{} of {n} workers blocked after {WAIT:?}",
+                self.blocked.load(Ordering::SeqCst)
+            );
+            std::thread::sleep(Duration::from_millis(1));
         }
+    }
+    /// Waits until every permit is spent and `n` workers wait at the gate for more: each has
+    /// finished (and cached) the page it read before, so counts read now are settled. Both
+    /// numbers are read under the gate's lock, where the workers change them.
+    fn wait_at_rest(&self, n: usize) {
+        let start = std::time::Instant::now();
+        loop {
+            let (p, b) = {
+                let g = self.permits.0.lock().unwrap();
+                (*g, self.blocked.load(Ordering::SeqCst))
+            };
+            if p == 0 && b == n {
+                return;
+            }
+            assert!(
+                start.elapsed() < WAIT,
+                "{p} permits left and {b} of {n} workers at the gate after {WAIT:?}"
+            );
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+    /// A guard that opens the gate for good when dropped. Declared after the `StreamedStore`,
+    /// it is dropped first, also while a failed assertion unwinds: the store's drop joins its
+    /// workers, and a worker held at the gate would otherwise make that join wait forever.
+    fn opened_on_drop(&self) -> OpenOnDrop {
+        OpenOnDrop(self.clone())
+    }
+}
+
+struct OpenOnDrop(GateFs);
+
+impl Drop for OpenOnDrop {
+    fn drop(&mut self) {
+        self.0.release();
     }
 }
 
@@ -240,6 +282,7 @@ fn nothing_is_answered_before_its_page_arrives_and_nothing_waits_for_it() {
     let mem = InMemoryTerrain::new(ds);
     let gate = GateFs::default();
     let (s, _) = StreamedStore::open(&path, params(1 << 20, Arc::new(gate.clone()))).unwrap();
+    let _open = gate.opened_on_drop();
     // The pinned levels are asked for at open: both workers are now stuck inside a read.
     gate.wait_blocked(2);
     assert_eq!(s.loader_stats().in_flight, 2);
@@ -603,6 +646,7 @@ fn what_the_renderer_requests_comes_before_the_pins_still_missing() {
     let gate = GateFs::default();
     // 64 pages of budget pin levels 2..5 (11 pages); level 0 is not pinned.
     let (s, _) = StreamedStore::open(&path, params(64 * full, Arc::new(gate.clone()))).unwrap();
+    let _open = gate.opened_on_drop();
     let pinned = s.loader_stats().pinned_pages;
     assert_eq!((s.pinned_levels(), pinned), (2..5, 11));
     gate.wait_blocked(2);
@@ -620,6 +664,9 @@ fn what_the_renderer_requests_comes_before_the_pins_still_missing() {
     // went first, the wished ones could not all arrive.
     gate.allow(2 + 4);
     s.wait_resident(&[r], WAIT).unwrap();
+    // Six permits spent and both workers back at the gate, each on a pinned page now: every
+    // page read so far is in the cache, so the count below cannot race a worker still decoding.
+    gate.wait_at_rest(2);
     let ls = s.loader_stats();
     assert_eq!(ls.pinned_missing, pinned - 2, "{ls:?}");
     gate.release();
