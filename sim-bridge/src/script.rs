@@ -6,6 +6,13 @@
 //! (local ENU metres, degrees); blank lines and `#` comments are ignored; times strictly
 //! increase. Between waypoints everything is linear in time; the heading turns the shorter way
 //! round. Before the first and after the last waypoint the pose is held (zero velocity).
+//!
+//! A file whose first line (after blank lines and comments) is `geo` holds geodetic waypoints
+//! instead: `t_s,lat_deg,lon_deg,alt_m,heading_deg,pitch_deg,roll_deg` (WGS84 degrees, metres
+//! in the data's vertical datum; heading from true north at the aircraft, pitch and roll
+//! against its own horizon). Latitude and altitude are linear in time, longitude too along the
+//! shorter way round (a path may cross ±180°); the position of a sample is then
+//! `[lat, lon, alt]` with lon in [−180, 180), and its velocity in deg/s, deg/s, m/s.
 
 /// One sample of a scripted flight: plain f64 arrays in local ENU metres and degrees.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,8 +30,30 @@ pub struct ScriptSample {
 /// Timed waypoints, linearly interpolated.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Waypoints {
+    /// `[t, x|lat, y|lon, z|alt, heading, pitch, roll]`; geodetic longitudes unwrapped (each
+    /// within 180° of the one before) so that interpolation takes the shorter way.
     points: Vec<[f64; 7]>,
+    frame: WaypointFrame,
 }
+
+/// What a waypoint file's positions are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WaypointFrame {
+    /// Local ENU metres `x, y, z`.
+    Local,
+    /// WGS84 `lat, lon` (degrees) and altitude (metres): a file headed `geo`.
+    Geodetic,
+}
+
+const GEO_FIELDS: [&str; 7] = [
+    "t_s",
+    "lat_deg",
+    "lon_deg",
+    "alt_m",
+    "heading_deg",
+    "pitch_deg",
+    "roll_deg",
+];
 
 const FIELDS: [&str; 7] = [
     "t_s",
@@ -40,27 +69,49 @@ impl Waypoints {
     /// Parses the text of a waypoint file; errors name `source:line` and the reason.
     pub fn parse(text: &str, source: &str) -> Result<Self, String> {
         let mut points: Vec<[f64; 7]> = Vec::new();
+        let mut frame = None;
         for (n, line) in text.lines().enumerate() {
             let line = line.split('#').next().unwrap_or("").trim();
             if line.is_empty() {
                 continue;
             }
             let at = |reason: String| format!("{source}:{}: {reason}", n + 1);
+            let kind = match frame {
+                Some(f) => f,
+                None if line.eq_ignore_ascii_case("geo") => {
+                    frame = Some(WaypointFrame::Geodetic);
+                    continue;
+                }
+                None => *frame.insert(WaypointFrame::Local),
+            };
+            let fields = match kind {
+                WaypointFrame::Local => FIELDS,
+                WaypointFrame::Geodetic => GEO_FIELDS,
+            };
             let parts: Vec<&str> = line.split(',').map(str::trim).collect();
             if parts.len() != 7 {
                 return Err(at(format!(
                     "expected 7 values {} , got {}",
-                    FIELDS.join(","),
+                    fields.join(","),
                     parts.len()
                 )));
             }
             let mut p = [0.0; 7];
-            for ((slot, text), name) in p.iter_mut().zip(&parts).zip(FIELDS) {
+            for ((slot, text), name) in p.iter_mut().zip(&parts).zip(fields) {
                 *slot = text
                     .parse::<f64>()
                     .ok()
                     .filter(|v| v.is_finite())
                     .ok_or_else(|| at(format!("{name} = {text:?} is not a finite number")))?;
+            }
+            if kind == WaypointFrame::Geodetic {
+                if !(-90.0..=90.0).contains(&p[1]) {
+                    return Err(at(format!("lat_deg = {} is outside [-90, 90]", p[1])));
+                }
+                if let Some(prev) = points.last() {
+                    // Unwrapped: within 180° of the previous longitude.
+                    p[2] = prev[2] + ((p[2] - prev[2] + 540.0).rem_euclid(360.0) - 180.0);
+                }
             }
             if let Some(prev) = points.last() {
                 if p[0] <= prev[0] {
@@ -75,7 +126,15 @@ impl Waypoints {
         if points.is_empty() {
             return Err(format!("{source}: no waypoints"));
         }
-        Ok(Self { points })
+        Ok(Self {
+            points,
+            frame: frame.unwrap_or(WaypointFrame::Local),
+        })
+    }
+
+    /// Local metres or geodetic degrees (a file headed `geo`).
+    pub fn frame(&self) -> WaypointFrame {
+        self.frame
     }
 
     /// Time of the last waypoint, seconds.
@@ -83,7 +142,8 @@ impl Waypoints {
         self.points.last().map(|p| p[0]).unwrap_or(0.0)
     }
 
-    /// The waypoints as `[t, x, y, z, heading, pitch, roll]` rows.
+    /// The waypoints as `[t, x, y, z, heading, pitch, roll]` rows (geodetic: `[t, lat, lon,
+    /// alt, …]`, longitudes unwrapped).
     pub fn points(&self) -> &[[f64; 7]] {
         &self.points
     }
@@ -104,8 +164,12 @@ impl Waypoints {
         let rate = |d: f64| if dt > 0.0 { d / dt } else { 0.0 };
         let dh = (b[4] - a[4] + 540.0).rem_euclid(360.0) - 180.0;
         let lerp = |i: usize| a[i] + (b[i] - a[i]) * s;
+        let second = match self.frame {
+            WaypointFrame::Local => lerp(2),
+            WaypointFrame::Geodetic => (lerp(2) + 180.0).rem_euclid(360.0) - 180.0,
+        };
         ScriptSample {
-            position: [lerp(1), lerp(2), lerp(3)],
+            position: [lerp(1), second, lerp(3)],
             attitude_deg: [(a[4] + dh * s).rem_euclid(360.0), lerp(5), lerp(6)],
             velocity: [rate(b[1] - a[1]), rate(b[2] - a[2]), rate(b[3] - a[3])],
             rates_deg_s: [rate(dh), rate(b[5] - a[5]), rate(b[6] - a[6])],
@@ -268,6 +332,41 @@ mod tests {
         let e = Waypoints::parse("0,0,nan,0,0,0,0\n", "p.csv").unwrap_err();
         assert!(e.contains("y_m"), "{e}");
         assert!(Waypoints::parse("# nothing\n", "p.csv")
+            .unwrap_err()
+            .contains("no waypoints"));
+    }
+
+    #[test]
+    fn a_geo_file_interpolates_degrees_and_crosses_the_antimeridian_the_short_way() {
+        let w = Waypoints::parse(
+            "# over the date line\n\ngeo\n0,10,179.5,1000,90,0,0\n10,11,-179.5,2000,90,0,0\n",
+            "g.csv",
+        )
+        .unwrap();
+        assert_eq!(w.frame(), WaypointFrame::Geodetic);
+        let s = w.sample(5.0);
+        assert!(
+            close(s.position, [10.5, -180.0, 1500.0]),
+            "{:?}",
+            s.position
+        );
+        let s = w.sample(7.5);
+        assert!(
+            close(s.position, [10.75, -179.75, 1750.0]),
+            "{:?}",
+            s.position
+        );
+        assert!(close(s.velocity, [0.1, 0.1, 100.0]), "{:?}", s.velocity);
+        let local = Waypoints::parse("0,10,179.5,1000,90,0,0\n", "l.csv").unwrap();
+        assert_eq!(local.frame(), WaypointFrame::Local);
+        let e = Waypoints::parse("geo\n0,91,0,0,0,0,0\n", "g.csv").unwrap_err();
+        assert!(e.starts_with("g.csv:2:") && e.contains("lat_deg"), "{e}");
+        let e = Waypoints::parse("geo\n0,1,x,0,0,0,0\n", "g.csv").unwrap_err();
+        assert!(e.contains("lon_deg"), "{e}");
+        // `geo` is a header: anywhere else it is a bad waypoint line.
+        let e = Waypoints::parse("0,0,0,0,0,0,0\ngeo\n", "g.csv").unwrap_err();
+        assert!(e.starts_with("g.csv:2:"), "{e}");
+        assert!(Waypoints::parse("geo\n", "g.csv")
             .unwrap_err()
             .contains("no waypoints"));
     }

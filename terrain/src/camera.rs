@@ -295,6 +295,29 @@ impl Camera {
         Some((px, self.near / v.z))
     }
 
+    /// The world point drawn at pixel (px, py) (its centre, `+ ½`) whose read-back reversed-Z
+    /// depth is `depth` (`near / view z`, as [`Camera::project_px`] returns it); `None` for
+    /// sky (depth 0) or a depth that is not one.
+    pub fn unproject_px(
+        &self,
+        px: u32,
+        py: u32,
+        width_px: u32,
+        height_px: u32,
+        depth: f32,
+    ) -> Option<DVec3> {
+        if !(depth > 0.0 && depth.is_finite()) {
+            return None;
+        }
+        let z = self.near / f64::from(depth);
+        let f = &self.frustum;
+        let x_ndc = 2.0 * (f64::from(px) + 0.5) / f64::from(width_px) - 1.0;
+        let y_ndc = 2.0 * (f64::from(py) + 0.5) / f64::from(height_px) - 1.0;
+        let a = 0.5 * (x_ndc * (f.tan_right - f.tan_left) + (f.tan_right + f.tan_left));
+        let b = 0.5 * (y_ndc * (f.tan_up - f.tan_down) - (f.tan_up + f.tan_down));
+        Some(self.position + self.world_to_view_rotation().transpose() * DVec3::new(a, b, 1.0) * z)
+    }
+
     /// Unit world direction through pixel (px, py), the inverse of [`Camera::project_px`]; for
     /// tests and picking.
     pub fn pixel_ray(&self, px: f64, py: f64, width_px: u32, height_px: u32) -> DVec3 {
@@ -311,20 +334,65 @@ impl Camera {
 /// Parses `"x,y,z,heading,pitch,roll"` (metres, degrees, as on the wire: DESIGN.md "Conventions").
 /// Errors name the bad field; NaN and infinities are refused so they never reach a matrix.
 pub fn parse_camera_arg(s: &str) -> Result<(DVec3, Attitude), CameraError> {
-    const FIELDS: [&str; 6] = ["x", "y", "z", "heading", "pitch", "roll"];
+    let v = parse_six(
+        s,
+        ["x", "y", "z", "heading", "pitch", "roll"],
+        "metres, degrees",
+    )?;
+    Ok((
+        DVec3::new(v[0], v[1], v[2]),
+        Attitude::from_degrees(v[3], v[4], v[5]),
+    ))
+}
+
+/// A camera given as `"lat,lon,alt,heading,pitch,roll"`: WGS84 degrees, metres above the data's
+/// vertical datum, the attitude in degrees in the north-east-down frame at that point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GeodeticCamera {
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    pub alt_m: f64,
+    pub attitude: Attitude,
+}
+
+/// Parses `"lat,lon,alt,heading,pitch,roll"` (degrees, metres, degrees); latitude within
+/// [−90, 90], every field finite, errors name the bad field.
+pub fn parse_geodetic_camera_arg(s: &str) -> Result<GeodeticCamera, CameraError> {
+    let v = parse_six(
+        s,
+        ["lat", "lon", "alt", "heading", "pitch", "roll"],
+        "degrees, metres, degrees",
+    )?;
+    if !(-90.0..=90.0).contains(&v[0]) {
+        return Err(CameraError::CameraArg {
+            arg: s.to_string(),
+            reason: format!("field lat = {} is outside [-90, 90] degrees", v[0]),
+        });
+    }
+    Ok(GeodeticCamera {
+        lat_deg: v[0],
+        lon_deg: v[1],
+        alt_m: v[2],
+        attitude: Attitude::from_degrees(v[3], v[4], v[5]),
+    })
+}
+
+/// Six comma-separated finite numbers named `fields` (`units` for the message).
+fn parse_six(s: &str, fields: [&str; 6], units: &str) -> Result<[f64; 6], CameraError> {
     let err = |reason: String| CameraError::CameraArg {
         arg: s.to_string(),
         reason,
     };
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    if parts.len() != FIELDS.len() {
+    if parts.len() != fields.len() {
         return Err(err(format!(
-            "expected 6 comma-separated values x,y,z,heading,pitch,roll (metres, degrees), got {}",
+            "expected 6 comma-separated values {} ({units}), got {}",
+            fields.join(","),
             parts.len()
         )));
     }
     let mut v = [0.0f64; 6];
-    for ((slot, name), text) in v.iter_mut().zip(FIELDS).zip(&parts) {
+    for ((slot, name), text) in v.iter_mut().zip(fields).zip(&parts) {
         let x: f64 = text
             .parse()
             .map_err(|_| err(format!("field {name} = {text:?} is not a number")))?;
@@ -333,10 +401,7 @@ pub fn parse_camera_arg(s: &str) -> Result<(DVec3, Attitude), CameraError> {
         }
         *slot = x;
     }
-    Ok((
-        DVec3::new(v[0], v[1], v[2]),
-        Attitude::from_degrees(v[3], v[4], v[5]),
-    ))
+    Ok(v)
 }
 
 #[cfg(test)]

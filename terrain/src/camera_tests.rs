@@ -404,6 +404,44 @@ fn pixel_ray_inverts_project_px() {
     }
 }
 
+#[test]
+fn unproject_px_inverts_project_px_at_pixel_centres() {
+    for cam in cameras() {
+        for (px, py, dist) in [(0u32, 0u32, 5.0), (960, 540, 1234.5), (1919, 7, 80_000.0)] {
+            let ray = cam.pixel_ray(f64::from(px) + 0.5, f64::from(py) + 0.5, W, H);
+            let p = cam.position + dist * ray;
+            let (at, depth) = cam.project_px(p, W, H).unwrap();
+            assert!((at - DVec2::new(f64::from(px) + 0.5, f64::from(py) + 0.5)).length() < 1e-6);
+            let back = cam.unproject_px(px, py, W, H, depth as f32).unwrap();
+            // f32 depth: a relative error of 2^-24 in the range.
+            assert!((back - p).length() < dist * 1e-6, "{back:?} vs {p:?}");
+        }
+        assert_eq!(cam.unproject_px(1, 1, W, H, 0.0), None);
+        assert_eq!(cam.unproject_px(1, 1, W, H, f32::NAN), None);
+        assert_eq!(cam.unproject_px(1, 1, W, H, -0.5), None);
+    }
+}
+
+#[test]
+fn geodetic_camera_argument_names_its_fields() {
+    let g = parse_geodetic_camera_arg("47.25, 11.4,2500,90,-90,0").unwrap();
+    assert_eq!((g.lat_deg, g.lon_deg, g.alt_m), (47.25, 11.4, 2500.0));
+    assert_eq!(g.attitude, Attitude::from_degrees(90.0, -90.0, 0.0));
+    for (bad, says) in [
+        ("47,11,2500", "expected 6"),
+        ("91,11,2500,0,0,0", "lat"),
+        ("47,x,2500,0,0,0", "lon"),
+        ("47,11,inf,0,0,0", "alt"),
+        ("47,11,2500,0,NaN,0", "pitch"),
+    ] {
+        let e = parse_geodetic_camera_arg(bad).unwrap_err().to_string();
+        assert!(e.contains(says), "{bad:?}: {e}");
+    }
+    // The local form keeps its own names.
+    let e = parse_camera_arg("1,2").unwrap_err().to_string();
+    assert!(e.contains("x,y,z,heading,pitch,roll"), "{e}");
+}
+
 proptest! {
     /// DESIGN.md's bound: a segment of length ε starting at view depth z inside the frustum
     /// projects to at most ε·f·c/(z − ε) pixels, c = max_obliquity, f = focal length.

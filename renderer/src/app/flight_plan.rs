@@ -49,15 +49,17 @@ pub struct FlightPlan {
 }
 
 impl FlightPlan {
-    /// The flight over `terrain` lasting `duration_s`: along `waypoints` when given, else the
-    /// pass.
+    /// The flight over `terrain` lasting `duration_s`: along `waypoints` when given (geo
+    /// waypoints placed on the terrain's ellipsoid; `Err` when it has no geo-reference), else
+    /// the pass.
     pub fn new(
         terrain: &Terrain,
         pass: &PassArgs,
         waypoints: Option<Waypoints>,
         duration_s: f64,
-    ) -> Self {
+    ) -> Result<Self, String> {
         let g = terrain.grid();
+        let waypoints = waypoints.map(|w| w.placed_on(g)).transpose()?;
         let extent = [
             (g.valid_width - 1) as f64 * g.spacing_x,
             (g.valid_height - 1) as f64 * g.spacing_y,
@@ -71,7 +73,7 @@ impl FlightPlan {
             Some(ds) => Ground::Samples(ds.clone()),
             None => Ground::TileMaxima(terrain.bake.clone()),
         };
-        Self {
+        Ok(Self {
             waypoints,
             pass: StraightPass::over_extent(
                 extent,
@@ -83,7 +85,7 @@ impl FlightPlan {
                 duration_s,
             ),
             follow: pass.follow_terrain.then_some((ground, pass.agl)),
-        }
+        })
     }
 
     /// The aircraft's position and attitude `t` seconds into the flight.

@@ -2,8 +2,12 @@
 
 use glam::{DVec2, DVec3};
 
+use aerie_sim_bridge::script::WaypointFrame;
 use aerie_terrain::camera::Attitude;
 use aerie_terrain::dataset::Dataset;
+use aerie_terrain::source::SourceGrid;
+
+use crate::sim::geo_mapping::GeoMapping;
 #[cfg(test)]
 use aerie_terrain::Heightfield;
 
@@ -105,18 +109,45 @@ mod tests {
 
 /// A scripted flight from timed waypoints, linearly interpolated (heading along the shorter
 /// arc). File format: one waypoint per line, `t_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg`;
-/// blank lines and `#` comments are ignored; times strictly increase. A thin wrapper over
-/// `aerie_sim_bridge::script::Waypoints`, so `aerie fly --path` and `aerie-send --path` fly
-/// exactly the same path.
+/// blank lines and `#` comments are ignored; times strictly increase. A file headed `geo`
+/// holds `t_s,lat_deg,lon_deg,alt_m,heading_deg,pitch_deg,roll_deg` instead, placed on a
+/// geo-referenced dataset by [`Waypoints::placed_on`] exactly as a host's geodetic poses are
+/// ([`GeoMapping`]). A thin wrapper over `aerie_sim_bridge::script::Waypoints`, so
+/// `aerie fly --path` and `aerie-send --path` fly exactly the same path.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Waypoints {
     inner: aerie_sim_bridge::script::Waypoints,
+    /// A geo file's placement on its dataset (`None`: local metres, or not yet placed).
+    mapping: Option<GeoMapping>,
 }
 
 impl Waypoints {
     /// Parses the text of a waypoint file; errors name `source:line` and the reason.
     pub fn parse(text: &str, source: &str) -> Result<Self, String> {
-        aerie_sim_bridge::script::Waypoints::parse(text, source).map(|inner| Self { inner })
+        aerie_sim_bridge::script::Waypoints::parse(text, source).map(|inner| Self {
+            inner,
+            mapping: None,
+        })
+    }
+
+    /// Whether the file holds geodetic waypoints (headed `geo`).
+    pub fn is_geo(&self) -> bool {
+        self.inner.frame() == WaypointFrame::Geodetic
+    }
+
+    /// The waypoints on the dataset of `grid`: a geo file placed on the ellipsoid through the
+    /// grid's geo-reference (`Err` names why it has none); a local file unchanged.
+    pub fn placed_on(self, grid: &SourceGrid) -> Result<Self, String> {
+        if !self.is_geo() {
+            return Ok(self);
+        }
+        let mapping = GeoMapping::of_source(grid).map_err(|e| {
+            format!("geo waypoints (lat, lon, alt) need a geo-referenced dataset: {e}")
+        })?;
+        Ok(Self {
+            mapping: Some(mapping),
+            ..self
+        })
     }
 
     /// Time of the last waypoint, seconds.
@@ -124,14 +155,26 @@ impl Waypoints {
         self.inner.duration()
     }
 
-    /// Pose at time `t`, held before the first and after the last waypoint.
+    /// Pose at time `t` in the dataset's world frame, held before the first and after the
+    /// last waypoint. Geodetic waypoints: the exact point on the ellipsoid, the attitude in
+    /// the north-east-down frame at that point.
+    ///
+    /// # Panics
+    /// For a geo file not yet [`placed_on`](Self::placed_on) its dataset (a programming error:
+    /// every flight places its waypoints when it is planned).
     pub fn pose_at(&self, t: f64) -> (DVec3, Attitude) {
         let s = self.inner.sample(t);
         let [h, p, r] = s.attitude_deg;
-        (
-            DVec3::from_array(s.position),
-            Attitude::from_degrees(h, p, r),
-        )
+        let attitude = Attitude::from_degrees(h, p, r);
+        if !self.is_geo() {
+            return (DVec3::from_array(s.position), attitude);
+        }
+        let m = self
+            .mapping
+            .as_ref()
+            .expect("geo waypoints are placed on their dataset before they are flown");
+        let [lat, lon, alt] = s.position;
+        (m.to_world(lat, lon, alt), m.attitude_at(lat, lon, attitude))
     }
 }
 

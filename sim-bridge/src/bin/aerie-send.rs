@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use aerie_sim_bridge::codec::cigi::StartOfFrame;
 use aerie_sim_bridge::geodesy::{Geodetic, LocalTangentPlane};
-use aerie_sim_bridge::script::{Script, ScriptSample, Straight, Waypoints};
+use aerie_sim_bridge::script::{Script, ScriptSample, Straight, WaypointFrame, Waypoints};
 use aerie_sim_bridge::send::query::{
     answer_json, answer_line, ask, exit_status, json_string, parse_hot, parse_los,
     parse_los_vector, QueryPlan, DEFAULT_TIMEOUT, RESEND_EVERY,
@@ -321,7 +321,16 @@ fn parse_args(argv: &[String]) -> Result<Option<Args>, String> {
         (Some(p), None) => {
             let text =
                 std::fs::read_to_string(&p).map_err(|e| format!("--path {}: {e}", p.display()))?;
-            Script::Waypoints(Waypoints::parse(&text, &p.display().to_string())?)
+            let w = Waypoints::parse(&text, &p.display().to_string())?;
+            if w.frame() == WaypointFrame::Geodetic {
+                return Err(format!(
+                    "--path {}: a geo waypoint file (lat, lon, alt); aerie-send flies local ENU \
+                     waypoints (with --origin for the geodetic protocols); `aerie fly --path` \
+                     and `aerie bench --flight` read geo files",
+                    p.display()
+                ));
+            }
+            Script::Waypoints(w)
         }
         (None, Some(s)) => Script::Straight(s),
         (Some(_), Some(_)) => return Err("give either --path or --straight, not both".into()),

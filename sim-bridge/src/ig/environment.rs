@@ -143,7 +143,11 @@ pub fn solar_declination_eot(jd: f64) -> (f64, f64) {
 /// lifts the sun by about 0.5° on the horizon and under 0.02° above 45°). `None` without a
 /// valid date or for non-finite input.
 pub fn sun_direction_enu(celestial: &Celestial, lat_deg: f64, lon_deg: f64) -> Option<[f64; 3]> {
-    let jd = celestial.julian_day()?;
+    sun_direction_enu_at(celestial.julian_day()?, lat_deg, lon_deg)
+}
+
+/// [`sun_direction_enu`] at Julian day `jd` (UT).
+pub fn sun_direction_enu_at(jd: f64, lat_deg: f64, lon_deg: f64) -> Option<[f64; 3]> {
     if !(jd.is_finite() && lat_deg.is_finite() && lon_deg.is_finite()) {
         return None;
     }

@@ -90,7 +90,8 @@ pub struct BenchArgs {
     /// it is kept.
     #[arg(long)]
     pub overwrite: bool,
-    /// Timed waypoints (`t_s,x_m,y_m,z_m,heading,pitch,roll` per line) instead of the built-in
+    /// Timed waypoints (`t_s,x_m,y_m,z_m,heading,pitch,roll` per line; after a first line `geo`,
+    /// `t_s,lat,lon,alt,heading,pitch,roll` on a geo-referenced dataset) instead of the built-in
     /// straight pass through the dataset's centre.
     #[arg(long)]
     pub flight: Option<PathBuf>,
@@ -289,7 +290,8 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
     };
     let total_frames = a.warmup + a.frames;
     let duration = total_frames as f64 / a.fps;
-    let flight = FlightPlan::new(&terrain, &a.pass, p.waypoints.take(), duration);
+    let flight = FlightPlan::new(&terrain, &a.pass, p.waypoints.take(), duration)
+        .map_err(|e| bad_input(format!("--flight: {e}")))?;
     let described = match &a.flight {
         Some(f) => format!("waypoints {}", f.display()),
         None => format!(
@@ -342,7 +344,8 @@ fn suite_flight(
     let p = plan(&args)?;
     let duration = (r.warmup + r.frames) as f64 / r.fps;
     let terrain = Terrain::in_memory(job.ds.clone(), job.bake.clone());
-    let flight = FlightPlan::new(&terrain, &args.pass, Some(job.waypoints.clone()), duration);
+    let flight = FlightPlan::new(&terrain, &args.pass, Some(job.waypoints.clone()), duration)
+        .map_err(|e| runtime(format!("{}: {e}", job.described)))?;
     let input = FlightInput {
         dem: job.dem,
         ds: job.ds,

@@ -31,8 +31,10 @@ use crate::app::out_path::{prepare_run_folder, WriteFailures, FLY_FILES};
 use crate::app::prepare::prepare_source;
 use crate::app::progress::count_bar;
 use crate::app::renderer_setup::{setup, Setup};
-use crate::render::frame::{FrameStats, TerrainRenderer};
+use crate::render::frame::{FrameStats, Lighting, TerrainRenderer};
 use crate::sim::channel::channel_camera;
+use crate::sim::geo_mapping::GeoMapping;
+use crate::sim::sun_clock::SunClock;
 use crate::tools::output::write_png;
 use crate::tools::overlay::{OverlayInfo, OverlayState};
 use crate::tools::panorama::{canvas_for, PanoramaChannel, PanoramaMap, MAX_CANVAS};
@@ -64,9 +66,15 @@ pub struct FlyArgs {
     pub fps: f64,
     #[command(flatten)]
     pub pass: PassArgs,
-    /// Timed waypoints instead of the built-in pass: lines `t_s,x_m,y_m,z_m,heading,pitch,roll`.
+    /// Timed waypoints instead of the built-in pass: lines `t_s,x_m,y_m,z_m,heading,pitch,roll`
+    /// (local metres); a file whose first line is `geo` holds `t_s,lat,lon,alt,heading,pitch,roll`
+    /// (degrees, metres above the data's datum) on a geo-referenced dataset.
     #[arg(long)]
     pub path: Option<PathBuf>,
+    /// Light every frame by the sun where it stands over the aircraft at this UTC date and time
+    /// plus the flight's clock (`2026-06-21T18:30:00Z`), on a geo-referenced dataset.
+    #[arg(long)]
+    pub time: Option<String>,
     /// Write every k-th frame as PNG (stats are written for every frame).
     #[arg(long, default_value_t = 1)]
     pub every: u32,
@@ -113,6 +121,10 @@ pub fn run(a: FlyArgs) -> Result<(), Failure> {
         None => None,
     };
     let waypoints = read_waypoints("--path", a.path.as_ref())?;
+    let clock = match &a.time {
+        Some(t) => Some(SunClock::parse(t).map_err(|e| bad_input(format!("--time: {e}")))?),
+        None => None,
+    };
     let removed = prepare_run_folder("--out", &a.out, a.overwrite, &FLY_FILES)?;
     if removed > 0 {
         eprintln!(
@@ -121,7 +133,16 @@ pub fn run(a: FlyArgs) -> Result<(), Failure> {
         );
     }
     let terrain = prepare_source(&a.dem, &s.desc, &a.store)?;
-    let flight = FlightPlan::new(&terrain, &a.pass, waypoints, a.frames as f64 / a.fps);
+    let flight = FlightPlan::new(&terrain, &a.pass, waypoints, a.frames as f64 / a.fps)
+        .map_err(|e| bad_input(format!("--path: {e}")))?;
+    let light = match clock {
+        Some(clock) => Some(FlightLight {
+            clock,
+            mapping: GeoMapping::of_source(terrain.grid())
+                .map_err(|e| bad_input(format!("--time: the sun's place needs latitudes: {e}")))?,
+        }),
+        None => None,
+    };
     if a.no_draw {
         let job = NoDrawFlight {
             dem: &a.dem,
@@ -160,10 +181,24 @@ pub fn run(a: FlyArgs) -> Result<(), Failure> {
                 config_path: a.channels.clone().unwrap_or_default(),
                 channels,
                 flight: &flight,
+                light: light.as_ref(),
             };
             fly_channels(&mut r, job)
         }
-        None => fly_one_camera(&mut r, &a, &s, &flight),
+        None => fly_one_camera(&mut r, &a, &s, &flight, light.as_ref()),
+    }
+}
+
+/// `--time`: the sun over the aircraft as the flight's clock runs.
+pub struct FlightLight {
+    pub clock: SunClock,
+    pub mapping: GeoMapping,
+}
+
+impl FlightLight {
+    /// The light `t_s` seconds into the flight for an eye at world point `eye`.
+    pub fn at(&self, t_s: f64, eye: glam::DVec3) -> Lighting {
+        Lighting::from_host(self.clock.sun_world(t_s, &self.mapping, eye), None)
     }
 }
 
@@ -175,6 +210,7 @@ fn fly_one_camera(
     a: &FlyArgs,
     s: &Setup,
     flight: &FlightPlan,
+    light: Option<&FlightLight>,
 ) -> Result<(), Failure> {
     let (width, height) = (s.view.width, s.view.height);
     let mut overlay = OverlayState::new(a.overlay);
@@ -195,6 +231,9 @@ fn fly_one_camera(
         let t = f as f64 / a.fps;
         let (pos, att) = flight.pose_at(t);
         let camera = Camera::new(pos, att, s.view.frustum);
+        if let Some(l) = light {
+            r.set_lighting(l.at(t, pos));
+        }
         r.set_overlay(overlay.panel((width, height), None));
         let wall = Instant::now();
         let stats = r.render(&camera).map_err(runtime)?;
@@ -353,6 +392,8 @@ pub struct ChannelFlight<'a> {
     pub config_path: PathBuf,
     pub channels: Vec<FlyChannel>,
     pub flight: &'a FlightPlan,
+    /// `--time`: the sun over the aircraft.
+    pub light: Option<&'a FlightLight>,
 }
 
 /// Flies every channel: `r` has its terrain loaded. Writes the PNGs, `frames.csv` and
@@ -403,6 +444,9 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
     for f in 0..a.frames {
         let t = f as f64 / a.fps;
         let (pos, att) = job.flight.pose_at(t);
+        if let Some(l) = job.light {
+            r.set_lighting(l.at(t, pos));
+        }
         let cams: Vec<Camera> = chans
             .iter()
             .map(|c| channel_camera((pos, att), &c.channel, c.size.0 as f64 / c.size.1 as f64))

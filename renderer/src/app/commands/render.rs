@@ -13,8 +13,10 @@ use crate::app::out_path::{prepare_out_file, with_suffix};
 use crate::app::prepare::prepare_source;
 use crate::app::renderer_setup::setup;
 use crate::render::frame::{Lighting, TerrainRenderer};
+use crate::sim::geo_mapping::GeoMapping;
+use crate::sim::sun_clock::SunClock;
 use crate::tools::output::{write_png, write_text};
-use aerie_terrain::camera::{parse_camera_arg, Camera};
+use aerie_terrain::camera::{parse_camera_arg, parse_geodetic_camera_arg, Camera};
 
 #[derive(Debug, Args)]
 pub struct RenderArgs {
@@ -29,8 +31,19 @@ pub struct RenderArgs {
     /// level; geographic data: East-North-Up at that sample on the WGS84 ellipsoid, so far away
     /// the ground falls below z = its height), degrees (heading clockwise from north, pitch
     /// nose-up, roll right-wing-down).
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        required_unless_present = "camera_geo",
+        conflicts_with = "camera_geo"
+    )]
+    pub camera: Option<String>,
+    /// Camera as lat,lon,alt,heading,pitch,roll on a geo-referenced dataset (geographic or
+    /// UTM): WGS84 degrees, metres above the data's vertical datum (mean sea level for SRTM),
+    /// the attitude in degrees in the north-east-down frame at that point — exactly where a
+    /// CIGI host's pose would put the eye.
     #[arg(long, allow_hyphen_values = true)]
-    pub camera: String,
+    pub camera_geo: Option<String>,
     #[command(flatten)]
     pub gpu: GpuArgs,
     /// Output PNG (its folder is created); a JSON summary is written next to it as
@@ -39,8 +52,12 @@ pub struct RenderArgs {
     pub out: PathBuf,
     /// The sun as azimuth,elevation in degrees (azimuth clockwise from north, elevation
     /// negative below the horizon); default 315,40.
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "time")]
     pub sun: Option<String>,
+    /// The sun where it stands over the eye at this UTC date and time (`2026-06-21T12:00:00Z`),
+    /// on a geo-referenced dataset — the ephemeris a CIGI host's Celestial Sphere Control sets.
+    #[arg(long)]
+    pub time: Option<String>,
     /// Meteorological visibility at sea level, metres (default 40 km).
     #[arg(long)]
     pub visibility: Option<f64>,
@@ -68,8 +85,12 @@ fn parse_sun(s: &str) -> Result<[f64; 3], String> {
 
 pub fn run(a: RenderArgs) -> Result<(), Failure> {
     let s = setup(&a.gpu)?;
-    let sun = match &a.sun {
+    let mut sun = match &a.sun {
         Some(v) => Some(parse_sun(v).map_err(|e| bad_input(format!("--sun: {e}")))?),
+        None => None,
+    };
+    let clock = match &a.time {
+        Some(t) => Some(SunClock::parse(t).map_err(|e| bad_input(format!("--time: {e}")))?),
         None => None,
     };
     if let Some(v) = a.visibility.filter(|v| !(v.is_finite() && *v > 0.0)) {
@@ -77,17 +98,50 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
             "--visibility: {v} must be a positive number of metres"
         )));
     }
-    let (position, attitude) =
-        parse_camera_arg(&a.camera).map_err(|e| bad_input(format!("--camera: {e}")))?;
+    let local = match &a.camera {
+        Some(c) => Some(parse_camera_arg(c).map_err(|e| bad_input(format!("--camera: {e}")))?),
+        None => None,
+    };
+    let geo = match &a.camera_geo {
+        Some(c) => Some(
+            parse_geodetic_camera_arg(c).map_err(|e| bad_input(format!("--camera-geo: {e}")))?,
+        ),
+        None => None,
+    };
     prepare_out_file("--out", &a.out)?;
     let json_path = with_suffix(&a.out, ".json");
     check_summary_path(&a.out, &json_path)?;
     let terrain = prepare_source(&a.dem, &s.desc, &a.store)?;
+    // Geodetic positions of the data (for `--camera-geo` and `centre_hit`): none without a
+    // geo-reference.
+    let mapping = GeoMapping::of_source(terrain.grid());
+    let (position, attitude) = match (local, geo) {
+        (Some(l), _) => l,
+        (None, Some(g)) => {
+            let m = mapping
+                .as_ref()
+                .map_err(|e| bad_input(format!("--camera-geo: {e}")))?;
+            (
+                m.to_world(g.lat_deg, g.lon_deg, g.alt_m),
+                m.attitude_at(g.lat_deg, g.lon_deg, g.attitude),
+            )
+        }
+        // clap requires one of the two.
+        (None, None) => return Err(bad_input("--camera or --camera-geo is required")),
+    };
+    if let Some(c) = clock {
+        let m = mapping
+            .as_ref()
+            .map_err(|e| bad_input(format!("--time: the sun's place needs latitudes: {e}")))?;
+        sun = c.sun_world(0.0, m, position);
+    }
     let mut r = TerrainRenderer::new(&s.desc).map_err(runtime)?;
     let source = terrain.source.clone();
     r.load_source(source, terrain.bake.clone(), position)
         .map_err(runtime)?;
-    r.set_lighting(Lighting::from_host(sun, a.visibility));
+    let lighting = Lighting::from_host(sun, a.visibility);
+    r.set_lighting(lighting);
+    let sun_drawn = lighting.sun_enu;
     let camera = Camera::new(position, attitude, s.view.frustum);
     // One still image: frames are drawn until nothing is late for streaming (each frame asks
     // for what it lacked and never waits; the pause between frames lets the pages arrive).
@@ -103,10 +157,12 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         warm_up_frames += 1;
     }
     let rgba = r.colour_rgba();
+    let (width, height) = (s.view.width, s.view.height);
+    let mapping = mapping.ok();
+    let centre_hit = centre_hit(&camera, &r.depth(), (width, height), mapping.as_ref());
     let device = r.device_name().to_string();
     r.destroy();
     r.validation_counters().verdict().map_err(runtime)?;
-    let (width, height) = (s.view.width, s.view.height);
     write_png(&a.out, width, height, &rgba).map_err(runtime)?;
     let summary = serde_json::json!({
         "device": device,
@@ -129,12 +185,69 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         "tiles_late_stream": stats.tiles_late_stream,
         "warm_up_frames": warm_up_frames,
         "stream": stream_json(&stats),
+        "camera": camera_json(&camera, mapping.as_ref()),
+        "centre_hit": centre_hit,
+        "sun": sun_drawn,
         "out": a.out.display().to_string(),
     });
     let line = summary.to_string();
     write_text(&json_path, &format!("{line}\n")).map_err(runtime)?;
     println!("{line}");
     Ok(())
+}
+
+/// The point drawn under the screen centre, read back from the depth buffer: pixel
+/// (width/2, height/2)'s centre unprojected at its depth. World metres (x, y, z) and the range
+/// from the eye always; latitude, longitude and height (the data's datum) on a geo-referenced
+/// dataset. `null` for sky.
+fn centre_hit(
+    camera: &Camera,
+    depth: &[f32],
+    (width, height): (u32, u32),
+    mapping: Option<&GeoMapping>,
+) -> serde_json::Value {
+    let (px, py) = (width / 2, height / 2);
+    let d = depth
+        .get(py as usize * width as usize + px as usize)
+        .copied()
+        .unwrap_or(0.0);
+    let Some(p) = camera.unproject_px(px, py, width, height, d) else {
+        return serde_json::Value::Null;
+    };
+    let mut hit = serde_json::json!({
+        "pixel": [px, py],
+        "x": p.x,
+        "y": p.y,
+        "z": p.z,
+        "range_m": (p - camera.position).length(),
+    });
+    if let Some(m) = mapping {
+        let (lat, lon, h) = m.world_to_geodetic(p);
+        hit["lat"] = lat.into();
+        hit["lon"] = lon.into();
+        hit["height"] = h.into();
+    }
+    hit
+}
+
+/// The camera drawn: world metres, the attitude in the world frame (degrees), and its geodetic
+/// position when the data has one.
+fn camera_json(camera: &Camera, mapping: Option<&GeoMapping>) -> serde_json::Value {
+    let p = camera.position;
+    let a = camera.attitude;
+    let mut v = serde_json::json!({
+        "x": p.x, "y": p.y, "z": p.z,
+        "heading_deg": a.heading.to_degrees(),
+        "pitch_deg": a.pitch.to_degrees(),
+        "roll_deg": a.roll.to_degrees(),
+    });
+    if let Some(m) = mapping {
+        let (lat, lon, alt) = m.world_to_geodetic(p);
+        v["lat"] = lat.into();
+        v["lon"] = lon.into();
+        v["alt"] = alt.into();
+    }
+    v
 }
 
 /// How long a still image of a streamed store waits for its pages (frames drawn meanwhile).

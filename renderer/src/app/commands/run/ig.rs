@@ -32,6 +32,7 @@ use crate::app::prepare::Terrain;
 use crate::render::entity_lod::LodParams;
 use crate::render::frame::{Lighting, TerrainRenderer};
 use crate::sim::pose_input::{GeoMapping, SimInput};
+use crate::sim::sun_clock::enu_at_to_world;
 use crate::sim::terrain_queries::DatasetQueries;
 use crate::sim::traffic::{model_library, Traffic};
 use crate::tools::percentile::percentile;
@@ -267,7 +268,7 @@ impl IgDriver {
             let local = env.sun_direction_enu(monotonic_s(), lat, lon)?;
             // The terrain is lit in world axes (ENU at the dataset's origin): the sun's
             // direction at the eye, turned into them.
-            Some((g.grid().local_enu_axes(lat, lon) * DVec3::from_array(local)).to_array())
+            Some(enu_at_to_world(g, lat, lon, local))
         });
         let visibility = env.visibility_m();
         self.host_light = (sun.is_some(), visibility.is_some());
