@@ -5,11 +5,15 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
 use aerie_sim_bridge::shm::ShmWriter;
 use aerie_sim_bridge::{Pose, PosePosition};
+
+/// The timed shrinking-file test runs alone: not while another test here renders on lavapipe
+/// or compiles a writer on the same two cores.
+static SERIAL: Mutex<()> = Mutex::new(());
 
 /// `aerie`, built (or found up to date) once by cargo, so a stale binary is never tested.
 fn aerie() -> &'static Path {
@@ -117,6 +121,7 @@ fn u(v: &serde_json::Value, key: &str) -> u64 {
 
 #[test]
 fn a_cxx11_writer_from_the_header_feeds_aerie_listen() {
+    let _alone = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tempfile::tempdir().unwrap();
     let Some(exe) = build_writer(dir.path(), "g++", &["-x", "c++", "-std=c++11"]) else {
         return;
@@ -139,8 +144,8 @@ fn a_cxx11_writer_from_the_header_feeds_aerie_listen() {
     assert_eq!(u(&s, "dropped_total"), u(d, "bad_crc"), "{s}");
 }
 
-#[test]
-fn aerie_listen_survives_a_file_shrinking_under_it() {
+/// One try of the shrinking-file scenario: the listener's summary and the last frame written.
+fn shrinking_file_run() -> (serde_json::Value, u64) {
     let dir = tempfile::tempdir().unwrap();
     let (file, json) = (dir.path().join("pose"), dir.path().join("listen.json"));
     let pose = |k: u64| Pose {
@@ -178,7 +183,20 @@ fn aerie_listen_survives_a_file_shrinking_under_it() {
             std::thread::sleep(Duration::from_millis(2));
         }
     }
-    let s = child.summary(&json);
+    (child.summary(&json), k)
+}
+
+/// The scenario is timed (a 4 s listener, 40 cuts 50 ms apart). It runs alone (`SERIAL`: not
+/// beside the lavapipe frames of the other tests) and is tried twice: a listener thread that
+/// the machine did not schedule for a second reads too little to judge, and is reported.
+#[test]
+fn aerie_listen_survives_a_file_shrinking_under_it() {
+    let _alone = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let (mut s, mut k) = shrinking_file_run();
+    if u(&s, "shm_shrinks") < 10 {
+        eprintln!("aerie listen read too little to judge (machine busy?), trying again: {s}");
+        (s, k) = shrinking_file_run();
+    }
     eprintln!("aerie listen under a shrinking file: {s}");
     assert!(u(&s, "shm_shrinks") >= 10, "{s}");
     assert!(u(&s, "shm_shrinks") <= 40, "{s}");
@@ -198,6 +216,7 @@ fn aerie_listen_survives_a_file_shrinking_under_it() {
 
 #[test]
 fn a_c99_writer_from_the_header_drives_aerie_run() {
+    let _alone = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let dir = tempfile::tempdir().unwrap();
     let Some(exe) = build_writer(dir.path(), "gcc", &["-std=c99"]) else {
         return;
