@@ -63,11 +63,13 @@ struct Options {
   std::vector<Geo> at;
   std::vector<std::array<double, 3>> entity_at;
   int period = 0;        // > 0: also periodic requests at the first point, every `period` frames
-  int cancel_after = 20; // host frames after which the periodic requests are cancelled
+  // IG Start of Frames (received after the periodic requests were sent) after which the host
+  // cancels them: counted in the IG's frames, not the host's, so a slow IG still answers them.
+  int cancel_after = 20;
   // los: segments (lat, lon, alt, lat, lon, alt) and vectors (lat, lon, alt, az, el, min, max).
   std::vector<std::array<double, 6>> segments;
   std::vector<std::array<double, 7>> vectors;
-  // modes: host frames (counted from the first Start of Frame) in Operate, then in Reset.
+  // modes: IG Start of Frames (counted from the first) in Operate, then in Reset.
   int operate_frames = 10, reset_frames = 10;
   // Host frame (from the first Start of Frame) at which requests are sent.
   int request_frame = 2;
@@ -116,6 +118,10 @@ class Link {
 
   CigiEntityCtrlV3_3 ownship;
   Counts counts;
+  // Start of Frames received when the periodic requests were sent (-1: not yet), and whether
+  // they have been cancelled.
+  long long periodic_sent_at_sof = -1;
+  bool periodic_cancelled = false;
   const Options& opt;
 
   // Called by the packet printers.

@@ -150,11 +150,15 @@ void requests(Link& link, CigiOutgoingMsg& out, long k) {
   }
   // Periodic requests exist from CIGI 3.2 on; the same ID with period 0 ends them.
   if (o.period > 0 && o.minor >= 2 && !o.at.empty()) {
-    const long first = o.request_frame + 2, cancel = first + o.cancel_after;
-    if (k == first || k == cancel)
+    const bool start = k == o.request_frame + 2;
+    const bool cancel = !start && !link.periodic_cancelled && link.periodic_sent_at_sof >= 0 &&
+                        link.counts.sof - link.periodic_sent_at_sof >= o.cancel_after;
+    if (start) link.periodic_sent_at_sof = link.counts.sof;
+    if (cancel) link.periodic_cancelled = true;
+    if (start || cancel)
       for (int t = 0; t < 3; ++t)
         hot_request(link, out, kHotPeriodic + t, t, false, {o.at[0].lat, o.at[0].lon, o.at[0].alt},
-                    k == first ? o.period : 0);
+                    start ? o.period : 0);
   }
 }
 
@@ -188,8 +192,11 @@ int run_async(Link& link) {
   std::string why;
   while ((why = link.stop_reason()).empty()) {
     const long k = link.frames_since_first_sof();
-    const bool reset = o.command == "modes" && k >= o.operate_frames &&
-                       k < o.operate_frames + o.reset_frames;
+    // The mode windows count the IG's Start of Frames, not the host's messages: a slow IG
+    // still renders frames in each of them.
+    const long long sofs = link.counts.sof;
+    const bool reset = o.command == "modes" && sofs >= o.operate_frames &&
+                       sofs < o.operate_frames + o.reset_frames;
     CigiOutgoingMsg& out = link.begin(reset ? CigiBaseIGCtrl::Reset : CigiBaseIGCtrl::Operate);
     if (k >= 0) requests(link, out, k);
     if (o.command == "traffic") traffic(link, out, k);

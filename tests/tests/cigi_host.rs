@@ -91,7 +91,7 @@ const VECTORS: [[f64; 7]; 3] = [
 ];
 /// The point each version run asks about.
 const VERSIONS_HOT: (f64, f64, f64) = (47.261_234_5, 11.352_345_6, 800.0);
-/// Periodic requests in the answer run: every 3 IG frames, cancelled 30 host frames later.
+/// Periodic requests in the answer run: every 3 IG frames, cancelled 30 IG frames later.
 const PERIOD: u64 = 3;
 /// Request IDs the host uses (tests/cigi-host/scripts.cpp).
 const PERIODIC_IDS: std::ops::Range<u64> = 300..303;
@@ -668,7 +668,12 @@ fn reset_reports_standby_until_operate_and_drops_requests() {
         .map(|m| m["host_frame"].as_u64().unwrap())
         .collect();
     let (Some(&r0), Some(&r1)) = (reset.first(), reset.last()) else {
-        panic!("{}: the host sent no Reset", r.label)
+        panic!(
+            "{}: the host sent no Reset in {} messages; its summary: {:?}",
+            r.label,
+            msgs.len(),
+            r.host.summary()
+        )
     };
     let again = r1 + 1;
     let sofs: Vec<&Value> = r.host.recv("sof").collect();

@@ -69,45 +69,64 @@ pub fn free_port() -> u16 {
         .port()
 }
 
-/// Waits for `child` at most `limit`; kills it and returns `Err` with its stderr if longer.
-pub fn wait(mut child: Child, limit: Duration, what: &str) -> Result<Output, String> {
-    let start = Instant::now();
-    // Drain stdout/stderr while waiting: a chatty host must never block on a full pipe.
-    let mut out = child.stdout.take().unwrap();
-    let mut err = child.stderr.take().unwrap();
-    let o = std::thread::spawn(move || {
+/// A child whose stdout and stderr are read on two threads from the moment it is started: a
+/// chatty process (the host prints a line per message) must never block on a full pipe while
+/// the test waits for another one.
+pub struct Drained {
+    child: Child,
+    out: std::thread::JoinHandle<Vec<u8>>,
+    err: std::thread::JoinHandle<Vec<u8>>,
+}
+
+fn read_all(mut r: impl std::io::Read + Send + 'static) -> std::thread::JoinHandle<Vec<u8>> {
+    std::thread::spawn(move || {
         let mut b = Vec::new();
-        std::io::Read::read_to_end(&mut out, &mut b).ok();
+        r.read_to_end(&mut b).ok();
         b
-    });
-    let e = std::thread::spawn(move || {
-        let mut b = Vec::new();
-        std::io::Read::read_to_end(&mut err, &mut b).ok();
-        b
-    });
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break Some(s);
+    })
+}
+
+/// Starts reading `child`'s piped stdout and stderr now.
+pub fn drain(mut child: Child) -> Drained {
+    let out = read_all(child.stdout.take().expect("stdout piped"));
+    let err = read_all(child.stderr.take().expect("stderr piped"));
+    Drained { child, out, err }
+}
+
+impl Drained {
+    /// Waits at most `limit`; kills the child and returns `Err` with its stderr if longer.
+    pub fn wait(mut self, limit: Duration, what: &str) -> Result<Output, String> {
+        let start = Instant::now();
+        let status = loop {
+            if let Some(s) = self.child.try_wait().unwrap() {
+                break Some(s);
+            }
+            if start.elapsed() > limit {
+                let _ = self.child.kill();
+                let _ = self.child.wait();
+                break None;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        let (stdout, stderr) = (self.out.join().unwrap(), self.err.join().unwrap());
+        match status {
+            Some(status) => Ok(Output {
+                status,
+                stdout,
+                stderr,
+            }),
+            None => Err(format!(
+                "{what} did not finish within {limit:?}; stderr:\n{}",
+                text(&stderr)
+            )),
         }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            break None;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    let (stdout, stderr) = (o.join().unwrap(), e.join().unwrap());
-    match status {
-        Some(status) => Ok(Output {
-            status,
-            stdout,
-            stderr,
-        }),
-        None => Err(format!(
-            "{what} did not finish within {limit:?}; stderr:\n{}",
-            text(&stderr)
-        )),
     }
+}
+
+/// Waits for `child` at most `limit` (its pipes read from now on); kills it and returns `Err`
+/// with its stderr if longer.
+pub fn wait(child: Child, limit: Duration, what: &str) -> Result<Output, String> {
+    drain(child).wait(limit, what)
 }
 
 /// One `aerie run` driven by one host.
@@ -154,6 +173,7 @@ pub fn ig_run(arch: Arch, minor: u8, frames: u64, fps: u32, command: &str, args:
         .stderr(Stdio::piped())
         .spawn()
         .expect("spawn aerie run");
+    let aerie = drain(aerie);
     let mut host_args: Vec<String> = vec![
         command.into(),
         "--ig".into(),
@@ -174,8 +194,10 @@ pub fn ig_run(arch: Arch, minor: u8, frames: u64, fps: u32, command: &str, args:
         .stderr(Stdio::piped())
         .spawn()
         .unwrap_or_else(|e| panic!("{label}: spawn {}: {e}", host.exe.display()));
-    let aerie_out = wait(aerie, Duration::from_secs(120), "aerie run");
-    let host_out = wait(host_child, Duration::from_secs(120), "cigi-host")
+    let host_child = drain(host_child);
+    let aerie_out = aerie.wait(Duration::from_secs(120), "aerie run");
+    let host_out = host_child
+        .wait(Duration::from_secs(120), "cigi-host")
         .unwrap_or_else(|e| panic!("{label}: {e}"));
     let aerie_out = aerie_out.unwrap_or_else(|e| panic!("{label}: {e}"));
     assert!(
