@@ -1,8 +1,11 @@
 //! Shared helpers for aerie's integration tests: paths to the data, a headless render that
 //! fails on any validation message, and image comparison with a diff image on failure.
 
+pub mod bins;
 pub mod cigi_host;
 pub mod imports;
+
+pub use bins::{aerie_bin, aerie_send_bin, bin_dir};
 
 use std::path::{Path, PathBuf};
 

@@ -13,20 +13,6 @@ use aerie::terrain::load::load_dem;
 use aerie::terrain::query::{height_of_terrain, InMemorySource, Lookup};
 use aerie_tests::*;
 
-fn aerie_bin() -> PathBuf {
-    let status = Command::new(env!("CARGO"))
-        .args(["build", "-p", "aerie", "--bin", "aerie"])
-        .current_dir(repo_root())
-        .status()
-        .expect("run cargo build");
-    assert!(status.success(), "cargo build of aerie failed");
-    let exe = std::env::current_exe().expect("test executable path");
-    exe.parent()
-        .and_then(Path::parent)
-        .expect("target/<profile>/deps/<test>")
-        .join("aerie")
-}
-
 fn run(args: &[&str]) -> Output {
     let out = Command::new(aerie_bin())
         .args(args)

@@ -6,7 +6,7 @@
 //! host's Celestial Sphere and Atmosphere Controls set the frame's sun and haze.
 
 use std::net::UdpSocket;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -24,29 +24,12 @@ use aerie_sim_bridge::PosePosition;
 use aerie_terrain::bake::{bake, BakeParams};
 use aerie_terrain::dataset::load_dataset;
 use aerie_terrain::query::InMemorySource;
+use aerie_tests::aerie_bin;
 
 const LAT: f64 = 47.3;
 const LON: f64 = 11.4;
 const ALT: f64 = 4000.0;
 const FLAT_M: i16 = 1000;
-
-fn bin_dir() -> PathBuf {
-    let exe = std::env::current_exe().expect("test executable path");
-    exe.parent()
-        .and_then(Path::parent)
-        .expect("target/<profile>/deps/<test>")
-        .to_path_buf()
-}
-
-fn aerie_bin() -> PathBuf {
-    let status = Command::new(env!("CARGO"))
-        .args(["build", "-p", "aerie", "--bin", "aerie"])
-        .current_dir(aerie_tests::repo_root())
-        .status()
-        .expect("run cargo build");
-    assert!(status.success(), "cargo build of aerie failed");
-    bin_dir().join("aerie")
-}
 
 /// An SRTM3 tile named like the demo's, every sample at `FLAT_M`: the same geo-reference, a
 /// different ground.

@@ -6,33 +6,12 @@ use std::net::UdpSocket;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 use std::time::Duration;
 
 use aerie_sim_bridge::codec::native;
 use aerie_sim_bridge::{Pose, PosePosition};
-
-/// The `aerie` binary next to this test's executable (built once if missing).
-fn aerie() -> &'static Path {
-    static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| {
-        let exe = std::env::current_exe().expect("test executable path");
-        let bin = exe
-            .parent()
-            .and_then(Path::parent)
-            .expect("target/<profile>/deps/<test>")
-            .join("aerie");
-        if !bin.is_file() {
-            let status = Command::new(env!("CARGO"))
-                .args(["build", "-p", "aerie", "--bin", "aerie"])
-                .current_dir(aerie_tests::repo_root())
-                .status()
-                .expect("run cargo build");
-            assert!(status.success(), "cargo build of aerie failed");
-        }
-        bin
-    })
-}
+use aerie_tests::aerie_bin;
 
 /// A flat 65×65 raw f32 grid with `sidecar` (the JSON text) next to it.
 fn raw_dem(dir: &Path, sidecar: &str) -> PathBuf {
@@ -45,7 +24,7 @@ fn raw_dem(dir: &Path, sidecar: &str) -> PathBuf {
 
 /// Runs `aerie args…`, returning the exit code and stderr.
 fn aerie_exit(args: &[&str]) -> (Option<i32>, String) {
-    let out = Command::new(aerie())
+    let out = Command::new(aerie_bin())
         .args(args)
         .stdin(Stdio::null())
         .output()
@@ -144,7 +123,7 @@ fn absurd_native_poses_are_counted_and_never_drawn() {
         .port();
     let to = format!("127.0.0.1:{port}");
     let (json, stats) = (dir.path().join("run.json"), dir.path().join("stats.csv"));
-    let run = Command::new(aerie())
+    let run = Command::new(aerie_bin())
         .args([
             "run",
             "--headless",
@@ -221,4 +200,49 @@ fn absurd_native_poses_are_counted_and_never_drawn() {
         rows += 1;
     }
     assert_eq!(rows, 5, "{csv}");
+}
+
+/// Imagery that cannot be registered onto the terrain is bad input (exit 2) naming the file
+/// and the reason, whether the terrain has no geo-reference or the raster lies elsewhere.
+#[test]
+fn imagery_that_cannot_be_registered_is_bad_input_naming_the_file() {
+    use aerie::terrain::drape::{encode_geotiff, EncodeRef};
+    let dir = tempfile::tempdir().unwrap();
+    let far = dir.path().join("far.tif");
+    let g = EncodeRef {
+        epsg: 4326,
+        west: 100.0,
+        north: 10.0,
+        dx: 0.001,
+        dy: 0.001,
+    };
+    std::fs::write(&far, encode_geotiff(4, 4, 3, &[9; 48], Some(g)).unwrap()).unwrap();
+    let flat = raw_dem(
+        dir.path(),
+        r#"{"width": 65, "height": 65, "spacing_x": 30, "spacing_y": 30}"#,
+    );
+    let inn = dir.path().join("N47E011.hgt.zip");
+    std::fs::copy(aerie_tests::demo_dem(), &inn).unwrap();
+    let png = dir.path().join("out.png");
+    for (dem, camera, why) in [
+        (&flat, "900,900,800,0,-30,0", "no geo-reference"),
+        (&inn, "30500,12000,4500,0,-15,0", "no overlap"),
+    ] {
+        let (code, err) = aerie_exit(&[
+            "render",
+            "--dem",
+            dem.to_str().unwrap(),
+            "--camera",
+            camera,
+            "--size",
+            "64x36",
+            "--imagery",
+            far.to_str().unwrap(),
+            "--out",
+            png.to_str().unwrap(),
+        ]);
+        assert_eq!(code, Some(2), "{}: {err}", dem.display());
+        assert!(err.contains("far.tif") && err.contains(why), "{err}");
+        assert!(!png.exists(), "no picture is written for a refused run");
+    }
 }

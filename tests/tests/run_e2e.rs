@@ -23,40 +23,9 @@ use aerie_sim_bridge::{Geodetic, LocalTangentPlane, Pose, PosePosition};
 const MM: f64 = 1e-3;
 const DEG: f64 = 1e-3;
 
-/// target/<profile>/, where cargo puts the binaries (this test runs from target/<profile>/deps).
-fn bin_dir() -> PathBuf {
-    let exe = std::env::current_exe().expect("test executable path");
-    exe.parent()
-        .and_then(Path::parent)
-        .expect("target/<profile>/deps/<test>")
-        .to_path_buf()
-}
-
-fn bins() -> &'static (PathBuf, PathBuf) {
-    static BINS: OnceLock<(PathBuf, PathBuf)> = OnceLock::new();
-    BINS.get_or_init(|| {
-        let dir = bin_dir();
-        let (aerie, send) = (dir.join("aerie"), dir.join("aerie-send"));
-        // Always ask cargo (a no-op when up to date): a binary left from an older checkout must
-        // never be the one tested.
-        let status = Command::new(env!("CARGO"))
-            .args([
-                "build",
-                "-p",
-                "aerie",
-                "--bin",
-                "aerie",
-                "-p",
-                "aerie-sim-bridge",
-                "--bin",
-                "aerie-send",
-            ])
-            .current_dir(aerie_tests::repo_root())
-            .status()
-            .expect("run cargo build");
-        assert!(status.success(), "cargo build of aerie / aerie-send failed");
-        (aerie, send)
-    })
+/// The renderer and the test sender.
+fn bins() -> (&'static PathBuf, &'static PathBuf) {
+    (aerie_tests::aerie_bin(), aerie_tests::aerie_send_bin())
 }
 
 /// The demo DEM copied (with its bake, made once) into a folder shared by every test here, so
@@ -67,7 +36,7 @@ fn demo_dem() -> PathBuf {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("N47E011.hgt.zip");
         std::fs::copy(aerie_tests::demo_dem(), &p).unwrap();
-        let out = Command::new(&bins().0)
+        let out = Command::new(bins().0)
             .arg("bake")
             .arg(&p)
             .output()

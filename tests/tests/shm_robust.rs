@@ -5,31 +5,16 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::sync::{Mutex, OnceLock};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use aerie_sim_bridge::shm::ShmWriter;
 use aerie_sim_bridge::{Pose, PosePosition};
+use aerie_tests::aerie_bin;
 
 /// The timed shrinking-file test runs alone: not while another test here renders on lavapipe
 /// or compiles a writer on the same two cores.
 static SERIAL: Mutex<()> = Mutex::new(());
-
-/// `aerie`, built (or found up to date) once by cargo, so a stale binary is never tested.
-fn aerie() -> &'static Path {
-    static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| {
-        let status = Command::new(env!("CARGO"))
-            .args(["build", "-p", "aerie", "--bin", "aerie"])
-            .current_dir(aerie_tests::repo_root())
-            .status()
-            .expect("run cargo build");
-        assert!(status.success(), "cargo build of aerie failed");
-        let exe = std::env::current_exe().expect("test executable path");
-        // target/<profile>/deps/<test> → target/<profile>/aerie
-        exe.parent().and_then(Path::parent).unwrap().join("aerie")
-    })
-}
 
 /// Builds `sim-bridge/tests/c/shm_writer.c` from `aerie_pose.h` with `compiler` and `std_args`,
 /// warnings as errors, into `dir`; `None` (with a note) when the compiler is missing.
@@ -66,7 +51,7 @@ struct Listener {
 }
 
 fn listen(path: &Path, seconds: &str, json: &Path) -> Listener {
-    let mut child = Command::new(aerie())
+    let mut child = Command::new(aerie_bin())
         .args(["listen", "--protocol", "shm", "--shm-name"])
         .arg(path)
         .args(["--seconds", seconds, "--json"])
@@ -127,7 +112,7 @@ fn a_cxx11_writer_from_the_header_feeds_aerie_listen() {
         return;
     };
     let (file, json) = (dir.path().join("pose"), dir.path().join("listen.json"));
-    let _ = aerie();
+    let _ = aerie_bin();
     let child = listen(&file, "4", &json);
     // aerie waits for the file; the writer creates it and writes 10,000 poses (~1 s).
     let status = Command::new(&exe).arg(&file).arg("10000").status().unwrap();
@@ -162,7 +147,7 @@ fn shrinking_file_run() -> (serde_json::Value, u64) {
     };
     let mut w = ShmWriter::create(&file).unwrap();
     w.write(&pose(1));
-    let _ = aerie();
+    let _ = aerie_bin();
     let child = listen(&file, "4", &json);
     child.wait_ready();
     // 20 Hz for 2 s: cut the file, regrow it, write for the rest of the 50 ms.
@@ -227,7 +212,7 @@ fn a_c99_writer_from_the_header_drives_aerie_run() {
     // The writer starts first and holds its last pose; the IG then renders 30 frames from it.
     let status = Command::new(&exe).arg(&file).arg("3000").status().unwrap();
     assert!(status.success(), "writer: {status}");
-    let run = Command::new(aerie())
+    let run = Command::new(aerie_bin())
         .args(["run", "--headless", "--size", "64x36", "--frames", "30"])
         .arg("--dem")
         .arg(&dem)

@@ -9,21 +9,8 @@ use std::process::{Command, Output};
 use aerie::terrain::bake::{bake, BakeParams};
 use aerie::terrain::dataset::{load_dataset, load_dataset_tiles, Dataset};
 use aerie::terrain::store::{write_store, ImportParams, PageId, Store};
+use aerie_tests::aerie_bin;
 use sha2::{Digest, Sha256};
-
-fn aerie_bin() -> PathBuf {
-    let status = Command::new(env!("CARGO"))
-        .args(["build", "-p", "aerie", "--bin", "aerie"])
-        .current_dir(aerie_tests::repo_root())
-        .status()
-        .expect("run cargo build");
-    assert!(status.success(), "cargo build of aerie failed");
-    let exe = std::env::current_exe().expect("test executable path");
-    exe.parent()
-        .and_then(Path::parent)
-        .expect("target/<profile>/deps/<test>")
-        .join("aerie")
-}
 
 fn aerie(args: &[&str]) -> Output {
     Command::new(aerie_bin())

@@ -21,3 +21,12 @@ pub fn runtime(message: impl ToString) -> Failure {
         message: message.to_string(),
     }
 }
+
+/// A renderer failure: bad input where the renderer found the input could not be drawn
+/// ([`VkError::Input`]: a bake that does not fit, rasters that do not register), else runtime.
+pub fn renderer_failure(e: crate::vk::VkError) -> Failure {
+    match e {
+        crate::vk::VkError::Input(m) => bad_input(m),
+        e => runtime(e),
+    }
+}

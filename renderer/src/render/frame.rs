@@ -361,15 +361,15 @@ impl TerrainRenderer {
             self.desc.select.curvature,
             grid.geo.as_ref(),
         )
-        .map_err(VkError::Other)?;
+        .map_err(VkError::Input)?;
         if bake.width != grid.width || bake.height != grid.height {
-            return Err(VkError::Other(format!(
+            return Err(VkError::Input(format!(
                 "bake is for {}x{} samples, dataset has {}x{}",
                 bake.width, bake.height, grid.width, grid.height
             )));
         }
         if bake.params.tile_size != self.desc.tile_size {
-            return Err(VkError::Other(format!(
+            return Err(VkError::Input(format!(
                 "bake uses tiles of {} vertices, renderer {}: re-bake with --tile-size {}",
                 bake.params.tile_size, self.desc.tile_size, self.desc.tile_size
             )));
@@ -377,10 +377,10 @@ impl TerrainRenderer {
         let clipmap = self.desc.clipmap(&grid);
         clipmap
             .validate()
-            .map_err(|e| VkError::Other(format!("clipmap: {e}")))?;
+            .map_err(|e| VkError::Input(format!("clipmap: {e}")))?;
         let level_count = clipmap.level_count();
         if bake.levels.len() < level_count as usize {
-            return Err(VkError::Other(format!(
+            return Err(VkError::Input(format!(
                 "bake has {} levels, the clipmap needs {level_count}: re-bake with --levels 0",
                 bake.levels.len()
             )));
@@ -393,7 +393,7 @@ impl TerrainRenderer {
         if let Some(input) = self.desc.drape.clone() {
             let limit = self.device.properties.limits.max_image_dimension2_d;
             let rasters =
-                register(&input, &grid, limit.min(MAX_DRAPE_SIDE)).map_err(VkError::Other)?;
+                register(&input, &grid, limit.min(MAX_DRAPE_SIDE)).map_err(VkError::Input)?;
             self.wait_all()?;
             if let Some(mut old) = self.drape.take() {
                 old.destroy(&self.device);

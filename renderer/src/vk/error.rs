@@ -22,6 +22,10 @@ pub enum VkError {
     },
     #[error("staging ring: {0}")]
     Staging(String),
+    /// The input (data, bake, rasters, a choice of flags) cannot be drawn as asked: the
+    /// commands answer it as bad input (exit 2), not as a runtime failure.
+    #[error("{0}")]
+    Input(String),
     #[error("{0}")]
     Other(String),
 }

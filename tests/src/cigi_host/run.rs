@@ -17,26 +17,7 @@ use std::time::{Duration, Instant};
 use serde_json::Value;
 
 use super::{host_program, Arch, HostOutput};
-/// target/<profile>/, where cargo puts the binaries (this test runs from target/<profile>/deps).
-pub fn aerie_bin() -> &'static PathBuf {
-    static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| {
-        let exe = std::env::current_exe().expect("test executable path");
-        let dir = exe
-            .parent()
-            .and_then(Path::parent)
-            .expect("target/<profile>/deps/<test>");
-        // Always ask cargo (a no-op when up to date): never test a binary left from an older
-        // checkout.
-        let status = Command::new(env!("CARGO"))
-            .args(["build", "-p", "aerie", "--bin", "aerie"])
-            .current_dir(crate::repo_root())
-            .status()
-            .expect("run cargo build");
-        assert!(status.success(), "cargo build of aerie failed");
-        dir.join("aerie")
-    })
-}
+use crate::aerie_bin;
 
 /// The demo DEM copied (with its bake, made once) into a temporary folder: aerie never writes
 /// a bake next to the repository's copy.
@@ -121,12 +102,6 @@ impl Drained {
             )),
         }
     }
-}
-
-/// Waits for `child` at most `limit` (its pipes read from now on); kills it and returns `Err`
-/// with its stderr if longer.
-pub fn wait(child: Child, limit: Duration, what: &str) -> Result<Output, String> {
-    drain(child).wait(limit, what)
 }
 
 /// One `aerie run` driven by one host.

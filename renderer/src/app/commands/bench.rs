@@ -41,7 +41,7 @@ use std::time::Instant;
 use clap::Args;
 
 use crate::app::args::{read_waypoints, LookArg, PassArgs, StoreArgs, Switch};
-use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::failure::{bad_input, renderer_failure, runtime, Failure};
 use crate::app::flight_plan::FlightPlan;
 use crate::app::out_path::{prepare_run_folder, WriteFailures, BENCH_FILES};
 use crate::app::prepare::{prepare_source, prepare_terrain, Terrain};
@@ -439,7 +439,11 @@ fn run_flight(
         };
         renderer
             .load_source(source, bake.clone(), eye0)
-            .map_err(|e| runtime(format!("{}: {e}", config.label())))?;
+            .map_err(|e| {
+                let mut f = renderer_failure(e);
+                f.message = format!("{}: {}", config.label(), f.message);
+                f
+            })?;
         lanes.push(Lane {
             config,
             renderer,

@@ -25,7 +25,7 @@ use crate::app::commands::flight_files::{
 };
 use crate::app::commands::fly_no_draw::{fly_no_draw, NoDrawFlight};
 use crate::app::commands::render::stream_json;
-use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::failure::{bad_input, renderer_failure, runtime, Failure};
 use crate::app::flight_plan::FlightPlan;
 use crate::app::out_path::{prepare_run_folder, WriteFailures, FLY_FILES};
 use crate::app::prepare::prepare_source;
@@ -165,7 +165,7 @@ pub fn run(a: FlyArgs) -> Result<(), Failure> {
             terrain.bake.clone(),
             flight.pose_at(0.0).0,
         )
-        .map_err(runtime)?;
+        .map_err(renderer_failure)?;
     eprintln!(
         "{} clipmap levels filled: {:.1} MB in {} submissions ({:.2} s) on {}",
         up.levels,

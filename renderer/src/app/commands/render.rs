@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use crate::app::args::{GpuArgs, StoreArgs};
-use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::failure::{bad_input, renderer_failure, runtime, Failure};
 use crate::app::out_path::{prepare_out_file, with_suffix};
 use crate::app::prepare::prepare_source;
 use crate::app::renderer_setup::setup;
@@ -138,7 +138,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     let mut r = TerrainRenderer::new(&s.desc).map_err(runtime)?;
     let source = terrain.source.clone();
     r.load_source(source, terrain.bake.clone(), position)
-        .map_err(runtime)?;
+        .map_err(renderer_failure)?;
     let lighting = Lighting::from_host(sun, a.visibility);
     r.set_lighting(lighting);
     let sun_drawn = lighting.sun_enu;

@@ -15,7 +15,7 @@ use crate::app::commands::run::args::RunArgs;
 use crate::app::commands::run::ig::{ig_driver, IgDriver};
 use crate::app::commands::run::plan::{plan, renderer_desc, Plan};
 use crate::app::commands::run::poses::{open_input, open_stats, RunPoses, StraightPassSource};
-use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::failure::{bad_input, renderer_failure, runtime, Failure};
 use crate::app::prepare::{prepare_source, Terrain};
 use crate::app::window::pose_source::PoseSource;
 use crate::render::frame::TerrainRenderer;
@@ -130,7 +130,7 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
         };
         renderer
             .load_source(terrain.source.clone(), terrain.bake.clone(), start.position)
-            .map_err(runtime)?;
+            .map_err(renderer_failure)?;
         frame_loop(a, &plan, &sizes, &mut renderer, &mut poses)
     })();
     let device = renderer.device_name().to_string();

@@ -8,7 +8,7 @@ use crate::app::commands::run::headless::straight_pass;
 use crate::app::commands::run::ig::{ig_driver, IgDriver};
 use crate::app::commands::run::plan::{plan, renderer_desc, Plan};
 use crate::app::commands::run::poses::{open_input, open_stats, RunPoses, StraightPassSource};
-use crate::app::failure::{bad_input, runtime, Failure};
+use crate::app::failure::{bad_input, renderer_failure, runtime, Failure};
 use crate::app::prepare::prepare_source;
 use crate::app::window::display::required_instance_extensions;
 use crate::app::window::report::{RunOptions, RunReport, WindowError};
@@ -52,7 +52,7 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
     let start = source.default_view().position;
     renderer
         .load_source(terrain.source.clone(), terrain.bake.clone(), start)
-        .map_err(runtime)?;
+        .map_err(renderer_failure)?;
     let opts = RunOptions {
         max_frames: a.frames,
         max_seconds: a.seconds,
