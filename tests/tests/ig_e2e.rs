@@ -128,7 +128,7 @@ fn database_number_switches_datasets_and_the_host_sets_the_light() {
     let json = dir.path().join("run.json");
     let s = |p: &Path| p.display().to_string();
     let child = spawn(
-        &aerie_bin(),
+        aerie_bin(),
         &[
             "run".into(),
             "--headless".into(),
