@@ -27,10 +27,15 @@
 //!   sea → water; 48 (no data) → none.
 //!
 //! A code in neither (unknown) is drawn with the derived classes and counted in the summary.
+//!
+//! The same table may stand in a run config (`aerie run --config ig.toml`), where it may also
+//! name the raster, relative to the config's folder (`raster = "worldcover.tif"`, as
+//! `--landcover`); flags given on the command line win over it.
 
 use std::collections::BTreeMap;
+use std::path::PathBuf;
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// aerie's land-cover classes, in the shaders' order (`shaders/landcover.glsl`).
 pub const CLASS_NAMES: [&str; 8] = [
@@ -47,6 +52,14 @@ pub enum Preset {
 }
 
 impl Preset {
+    /// Its name in a config.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::WorldCover => "worldcover",
+            Self::Corine => "corine",
+        }
+    }
+
     pub fn parse(s: &str) -> Option<Self> {
         match s {
             "worldcover" => Some(Self::WorldCover),
@@ -130,48 +143,121 @@ struct RawFile {
 
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawLandcover {
+pub(crate) struct RawLandcover {
+    raster: Option<PathBuf>,
     preset: Option<String>,
     #[serde(default)]
     codes: BTreeMap<String, String>,
 }
 
-/// Parses a TOML text holding a `[landcover]` table; errors name `source` and the key.
+/// A run config's `[landcover]` table: the code mapping and, optionally, the raster.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct LandcoverSettings {
+    /// The land-cover raster, relative to the config's folder (`--landcover` wins over it).
+    pub raster: Option<PathBuf>,
+    pub map: LandcoverMap,
+}
+
+impl Serialize for LandcoverSettings {
+    /// Written back as the table it was read from (a config's `to_toml` round trip).
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(None)?;
+        if let Some(r) = &self.raster {
+            m.serialize_entry("raster", r)?;
+        }
+        if let Some(p) = self.map.preset {
+            m.serialize_entry("preset", p.name())?;
+        }
+        if !self.map.codes.is_empty() {
+            let codes: BTreeMap<String, &str> = self
+                .map
+                .codes
+                .iter()
+                .map(|(&code, &class)| (code.to_string(), class_name(class)))
+                .collect();
+            m.serialize_entry("codes", &codes)?;
+        }
+        m.end()
+    }
+}
+
+fn class_name(class: u8) -> &'static str {
+    CLASS_NAMES.get(class as usize).copied().unwrap_or("none")
+}
+
+impl RawLandcover {
+    /// Validates the table; errors are (dotted key, reason).
+    pub(crate) fn validate(self) -> Result<LandcoverSettings, (String, String)> {
+        let preset = match self.preset.as_deref() {
+            None => None,
+            Some(p) => Some(Preset::parse(p).ok_or_else(|| {
+                (
+                    "landcover.preset".to_owned(),
+                    format!("`{p}` is not a preset (worldcover, corine)"),
+                )
+            })?),
+        };
+        let mut codes = BTreeMap::new();
+        for (k, v) in &self.codes {
+            let key = format!("landcover.codes.{k}");
+            let code: u8 = k
+                .parse()
+                .ok()
+                .filter(|&c| c != NO_CLASS)
+                .ok_or_else(|| (key.clone(), "the key must be a raster code 0..=254".into()))?;
+            let class = if v == "none" {
+                NO_CLASS
+            } else {
+                CLASS_NAMES.iter().position(|n| n == v).ok_or_else(|| {
+                    (
+                        key.clone(),
+                        format!("`{v}` is not a class ({}, none)", CLASS_NAMES.join(", ")),
+                    )
+                })? as u8
+            };
+            codes.insert(code, class);
+        }
+        if preset.is_none() && codes.is_empty() {
+            return Err((
+                "landcover".to_owned(),
+                "[landcover] needs a preset or [landcover.codes]".to_owned(),
+            ));
+        }
+        if self
+            .raster
+            .as_ref()
+            .is_some_and(|r| r.as_os_str().is_empty())
+        {
+            return Err((
+                "landcover.raster".to_owned(),
+                "must name a GeoTIFF of class codes".to_owned(),
+            ));
+        }
+        Ok(LandcoverSettings {
+            raster: self.raster,
+            map: LandcoverMap { preset, codes },
+        })
+    }
+}
+
+/// Parses a TOML text holding a `[landcover]` table (a `--landcover-map` file); errors name
+/// `source` and the key. The raster is named by `--landcover` there, not in the table.
 pub fn parse_landcover(text: &str, source: &str) -> Result<LandcoverMap, String> {
     let raw: RawFile =
         toml::from_str(text).map_err(|e| format!("{source}: {}", e.message().trim()))?;
     let raw = raw
         .landcover
         .ok_or_else(|| format!("{source}: no [landcover] table"))?;
-    let preset = match raw.preset.as_deref() {
-        None => None,
-        Some(p) => Some(Preset::parse(p).ok_or_else(|| {
-            format!("{source}: landcover.preset: `{p}` is not a preset (worldcover, corine)")
-        })?),
-    };
-    let mut codes = BTreeMap::new();
-    for (k, v) in &raw.codes {
-        let code: u8 = k.parse().ok().filter(|&c| c != NO_CLASS).ok_or_else(|| {
-            format!("{source}: landcover.codes.{k}: the key must be a raster code 0..=254")
-        })?;
-        let class = if v == "none" {
-            NO_CLASS
-        } else {
-            CLASS_NAMES.iter().position(|n| n == v).ok_or_else(|| {
-                format!(
-                    "{source}: landcover.codes.{k}: `{v}` is not a class ({}, none)",
-                    CLASS_NAMES.join(", ")
-                )
-            })? as u8
-        };
-        codes.insert(code, class);
-    }
-    if preset.is_none() && codes.is_empty() {
+    if raw.raster.is_some() {
         return Err(format!(
-            "{source}: [landcover] needs a preset or [landcover.codes]"
+            "{source}: landcover.raster: a --landcover-map file maps codes only; name the raster with --landcover (or put the table in the run config)"
         ));
     }
-    Ok(LandcoverMap { preset, codes })
+    let s = raw
+        .validate()
+        .map_err(|(key, why)| format!("{source}: {key}: {why}"))?;
+    Ok(s.map)
 }
 
 #[cfg(test)]
@@ -208,6 +294,10 @@ mod tests {
             ),
             ("[landcover.codes]\n12 = \"jungle\"\n", "landcover.codes.12"),
             ("[landcover]\n", "needs a preset"),
+            (
+                "[landcover]\npreset = \"corine\"\nraster = \"a.tif\"\n",
+                "--landcover",
+            ),
             ("[other]\n", "lc.toml"),
         ] {
             let e = parse_landcover(text, "lc.toml").unwrap_err();

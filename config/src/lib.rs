@@ -31,6 +31,10 @@
 //!
 //! [databases]               # optional: CIGI database number → dataset (see [`Databases`])
 //! 1 = "dem/N47E011.hgt.zip"
+//!
+//! [landcover]               # optional: land-cover codes (see [`landcover`])
+//! raster = "worldcover.tif" # optional, relative to the config's folder
+//! preset = "worldcover"
 //! ```
 
 mod channels;
@@ -59,6 +63,7 @@ pub use error::{ConfigError, Location};
 pub use input::{
     HostHeightsName, InputProtocolName, InputSettings, MAX_SYNC_FRAMES, MAX_WORLD_BOUND_M,
 };
+pub use landcover::LandcoverSettings;
 pub use limits::{MAX_CHANNELS, MAX_CONFIG_BYTES};
 pub use locate::key_location;
 pub use settings::{
@@ -85,6 +90,9 @@ pub struct RenderConfig {
     /// The `[entities]` table: models of the host's other entities and their LOD.
     #[serde(skip_serializing_if = "EntitySettings::is_default")]
     pub entities: EntitySettings,
+    /// The `[landcover]` table: the land-cover raster's code mapping (and the raster).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub landcover: Option<LandcoverSettings>,
 }
 
 impl RenderConfig {
@@ -176,6 +184,7 @@ pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError>
     let raw_channels = std::mem::take(&mut raw.channel);
     let raw_databases = std::mem::take(&mut raw.databases);
     let raw_entities = std::mem::take(&mut raw.entities);
+    let raw_landcover = raw.landcover.take();
     if raw_channels.len() > MAX_CHANNELS {
         return Err(ConfigError::Invalid {
             source_name: source_name.to_owned(),
@@ -217,6 +226,15 @@ pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError>
             key,
             message,
         })?;
+    cfg.landcover = raw_landcover
+        .map(landcover::RawLandcover::validate)
+        .transpose()
+        .map_err(|(key, message)| ConfigError::Invalid {
+            source_name: source_name.to_owned(),
+            location: locate::key_location(text, &key),
+            key,
+            message,
+        })?;
     Ok(cfg)
 }
 
@@ -235,6 +253,7 @@ struct RawConfig {
     databases: std::collections::BTreeMap<String, PathBuf>,
     #[serde(default)]
     entities: entities::RawEntities,
+    landcover: Option<landcover::RawLandcover>,
 }
 
 #[derive(Debug, Default, Deserialize)]
@@ -380,6 +399,7 @@ impl RawConfig {
             channels: Vec::new(),
             databases: Databases::default(),
             entities: EntitySettings::default(),
+            landcover: None,
         })
     }
 }

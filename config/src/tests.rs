@@ -482,6 +482,7 @@ fn arb_config() -> impl Strategy<Value = RenderConfig> {
                     channels: Vec::new(),
                     databases: Default::default(),
                     entities: Default::default(),
+                    landcover: None,
                 }
             },
         )
@@ -500,4 +501,45 @@ proptest! {
         prop_assert_eq!(r.is_ok(), is_valid_tile_size(m));
         prop_assert_eq!(is_valid_tile_size(m), (3..=257).contains(&m) && (m - 1).is_power_of_two());
     }
+}
+
+#[test]
+fn landcover_table_parses_round_trips_and_names_bad_keys() {
+    let text = r#"
+        [landcover]
+        raster = "cover/worldcover.tif"
+        preset = "worldcover"
+
+        [landcover.codes]
+        10 = "rock"
+        200 = "none"
+    "#;
+    let cfg = parse(text, FILE).unwrap();
+    let lc = cfg.landcover.as_ref().expect("[landcover] read");
+    assert_eq!(
+        lc.raster.as_deref(),
+        Some(Path::new("cover/worldcover.tif"))
+    );
+    let t = lc.map.table();
+    // 10 overridden to rock (5), 40 from the preset (crops, 3), 200 explicitly none.
+    assert_eq!((t[10], t[40], t[200]), (5, 3, landcover::NO_CLASS));
+    assert_eq!(parse(&cfg.to_toml().unwrap(), FILE).unwrap(), cfg);
+    assert!(parse("", FILE).unwrap().landcover.is_none());
+    for (text, key) in [
+        ("[landcover]\npreset = \"modis\"\n", "landcover.preset"),
+        (
+            "[landcover.codes]\n300 = \"forest\"\n",
+            "landcover.codes.300",
+        ),
+        ("[landcover.codes]\n12 = \"jungle\"\n", "landcover.codes.12"),
+        ("[landcover]\nraster = \"a.tif\"\n", "landcover"),
+        (
+            "[landcover]\npreset = \"corine\"\nraster = \"\"\n",
+            "landcover.raster",
+        ),
+    ] {
+        assert_invalid(text, key);
+    }
+    let e = err("[landcover]\npreset = \"corine\"\ncolour = 1\n");
+    assert_names(&e, "landcover.colour");
 }

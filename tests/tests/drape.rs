@@ -389,3 +389,86 @@ fn rasters_that_cannot_be_placed_are_refused_naming_the_file() {
         assert_validation_clean(&counters);
     }
 }
+
+/// `aerie run --config` with a `[landcover]` table: its raster (relative to the config) and
+/// code table are used; `--landcover-map` on the command line wins over the table. The run
+/// summary's `drape` names the raster and counts the texels whose code the table lacks.
+#[test]
+fn the_run_config_landcover_table_maps_the_raster_and_flags_win() {
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let dem = dir.path().join("N47E011.hgt.zip");
+    std::fs::copy(demo_dem(), &dem).unwrap();
+    // 3 bands of codes over the valley: 10 (forest in WorldCover), 33 (no WorldCover code,
+    // mapped to rock by the table), 99 (known to neither).
+    let (w, h) = (30u32, 30u32);
+    let codes: Vec<u8> = (0..w * h)
+        .map(|i| [10u8, 33, 99][(i % w / 10) as usize])
+        .collect();
+    let g = EncodeRef {
+        epsg: 4326,
+        west: 11.2,
+        north: 47.4,
+        dx: 0.01,
+        dy: 0.01,
+    };
+    write_tif(dir.path(), "codes.tif", w, h, 1, &codes, g);
+    let cfg = dir.path().join("ig.toml");
+    std::fs::write(
+        &cfg,
+        "[landcover]\nraster = \"codes.tif\"\npreset = \"worldcover\"\n[landcover.codes]\n33 = \"rock\"\n",
+    )
+    .unwrap();
+    let run = |extra: &[&str]| -> serde_json::Value {
+        let json = dir.path().join("run.json");
+        let out = Command::new(aerie_bin())
+            .args([
+                "run",
+                "--headless",
+                "--frames",
+                "2",
+                "--size",
+                "64x36",
+                "--config",
+            ])
+            .arg(&cfg)
+            .arg("--dem")
+            .arg(&dem)
+            .arg("--json")
+            .arg(&json)
+            .args(extra)
+            .stdin(Stdio::null())
+            .output()
+            .expect("run aerie");
+        assert!(
+            out.status.success(),
+            "aerie run {extra:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
+    };
+    let unknown = |s: &serde_json::Value| -> Vec<String> {
+        let mut v: Vec<String> = s["drape"]["unknown_codes"]
+            .as_object()
+            .expect("unknown_codes")
+            .keys()
+            .cloned()
+            .collect();
+        v.sort();
+        v
+    };
+    let s = run(&[]);
+    let d = &s["drape"];
+    assert!(
+        d["landcover"]
+            .as_str()
+            .is_some_and(|p| p.ends_with("codes.tif")),
+        "{d}"
+    );
+    assert!(d["landcover_covered_texels"].as_u64() > Some(0), "{d}");
+    assert!(d["unknown_code_texels"].as_u64() > Some(0), "{d}");
+    assert_eq!(unknown(&s), ["99"], "{d}");
+    // The flag's preset replaces the table: 33 is unknown again.
+    let s = run(&["--landcover-map", "worldcover"]);
+    assert_eq!(unknown(&s), ["33", "99"], "{}", s["drape"]);
+}

@@ -87,9 +87,10 @@ pub struct DrapeArgs {
     #[arg(long)]
     pub landcover: Option<PathBuf>,
     /// The land-cover codes' meaning: worldcover, corine, or a TOML file with a [landcover]
-    /// table (a preset and/or [landcover.codes]).
-    #[arg(long, default_value = "worldcover")]
-    pub landcover_map: String,
+    /// table (a preset and/or [landcover.codes]). Default: the run config's [landcover]
+    /// table, else worldcover.
+    #[arg(long)]
+    pub landcover_map: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]

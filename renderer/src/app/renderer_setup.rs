@@ -155,9 +155,30 @@ pub fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
 /// Reads the rasters `--imagery` and `--landcover` name and the land-cover code table; a bad
 /// file is bad input naming it (its registration onto the terrain comes when it is loaded).
 pub fn drape_input(a: &DrapeArgs) -> Result<Option<SharedDrapeInput>, Failure> {
+    drape_input_with(a, None)
+}
+
+/// As [`drape_input`], with a run config's `[landcover]` table (and the config's folder, which
+/// its raster path is relative to) filling what the flags leave unset: `--landcover` wins over
+/// its `raster`, `--landcover-map` over its codes.
+pub fn drape_input_with(
+    a: &DrapeArgs,
+    config: Option<(&aerie_config::LandcoverSettings, &std::path::Path)>,
+) -> Result<Option<SharedDrapeInput>, Failure> {
     use aerie_config::landcover::{parse_landcover, LandcoverMap, Preset};
     use aerie_terrain::drape::read_raster;
-    if a.imagery.is_empty() && a.landcover.is_none() {
+    let raster = a
+        .landcover
+        .clone()
+        .or_else(|| config.and_then(|(lc, dir)| lc.raster.as_ref().map(|r| dir.join(r))));
+    if let (Some((lc, _)), None) = (config, &raster) {
+        if lc.raster.is_none() && a.landcover.is_none() {
+            eprintln!(
+                "warning: [landcover] maps codes but no raster is given (landcover.raster or --landcover): the classes are derived from the terrain"
+            );
+        }
+    }
+    if a.imagery.is_empty() && raster.is_none() {
         return Ok(None);
     }
     let read = |p: &std::path::Path| read_raster(p).map_err(|e| bad_input(e.to_string()));
@@ -166,24 +187,60 @@ pub fn drape_input(a: &DrapeArgs) -> Result<Option<SharedDrapeInput>, Failure> {
         .iter()
         .map(|p| read(p))
         .collect::<Result<Vec<_>, _>>()?;
-    let landcover = a.landcover.as_deref().map(read).transpose()?;
-    let map = match Preset::parse(&a.landcover_map) {
-        Some(p) => LandcoverMap::preset(p),
-        None => {
-            let text = std::fs::read_to_string(&a.landcover_map).map_err(|e| {
-                bad_input(format!(
-                    "--landcover-map: {}: {e} (worldcover, corine or a TOML file)",
-                    a.landcover_map
-                ))
-            })?;
-            parse_landcover(&text, &a.landcover_map).map_err(bad_input)?
-        }
+    let landcover = raster.as_deref().map(read).transpose()?;
+    let map = match (&a.landcover_map, config) {
+        (None, Some((lc, _))) => lc.map.clone(),
+        (None, None) => LandcoverMap::preset(Preset::WorldCover),
+        (Some(m), _) => match Preset::parse(m) {
+            Some(p) => LandcoverMap::preset(p),
+            None => {
+                let text = std::fs::read_to_string(m).map_err(|e| {
+                    bad_input(format!(
+                        "--landcover-map: {m}: {e} (worldcover, corine or a TOML file)"
+                    ))
+                })?;
+                parse_landcover(&text, m).map_err(bad_input)?
+            }
+        },
     };
     Ok(Some(Arc::new(DrapeInput {
         imagery,
         landcover,
         table: map.table(),
     })))
+}
+
+/// What was draped, for a command's JSON summary (null without rasters): the files, the
+/// textures' sizes and texels per terrain sample, the land-cover texels the raster covered and
+/// those whose code the table does not know (drawn with the derived classes, by code), and the
+/// textures' device bytes.
+pub fn drape_json(r: &crate::render::frame::TerrainRenderer) -> serde_json::Value {
+    let (Some(input), (Some(rasters), bytes)) = (r.desc().drape.as_ref(), r.draped()) else {
+        return serde_json::Value::Null;
+    };
+    let size = |s: &aerie_terrain::drape::DrapeSize| serde_json::json!({"texels": [s.width, s.height], "texels_per_sample": s.texels_per_sample});
+    let unknown: serde_json::Map<String, serde_json::Value> = rasters
+        .code_counts
+        .as_ref()
+        .map(|s| {
+            s.codes
+                .iter()
+                .enumerate()
+                .filter(|&(c, &n)| n > 0 && input.table[c] == aerie_terrain::drape::CODE_NONE)
+                .map(|(c, &n)| (c.to_string(), n.into()))
+                .collect()
+        })
+        .unwrap_or_default();
+    serde_json::json!({
+        "imagery": input.imagery.iter().map(|r| r.path.clone()).collect::<Vec<_>>(),
+        "imagery_texture": rasters.imagery.as_ref().map(|(s, _)| size(s)),
+        "landcover": input.landcover.as_ref().map(|r| r.path.clone()),
+        "landcover_texture": rasters.classes.as_ref().map(|(s, _)| size(s)),
+        "landcover_covered_texels": rasters.code_counts.as_ref().map(|s| s.covered),
+        "unknown_code_texels": rasters.unknown_code_texels(&input.table),
+        "unknown_codes": unknown,
+        "gpu_bytes": bytes,
+    })
 }
 
 #[cfg(test)]

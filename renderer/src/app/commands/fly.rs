@@ -260,6 +260,7 @@ fn fly_one_camera(
     }
     bar.finish_and_clear();
     let device = r.device_name().to_string();
+    let drape = crate::app::renderer_setup::drape_json(r);
     r.destroy();
     r.validation_counters().verdict().map_err(runtime)?;
     for v in [&mut gpu_ms, &mut frame_ms, &mut triangles] {
@@ -282,6 +283,7 @@ fn fly_one_camera(
         "tiles_drawn": drawn,
         "max_terrain_data_us": data_us,
         "stream": stream_json(&last),
+        "drape": drape,
         "validation": {
             "enabled": s.desc.validation,
             "errors": r.validation_counters().errors(),
@@ -509,6 +511,7 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
     let device = r.device_name().to_string();
     let counters = r.validation_counters();
     let validation = r.desc().validation;
+    let drape = crate::app::renderer_setup::drape_json(r);
     r.destroy();
     counters.verdict().map_err(runtime)?;
     frame_ms.sort_by(f64::total_cmp);
@@ -549,6 +552,7 @@ pub fn fly_channels(r: &mut TerrainRenderer, job: ChannelFlight) -> Result<(), F
         },
         "overlay": a.overlay,
         "frame_ms": median_p99_max(&frame_ms),
+        "drape": drape,
         "validation": {"enabled": validation, "errors": counters.errors(), "warnings": counters.warnings()},
     });
     let done = write_csv_and_summary(&a.out, &csv, summary, &mut failures);

@@ -161,6 +161,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     let mapping = mapping.ok();
     let centre_hit = centre_hit(&camera, &r.depth(), (width, height), mapping.as_ref());
     let device = r.device_name().to_string();
+    let drape = crate::app::renderer_setup::drape_json(&r);
     r.destroy();
     r.validation_counters().verdict().map_err(runtime)?;
     write_png(&a.out, width, height, &rgba).map_err(runtime)?;
@@ -188,6 +189,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         "camera": camera_json(&camera, mapping.as_ref()),
         "centre_hit": centre_hit,
         "sun": sun_drawn,
+        "drape": drape,
         "out": a.out.display().to_string(),
     });
     let line = summary.to_string();

@@ -98,7 +98,7 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
         .map_err(|e| bad_input(format!("--size: {e}")))?;
     let sizes = channel_sizes(&plan.channels, size, (cfg.width, cfg.height));
     let mut desc = renderer_desc(a, &plan, sizes[0], None);
-    desc.drape = crate::app::renderer_setup::drape_input(&a.drape)?;
+    desc.drape = super::plan::drape(a, &plan)?;
     let terrain = prepare_source(&a.dem, &desc, &a.store)?;
     let period_s = a
         .seconds
@@ -134,6 +134,7 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
         frame_loop(a, &plan, &sizes, &mut renderer, &mut poses)
     })();
     let device = renderer.device_name().to_string();
+    let drape = crate::app::renderer_setup::drape_json(&renderer);
     let counters = renderer.validation_counters();
     renderer.destroy();
     let finished = poses.finish();
@@ -170,6 +171,7 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
         "input": poses.summary_json(),
         "ig": poses.ig.as_ref().map(IgDriver::summary_json),
         "stats": a.stats.as_ref().map(|p| p.display().to_string()),
+        "drape": drape,
         "validation": {
             "enabled": desc.validation,
             "errors": counters.errors(),

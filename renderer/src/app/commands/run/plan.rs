@@ -100,6 +100,22 @@ fn check_args(a: &RunArgs) -> Result<(), Failure> {
 
 /// Checks the arguments, reads the config, resolves the settings and picks the channels
 /// (laid out side by side with `--windowed`).
+/// The draped rasters of a run: the flags, and the config's `[landcover]` table (its raster
+/// relative to the config's folder) where the flags leave it unset.
+pub(crate) fn drape(
+    a: &RunArgs,
+    plan: &Plan,
+) -> Result<Option<crate::render::drape_textures::SharedDrapeInput>, Failure> {
+    let dir = a
+        .config
+        .as_deref()
+        .and_then(std::path::Path::parent)
+        .map(std::path::Path::to_path_buf)
+        .unwrap_or_default();
+    let landcover = plan.config.landcover.as_ref().map(|lc| (lc, dir.as_path()));
+    crate::app::renderer_setup::drape_input_with(&a.drape, landcover)
+}
+
 pub(crate) fn plan(a: &RunArgs) -> Result<Plan, Failure> {
     check_args(a)?;
     let (config, source) = match &a.config {

@@ -28,7 +28,7 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
         .nominal_size()
         .unwrap_or((cfg.width, cfg.height));
     let mut desc = renderer_desc(a, &plan, (width, height), Some(extensions));
-    desc.drape = crate::app::renderer_setup::drape_input(&a.drape)?;
+    desc.drape = super::plan::drape(a, &plan)?;
     let terrain = prepare_source(&a.dem, &desc, &a.store)?;
     let period_s = a
         .seconds
