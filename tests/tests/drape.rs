@@ -181,6 +181,7 @@ fn checkerboard_imagery_lands_on_the_samples_the_geodesy_says() {
         imagery: vec![read_raster(&path).unwrap()],
         landcover: None,
         table: [NO_CLASS; 256],
+        budget_bytes: u64::MAX,
     };
     let desc = desc_with(Look::Classes, input);
     let cam = Camera::new(
@@ -252,6 +253,7 @@ fn land_cover_raster_classes_match_the_cpu_twin() {
         imagery: Vec::new(),
         landcover: Some(read_raster(&path).unwrap()),
         table,
+        budget_bytes: u64::MAX,
     };
     let desc = desc_with(Look::Classes, input);
     let cam = down_camera();
@@ -338,6 +340,7 @@ fn imagery_in_the_full_look_matches_golden_image() {
         imagery: vec![read_raster(&path).unwrap(), read_raster(&red).unwrap()],
         landcover: None,
         table: [NO_CLASS; 256],
+        budget_bytes: u64::MAX,
     };
     let desc = desc_with(Look::Full, input);
     let cam = Camera::new(
@@ -373,6 +376,7 @@ fn rasters_that_cannot_be_placed_are_refused_naming_the_file() {
         imagery: vec![read_raster(&far).unwrap()],
         landcover: None,
         table: [NO_CLASS; 256],
+        budget_bytes: u64::MAX,
     };
     let desc = desc_with(Look::Full, input.clone());
     let cam = down_camera();
@@ -471,4 +475,23 @@ fn the_run_config_landcover_table_maps_the_raster_and_flags_win() {
     // The flag's preset replaces the table: 33 is unknown again.
     let s = run(&["--landcover-map", "worldcover"]);
     assert_eq!(unknown(&s), ["33", "99"], "{}", s["drape"]);
+    // Within the default budget the classes take one texel per sample; under a 0.1 MiB budget
+    // (104,857 one-byte texels) a coarser texture, told as capped.
+    let texels = |s: &serde_json::Value| {
+        let t = &s["drape"]["landcover_texture"]["texels"];
+        t[0].as_u64().unwrap() * t[1].as_u64().unwrap()
+    };
+    assert_eq!(s["drape"]["capped"], false);
+    assert!(texels(&s) > 1_000_000, "{}", s["drape"]);
+    let s = run(&["--drape-mb", "0.1"]);
+    let d = &s["drape"];
+    assert_eq!(d["capped"], true, "{d}");
+    assert!(texels(&s) <= 104_857 && texels(&s) > 90_000, "{d}");
+    // The device rounds allocations up and holds a 1×1 placeholder for the absent imagery.
+    let (gpu, budget) = (
+        d["gpu_bytes"].as_u64().unwrap(),
+        d["budget_bytes"].as_u64().unwrap(),
+    );
+    assert!(gpu <= budget + 32 * 1024, "{d}");
+    assert_eq!(unknown(&s), ["99"], "{d}");
 }

@@ -91,6 +91,10 @@ pub struct DrapeArgs {
     /// table, else worldcover.
     #[arg(long)]
     pub landcover_map: Option<String>,
+    /// Device memory the draped textures may take together, MiB (imagery four fifths of it
+    /// when a land-cover raster shares it): past it a texture gets fewer texels per sample.
+    #[arg(long, default_value_t = crate::render::drape_textures::DEFAULT_DRAPE_MIB)]
+    pub drape_mb: f64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]

@@ -181,6 +181,12 @@ pub fn drape_input_with(
     if a.imagery.is_empty() && raster.is_none() {
         return Ok(None);
     }
+    if !(a.drape_mb.is_finite() && a.drape_mb > 0.0 && a.drape_mb <= 65536.0) {
+        return Err(bad_input(format!(
+            "--drape-mb: {} must be a number of MiB in (0, 65536]",
+            a.drape_mb
+        )));
+    }
     let read = |p: &std::path::Path| read_raster(p).map_err(|e| bad_input(e.to_string()));
     let imagery = a
         .imagery
@@ -207,6 +213,7 @@ pub fn drape_input_with(
         imagery,
         landcover,
         table: map.table(),
+        budget_bytes: (a.drape_mb * 1024.0 * 1024.0) as u64,
     })))
 }
 
@@ -240,6 +247,8 @@ pub fn drape_json(r: &crate::render::frame::TerrainRenderer) -> serde_json::Valu
         "unknown_code_texels": rasters.unknown_code_texels(&input.table),
         "unknown_codes": unknown,
         "gpu_bytes": bytes,
+        "budget_bytes": input.budget_bytes,
+        "capped": rasters.capped,
     })
 }
 

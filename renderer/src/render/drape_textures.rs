@@ -24,13 +24,36 @@ use crate::vk::{Buffer, Device, VkError, VkResultExt};
 /// The largest draped texture side asked of any device (the device's own limit may be lower).
 pub const MAX_DRAPE_SIDE: u32 = 8192;
 
+/// The draped textures' default device memory budget (`--drape-mb`), MiB: as much again as
+/// DESIGN's budget for the clipmap and the pools.
+pub const DEFAULT_DRAPE_MIB: f64 = 64.0;
+
 /// What the user gave to drape: the imagery files (later ones on top), the land-cover raster
-/// and its code → class table ([`CODE_NONE`]: keep the derived classes).
+/// and its code → class table ([`CODE_NONE`]: keep the derived classes), and the device bytes
+/// the draped textures may take together.
 #[derive(Clone)]
 pub struct DrapeInput {
     pub imagery: Vec<GeoRaster>,
     pub landcover: Option<GeoRaster>,
     pub table: [u8; 256],
+    pub budget_bytes: u64,
+}
+
+impl DrapeInput {
+    /// Texels each texture may have under the budget: the imagery (4 bytes a texel, its mip
+    /// chain 4/3 of that) gets four fifths when a land-cover raster (1 byte, no mips) shares
+    /// the budget, all of it alone; the classes get the rest.
+    pub fn texel_budgets(&self) -> (usize, usize) {
+        let b = self.budget_bytes as f64;
+        let image_share = match (self.imagery.is_empty(), self.landcover.is_some()) {
+            (false, true) => 0.8,
+            (false, false) => 1.0,
+            (true, _) => 0.0,
+        };
+        let image = (b * image_share / (4.0 * 4.0 / 3.0)).floor() as usize;
+        let classes = (b * (1.0 - image_share)).floor() as usize;
+        (image, classes)
+    }
 }
 
 impl std::fmt::Debug for DrapeInput {
@@ -55,6 +78,8 @@ pub struct DrapedRasters {
     pub classes: Option<(DrapeSize, Vec<u8>)>,
     /// The land-cover raster's texels per raw code.
     pub code_counts: Option<DrapeStats>,
+    /// A texture was made smaller than its rasters' resolution asked, to fit the budget.
+    pub capped: bool,
 }
 
 impl DrapedRasters {
@@ -93,9 +118,12 @@ pub fn register(
     )
     .map_err(|why| format!("{first}: {why}"))?;
     let mut out = DrapedRasters::default();
+    let (image_texels, class_texels) = input.texel_budgets();
     if !input.imagery.is_empty() {
         let refs: Vec<&GeoRaster> = input.imagery.iter().collect();
-        let size = DrapeSize::choose(&terrain, &refs, max_side);
+        let wanted = DrapeSize::choose(&terrain, &refs, max_side);
+        let size = wanted.within(&terrain, image_texels);
+        out.capped |= size != wanted;
         let mut texels = vec![0u8; size.texels() * 4];
         for r in &input.imagery {
             drape_rgba(&terrain, &size, r, &mut texels).map_err(|e| e.to_string())?;
@@ -103,7 +131,9 @@ pub fn register(
         out.imagery = Some((size, texels));
     }
     if let Some(r) = &input.landcover {
-        let size = DrapeSize::choose(&terrain, &[r], max_side);
+        let wanted = DrapeSize::choose(&terrain, &[r], max_side);
+        let size = wanted.within(&terrain, class_texels);
+        out.capped |= size != wanted;
         let mut texels = vec![CODE_NONE; size.texels()];
         let stats = drape_codes(&terrain, &size, r, &input.table, &mut texels)
             .map_err(|e| e.to_string())?;

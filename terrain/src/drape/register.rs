@@ -99,6 +99,30 @@ impl DrapeSize {
         }
     }
 
+    /// This size, or the largest that holds at most `max_texels` texels: fewer texels per
+    /// sample first (k keeps its meaning), then — when even one per sample is too many — a
+    /// texture coarser than the grid (k = 0), the aspect kept.
+    pub fn within(self, grid: &TerrainGrid, max_texels: usize) -> Self {
+        if self.texels() <= max_texels {
+            return self;
+        }
+        let cells = (grid.width * grid.height).max(1) as f64;
+        let f = (max_texels.max(1) as f64 / cells).sqrt();
+        let k = f.floor() as u32;
+        if k >= 1 {
+            return Self {
+                width: grid.width * k as usize,
+                height: grid.height * k as usize,
+                texels_per_sample: k,
+            };
+        }
+        Self {
+            width: ((grid.width as f64 * f).floor() as usize).max(1),
+            height: ((grid.height as f64 * f).floor() as usize).max(1),
+            texels_per_sample: 0,
+        }
+    }
+
     /// Grid coordinates (sample units) of texel (tx, ty)'s centre.
     pub fn texel_centre(&self, grid: &TerrainGrid, tx: usize, ty: usize) -> (f64, f64) {
         (

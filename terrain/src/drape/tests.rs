@@ -436,6 +436,22 @@ fn size_follows_the_resolution_and_the_texture_limit() {
     assert_eq!((s.texels_per_sample, s.width, s.height), (0, 32, 32));
     let (gx, gy) = s.texel_centre(&grid, 0, 31);
     assert!((gx - 0.5).abs() < 1e-12 && (gy - (31.5 * 1.5 - 0.5)).abs() < 1e-12);
+    // A texel budget: the size that fits is kept; a smaller budget first lowers k (64×48
+    // samples, k = 10 wanted), then goes coarser than the grid with the aspect kept.
+    let want = DrapeSize::choose(&grid, &[&r], 8192);
+    assert_eq!(want.within(&grid, want.texels()), want);
+    let s = want.within(&grid, 64 * 48 * 9 - 1);
+    assert_eq!((s.texels_per_sample, s.width, s.height), (2, 128, 96));
+    for budget in [64 * 48 - 1, 1000, 1] {
+        let s = want.within(&grid, budget);
+        assert!(s.texels() <= budget.max(1), "{budget}: {s:?}");
+        assert_eq!(s.texels_per_sample, 0, "{budget}: {s:?}");
+        let aspect = s.width as f64 / s.height as f64;
+        assert!(
+            budget < 100 || (aspect - 64.0 / 48.0).abs() < 0.05,
+            "{budget}: {s:?}"
+        );
+    }
     // Finer than 16 per sample is capped.
     let p = write(
         dir.path(),
