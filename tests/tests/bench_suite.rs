@@ -224,3 +224,52 @@ fn a_bad_suite_names_its_key() {
     );
     assert!(!out.exists(), "nothing written");
 }
+
+/// `aerie bench --feature-costs`: the first configuration is drawn again with each look
+/// feature off (land cover/sky/atmosphere, normal maps); features.csv has the base and a row
+/// per feature with the terrain pass's GPU time measured on every frame, summary.md the table.
+#[test]
+fn feature_costs_draw_the_first_configuration_with_each_feature_off() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = dir.path().join("N47E011.hgt.zip");
+    std::fs::copy(aerie_tests::demo_dem(), &dem).unwrap();
+    let out = dir.path().join("out");
+    aerie(&[
+        "bench",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--modes",
+        "bounded,clipmap",
+        "--tau",
+        "2",
+        "--frames",
+        "3",
+        "--warmup",
+        "1",
+        "--size",
+        "160x90",
+        "--no-image-error",
+        "--oracle-nodes",
+        "0",
+        "--feature-costs",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .map_err(|f| f.message)
+    .expect("bench runs");
+    let rows = table(&out.join("features.csv"));
+    let off: Vec<&str> = rows.iter().map(|r| r["feature_off"].as_str()).collect();
+    assert_eq!(off, ["none", "look_plain", "no_normal_maps"], "{rows:?}");
+    for r in &rows {
+        assert_eq!(r["configuration"], "bounded τ=2", "{r:?}");
+        assert_eq!(r["frames"], "3", "{r:?}");
+        let ms: f64 = r["gpu_terrain_ms_median"].parse().unwrap();
+        assert!(ms.is_finite() && ms > 0.0, "{r:?}");
+    }
+    // The variants are not configurations of the report.
+    let summary = table(&out.join("summary.csv"));
+    assert_eq!(summary.len(), 2, "{summary:?}");
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(md.contains("## What each feature costs"), "{md}");
+    assert!(md.contains("| normal maps |"), "{md}");
+}

@@ -113,6 +113,7 @@ pub const BENCH_FILES: RunFiles = RunFiles {
         "results.csv",
         "summary.csv",
         "summary.md",
+        "features.csv",
         "time_vs_error.png",
         "triangles_vs_error.png",
     ],

@@ -25,6 +25,7 @@
 
 mod config;
 pub mod curves;
+mod features;
 mod flights;
 mod plot;
 mod report;
@@ -163,6 +164,11 @@ pub struct BenchArgs {
     /// Normal maps from the full-resolution heights on level tiles (on) or per-vertex normals.
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub normal_maps: Switch,
+    /// Also draw the first configuration once with each look feature off (land cover, sky
+    /// and atmosphere; normal maps; draped rasters) on the same frames: features.csv and a
+    /// table in summary.md give the terrain pass's GPU time of each.
+    #[arg(long)]
+    pub feature_costs: bool,
 }
 
 /// Validated arguments.
@@ -253,8 +259,11 @@ fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> RendererDesc {
 struct Lane {
     config: BenchConfig,
     renderer: TerrainRenderer,
-    /// Reported in the summaries (false for a `full` renderer made only as the reference).
+    /// Reported in the summaries (false for a `full` renderer made only as the reference, and
+    /// for the feature-cost variants).
     reported: bool,
+    /// `--feature-costs`: which feature this renderer has off (an index of the costs' list).
+    variant: Option<usize>,
     selection: Selection,
     depth: Vec<f32>,
     heat: Vec<f32>,
@@ -448,6 +457,7 @@ fn run_flight(
             config,
             renderer,
             reported,
+            variant: None,
             selection: Selection::default(),
             depth: Vec::new(),
             heat: Vec::new(),
@@ -465,6 +475,33 @@ fn run_flight(
             input.dem.display()
         )));
     }
+    let mut costs = None;
+    if a.feature_costs {
+        let base = lanes[0].config;
+        let features = features::features_on(lanes[0].renderer.desc());
+        for (v, f) in features.iter().enumerate() {
+            let mut desc = lane_desc(a, p, base);
+            desc.drape = drape.clone();
+            f.apply(&mut desc);
+            let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
+            renderer
+                .load_source(input.source.clone(), bake.clone(), eye0)
+                .map_err(renderer_failure)?;
+            lanes.push(Lane {
+                config: base,
+                renderer,
+                reported: false,
+                variant: Some(v),
+                selection: Selection::default(),
+                depth: Vec::new(),
+                heat: Vec::new(),
+                worst_heat: Vec::new(),
+                worst: None,
+                image_total: ImageError::default(),
+            });
+        }
+        costs = Some(features::FeatureCosts::new(base.label(), &features));
+    }
     let device = lanes[0].renderer.device_name().to_string();
     eprintln!(
         "{} renderers on {device} ({:.1} s): {}",
@@ -472,10 +509,10 @@ fn run_flight(
         t_setup.elapsed().as_secs_f64(),
         lanes
             .iter()
-            .map(|l| if l.reported {
-                l.config.label()
-            } else {
-                "full (reference only)".to_string()
+            .map(|l| match (l.reported, l.variant) {
+                (true, _) => l.config.label(),
+                (false, Some(_)) => format!("{} with a feature off", l.config.label()),
+                (false, None) => "full (reference only)".to_string(),
             })
             .collect::<Vec<_>>()
             .join(", ")
@@ -489,7 +526,7 @@ fn run_flight(
     };
     let reference = lanes
         .iter()
-        .position(|l| l.config.mode == LodMode::Full)
+        .position(|l| l.config.mode == LodMode::Full && l.variant.is_none())
         .filter(|_| image_error);
     let bar = count_bar(total_frames as u64 * lanes.len() as u64, "renders", "");
     let mut rows: Vec<FrameRow> = Vec::new();
@@ -527,7 +564,7 @@ fn run_flight(
                 .render(&camera)
                 .map_err(|e| runtime(format!("{} frame {k}: {e}", lane.config.label())))?;
             let wall_ms = t0.elapsed().as_secs_f64() * 1e3;
-            if image_error {
+            if image_error && lane.variant.is_none() {
                 lane.depth = lane.renderer.depth();
             }
             results[i] = Some((wall_ms, stats));
@@ -537,6 +574,16 @@ fn run_flight(
         let reference_depth = reference.map(|r| std::mem::take(&mut lanes[r].depth));
         for (i, lane) in lanes.iter_mut().enumerate() {
             let (wall_ms, stats) = results[i].expect("rendered");
+            if let (Some(c), false) = (costs.as_mut(), warmup) {
+                match lane.variant {
+                    Some(v) => c.off[v].1.push(stats.gpu_terrain_ms),
+                    None if i == 0 => c.base_ms.push(stats.gpu_terrain_ms),
+                    None => {}
+                }
+            }
+            if lane.variant.is_some() {
+                continue;
+            }
             let image = if image_error {
                 let own = std::mem::take(&mut lane.depth);
                 let depth = if Some(i) == reference {
@@ -670,6 +717,18 @@ fn run_flight(
         write_text(&path, &report::summary_csv(&summaries)),
     );
     let mut md = report::summary_md(&meta, &summaries);
+    if let Some(c) = &costs {
+        md.push_str(&c.markdown());
+        let path = out.join("features.csv");
+        failures.check(None, &path, write_text(&path, &c.csv()));
+        for (f, median, _, cost) in c.rows() {
+            eprintln!(
+                "feature cost, {}: {} off {median:.3} GPU terrain ms, the feature {cost:+.3} ms",
+                c.base_label,
+                f.name()
+            );
+        }
+    }
     if !failures.failed.is_empty() {
         md.push_str("\n## Files not written\n\n");
         for f in &failures.failed {
