@@ -211,30 +211,19 @@ pub fn parse(text: &str, source_name: &str) -> Result<RenderConfig, ConfigError>
             key: e.dotted(),
             message: e.message,
         })?;
-    cfg.databases =
-        databases::validate(raw_databases).map_err(|(key, message)| ConfigError::Invalid {
-            source_name: source_name.to_owned(),
-            location: locate::key_location(text, &key),
-            key,
-            message,
-        })?;
-    cfg.entities = raw_entities
-        .validate()
-        .map_err(|(key, message)| ConfigError::Invalid {
-            source_name: source_name.to_owned(),
-            location: locate::key_location(text, &key),
-            key,
-            message,
-        })?;
+    // A table's own check names its key (dotted) and the reason; the text gives the place.
+    let invalid = |(key, message): (String, String)| ConfigError::Invalid {
+        source_name: source_name.to_owned(),
+        location: locate::key_location(text, &key),
+        key,
+        message,
+    };
+    cfg.databases = databases::validate(raw_databases).map_err(invalid)?;
+    cfg.entities = raw_entities.validate().map_err(invalid)?;
     cfg.landcover = raw_landcover
         .map(landcover::RawLandcover::validate)
         .transpose()
-        .map_err(|(key, message)| ConfigError::Invalid {
-            source_name: source_name.to_owned(),
-            location: locate::key_location(text, &key),
-            key,
-            message,
-        })?;
+        .map_err(invalid)?;
     Ok(cfg)
 }
 
