@@ -9,7 +9,7 @@
 //! `/dev/shm` where it exists, to keep a run of millions of inputs off the disk.
 
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use aerie_terrain::bake::read_bake_file;
 use aerie_terrain::load_dem;
@@ -28,21 +28,27 @@ pub const DEM_NAMES: [&str; 8] = [
     "dem.npz",
 ];
 
-/// This process's scratch folder (one per process: the replay test and a fuzzer may run at
-/// the same time). Left behind on exit, it holds at most two small files.
-fn scratch() -> &'static Path {
-    static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let shm = Path::new("/dev/shm");
-        let base = if shm.is_dir() {
-            shm.to_path_buf()
-        } else {
-            std::env::temp_dir()
+/// This thread's scratch folder: one per process and thread (the replay tests run on several
+/// threads of one process, and a fuzzer may run beside them; two bodies writing the same
+/// `dem.f32` at once would read each other's bytes). Left behind on exit, each holds at most
+/// two small files.
+fn scratch() -> PathBuf {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    thread_local! {
+        static DIR: PathBuf = {
+            let shm = Path::new("/dev/shm");
+            let base = if shm.is_dir() {
+                shm.to_path_buf()
+            } else {
+                std::env::temp_dir()
+            };
+            let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+            let dir = base.join(format!("aerie-fuzz-{}-{n}", std::process::id()));
+            std::fs::create_dir_all(&dir).expect("scratch folder");
+            dir
         };
-        let dir = base.join(format!("aerie-fuzz-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("scratch folder");
-        dir
-    })
+    }
+    DIR.with(PathBuf::clone)
 }
 
 /// A DEM input's parts: file name, sidecar (if any), file bytes.
