@@ -14,9 +14,11 @@ pub fn bin_dir() -> PathBuf {
         .to_path_buf()
 }
 
-fn built(package: &str, bin: &str) -> PathBuf {
+/// Builds `bin` with `args` (packages and binaries) and returns its path.
+fn built(args: &[&str], bin: &str) -> PathBuf {
     let status = Command::new(env!("CARGO"))
-        .args(["build", "-p", package, "--bin", bin])
+        .arg("build")
+        .args(args)
         .current_dir(crate::repo_root())
         .status()
         .expect("run cargo build");
@@ -27,11 +29,28 @@ fn built(package: &str, bin: &str) -> PathBuf {
 /// The `aerie` binary.
 pub fn aerie_bin() -> &'static PathBuf {
     static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| built("aerie", "aerie"))
+    BIN.get_or_init(|| built(&["-p", "aerie", "--bin", "aerie"], "aerie"))
 }
 
-/// The `aerie-send` binary (the test sender of the simulator bridge).
+/// The `aerie-send` binary (the test sender of the simulator bridge), built together with
+/// `aerie`: cargo unifies the features of the packages of one build, so building the bridge
+/// alone would compile its dependencies a second time with other features (2 minutes on 2
+/// cores).
 pub fn aerie_send_bin() -> &'static PathBuf {
     static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| built("aerie-sim-bridge", "aerie-send"))
+    BIN.get_or_init(|| {
+        built(
+            &[
+                "-p",
+                "aerie",
+                "--bin",
+                "aerie",
+                "-p",
+                "aerie-sim-bridge",
+                "--bin",
+                "aerie-send",
+            ],
+            "aerie-send",
+        )
+    })
 }
