@@ -325,4 +325,27 @@ mod tests {
             assert!(patch_tiles(bad).unwrap_err().message.starts_with("--patch"));
         }
     }
+
+    #[test]
+    fn a_drape_budget_outside_its_range_is_bad_input_naming_the_flag() {
+        for mb in [0.0, -1.0, f64::NAN, 1e9] {
+            let a = DrapeArgs {
+                imagery: vec!["missing.tif".into()],
+                drape_mb: mb,
+                ..DrapeArgs::default()
+            };
+            let e = drape_input(&a).unwrap_err();
+            assert_eq!(e.code, 2, "{mb}: {}", e.message);
+            assert!(e.message.contains("--drape-mb"), "{}", e.message);
+        }
+        // In range, the next check is the file itself.
+        let a = DrapeArgs {
+            imagery: vec!["missing.tif".into()],
+            drape_mb: 64.0,
+            ..DrapeArgs::default()
+        };
+        let e = drape_input(&a).unwrap_err();
+        assert_eq!(e.code, 2);
+        assert!(e.message.contains("missing.tif"), "{}", e.message);
+    }
 }
