@@ -102,21 +102,14 @@ fn message(frame: u32, db: i8, extra: &[Vec<u8>]) -> Vec<u8> {
     m
 }
 
-#[test]
-fn database_number_switches_datasets_and_the_host_sets_the_light() {
-    let dir = tempfile::tempdir().unwrap();
-    let inn = dir.path().join("inn/N47E011.hgt.zip");
-    std::fs::create_dir_all(inn.parent().unwrap()).unwrap();
-    std::fs::copy(aerie_tests::demo_dem(), &inn).unwrap();
-    write_flat_tile(&dir.path().join("flat/N47E011.hgt"));
-    let cfg = dir.path().join("ig.toml");
-    std::fs::write(
-        &cfg,
-        "[databases]\n1 = \"inn/N47E011.hgt.zip\"\n2 = \"flat/N47E011.hgt\"\n",
-    )
-    .unwrap();
-    let hot_inn = oracle_hot(&inn);
+/// What a host saw: (database in Start of Frame, valid HOT answers of that message) per IG
+/// message, the run's JSON summary and its stderr.
+type Switch = (Vec<(i8, Vec<f64>)>, serde_json::Value, String);
 
+/// `aerie run` on `inn` with `cfg`, driven by a host that asks HOT under the aircraft every 8th
+/// message and sets the sun and haze every 30th: database 0 (the `--dem`) until three answers
+/// came, then database 2 until three answers came on it.
+fn switch_to_database_2(dir: &Path, cfg: &Path, inn: &Path) -> Switch {
     let host = UdpSocket::bind("127.0.0.1:0").unwrap();
     host.set_read_timeout(Some(Duration::from_millis(2)))
         .unwrap();
@@ -125,7 +118,7 @@ fn database_number_switches_datasets_and_the_host_sets_the_light() {
         .local_addr()
         .unwrap()
         .port();
-    let json = dir.path().join("run.json");
+    let json = dir.join("run.json");
     let s = |p: &Path| p.display().to_string();
     let child = spawn(
         aerie_bin(),
@@ -225,8 +218,29 @@ fn database_number_switches_datasets_and_the_host_sets_the_light() {
     }
     drop(host);
     let out = child.wait_with_output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(out.status.success(), "aerie run failed:\n{stderr}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    (seen, summary, stderr)
+}
+
+#[test]
+fn database_number_switches_datasets_and_the_host_sets_the_light() {
+    let dir = tempfile::tempdir().unwrap();
+    let inn = dir.path().join("inn/N47E011.hgt.zip");
+    std::fs::create_dir_all(inn.parent().unwrap()).unwrap();
+    std::fs::copy(aerie_tests::demo_dem(), &inn).unwrap();
+    write_flat_tile(&dir.path().join("flat/N47E011.hgt"));
+    let cfg = dir.path().join("ig.toml");
+    std::fs::write(
+        &cfg,
+        "[databases]\n1 = \"inn/N47E011.hgt.zip\"\n2 = \"flat/N47E011.hgt\"\n",
+    )
+    .unwrap();
+    let hot_inn = oracle_hot(&inn);
+
+    let (seen, summary, _) = switch_to_database_2(dir.path(), &cfg, &inn);
 
     // Start of Frame: database 1 (the --dem is [databases] 1), −2 while 2 loads, then 2.
     let dbs: Vec<i8> = seen.iter().map(|(d, _)| *d).collect();
@@ -248,8 +262,6 @@ fn database_number_switches_datasets_and_the_host_sets_the_light() {
         }
     }
 
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let ig = &summary["ig"];
     assert_eq!(ig["database"], 2, "{ig:#}");
     assert_eq!(ig["database_loads"][0]["number"], 2, "{ig:#}");
@@ -298,4 +310,68 @@ fn database_number_switches_datasets_and_the_host_sets_the_light() {
     }
     // Midsummer noon-ish at 47°N: high in the south.
     assert!(expect[2] > 0.8 && expect[1] < 0.0, "{expect:?}");
+}
+
+/// A host's database that is a tile store is streamed like `--dem region.aerie`: the switch
+/// reports −2 while only its coarsest level is fetched, the run says it streams it, and the HOT
+/// answers come from its level-0 pages (pending until they are resident, then exactly the
+/// flat height).
+#[test]
+fn a_database_that_is_a_tile_store_is_streamed() {
+    let dir = tempfile::tempdir().unwrap();
+    let inn = dir.path().join("inn/N47E011.hgt.zip");
+    std::fs::create_dir_all(inn.parent().unwrap()).unwrap();
+    std::fs::copy(aerie_tests::demo_dem(), &inn).unwrap();
+    let flat = dir.path().join("flat/N47E011.hgt");
+    write_flat_tile(&flat);
+    let store = dir.path().join("flat.aerie");
+    let out = Command::new(aerie_bin())
+        .args(["import".as_ref(), flat.as_os_str(), "--out".as_ref()])
+        .arg(&store)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // The tile itself is gone: database 2 can only be read from the store.
+    std::fs::remove_dir_all(flat.parent().unwrap()).unwrap();
+    let cfg = dir.path().join("ig.toml");
+    std::fs::write(
+        &cfg,
+        "[databases]\n1 = \"inn/N47E011.hgt.zip\"\n2 = \"flat.aerie\"\n",
+    )
+    .unwrap();
+    let hot_inn = oracle_hot(&inn);
+
+    let (seen, summary, stderr) = switch_to_database_2(dir.path(), &cfg, &inn);
+
+    let mut phases: Vec<i8> = seen.iter().map(|(d, _)| *d).collect();
+    phases.dedup();
+    assert_eq!(phases, vec![1, -2, 2], "database numbers in Start of Frame");
+    let mut on_store = 0;
+    for (db, hots) in &seen {
+        for h in hots {
+            if *db == 2 {
+                on_store += 1;
+                assert!(
+                    (h - f64::from(FLAT_M)).abs() < 1e-6,
+                    "HOT {h} on the streamed store"
+                );
+            } else {
+                assert!((h - hot_inn).abs() < 1e-3, "HOT {h} vs oracle {hot_inn}");
+            }
+        }
+    }
+    assert!(on_store >= 3, "{on_store} valid HOT answers on database 2");
+    assert!(
+        stderr.contains("database 2 ready (streamed)"),
+        "the run says it streams the store:\n{stderr}"
+    );
+    let load = &summary["ig"]["database_loads"][0];
+    assert_eq!(load["number"], 2, "{load:#}");
+    assert!(load["error"].is_null(), "{load:#}");
+    assert_eq!(load["streamed"], true, "{load:#}");
+    assert!(load["ready_s"].as_f64().unwrap() >= 0.0, "{load:#}");
 }

@@ -6,14 +6,13 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
-use std::sync::Arc;
 
 use aerie_config::Databases;
-use aerie_terrain::bake::ErrorBake;
-use aerie_terrain::dataset::Dataset;
 use aerie_terrain::query::InMemorySource;
 
-use crate::app::prepare::prepare_terrain;
+use crate::app::args::StoreArgs;
+use crate::app::prepare::{prepare_source, Terrain};
+use crate::render::desc::RendererDesc;
 
 /// What Start of Frame reports about the database.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -134,12 +133,13 @@ fn same_path(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// A loaded database: the terrain, its bake, and the query service on it (built on the loader
-/// thread too: on a 16385² grid its hierarchy takes seconds; `Err` says why there is none).
+/// A loaded database: the terrain (a dataset in memory, or a tile store streamed exactly as
+/// `--dem region.aerie` is) and, for a dataset in memory, the query service on it (built on
+/// the loader thread too: on a 16385² grid its hierarchy takes seconds; `Err` says why there is
+/// none). A streamed store's queries read its resident pages and need no building.
 pub struct LoadedTerrain {
-    pub dataset: Arc<Dataset>,
-    pub bake: Arc<ErrorBake>,
-    pub queries: Result<InMemorySource, String>,
+    pub terrain: Terrain,
+    pub queries: Option<Result<InMemorySource, String>>,
 }
 
 /// One dataset loading on a worker thread.
@@ -150,19 +150,23 @@ pub struct DatabaseLoader {
 }
 
 impl DatabaseLoader {
-    /// Starts loading `path` (the same loading and baking as `--dem`).
-    pub fn start(number: i8, path: PathBuf, tile_size: u32) -> Self {
+    /// Starts loading `path` for a renderer made with `desc` (the same preparation as
+    /// `--dem`: a store is streamed within `store`'s cache, its coarsest level waited for on
+    /// this thread; any other file is loaded whole with its bake).
+    pub fn start(number: i8, path: PathBuf, desc: &RendererDesc, store: &StoreArgs) -> Self {
         let (tx, rx) = mpsc::channel();
         let p = path.clone();
+        let (desc, store) = (desc.clone(), store.clone());
         std::thread::Builder::new()
             .name(format!("aerie-database-{number}"))
             .spawn(move || {
-                let r = prepare_terrain(&p, tile_size)
-                    .map(|(dataset, bake)| LoadedTerrain {
-                        queries: InMemorySource::new(dataset.clone(), bake.clone())
-                            .map_err(|e| e.to_string()),
-                        dataset,
-                        bake,
+                let r = prepare_source(&p, &desc, &store)
+                    .map(|terrain| LoadedTerrain {
+                        queries: terrain.dataset.as_ref().map(|ds| {
+                            InMemorySource::new(ds.clone(), terrain.bake.clone())
+                                .map_err(|e| e.to_string())
+                        }),
+                        terrain,
                     })
                     .map_err(|f| f.message);
                 let _ = tx.send(r);

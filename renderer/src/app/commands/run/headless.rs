@@ -109,7 +109,7 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
     // The port is bound before the (slow) device creation, so a sender may start right away.
     let input = open_input(&plan.settings, terrain.grid())?;
     let geo = GeoMapping::of_source(terrain.grid()).ok();
-    let ig = ig_driver(a, &plan, input.as_ref(), &terrain)?;
+    let ig = ig_driver(a, &plan, input.as_ref(), &terrain, &desc)?;
     let mut poses = RunPoses::new(
         input,
         StraightPassSource { pass, period_s },

@@ -22,6 +22,7 @@ const HOST_QUESTION_PRIORITY: f32 = 1.0e9;
 use glam::DVec3;
 use std::sync::Arc;
 
+use crate::app::args::StoreArgs;
 use crate::app::commands::run::args::RunArgs;
 use crate::app::commands::run::database::{
     DatabaseAction, DatabaseChoice, DatabaseLoader, DatabaseReport, LoadedTerrain,
@@ -29,6 +30,7 @@ use crate::app::commands::run::database::{
 use crate::app::commands::run::plan::Plan;
 use crate::app::failure::{bad_input, Failure};
 use crate::app::prepare::Terrain;
+use crate::render::desc::RendererDesc;
 use crate::render::entity_lod::LodParams;
 use crate::render::frame::{Lighting, TerrainRenderer};
 use crate::sim::pose_input::{GeoMapping, SimInput};
@@ -47,6 +49,7 @@ pub(crate) fn ig_driver(
     plan: &Plan,
     input: Option<&SimInput>,
     terrain: &Terrain,
+    desc: &RendererDesc,
 ) -> Result<Option<IgDriver>, Failure> {
     let Some(link) = input.and_then(SimInput::ig_link) else {
         return Ok(None);
@@ -78,7 +81,10 @@ pub(crate) fn ig_driver(
         plan.config.databases.clone(),
         &dir,
         &a.dem,
-        plan.config.render.tile_size,
+        DatabaseTerrain {
+            desc: desc.clone(),
+            store: a.store.clone(),
+        },
     );
     ig.host_heights = host_heights;
     ig.queries = ig.queries.take().map(|q| q.with_host_heights(host_heights));
@@ -102,6 +108,13 @@ struct TrafficDriver {
     started_s: Option<f64>,
 }
 
+/// What a database load needs of the run: the renderer's description (tile size, start-up
+/// levels) and how stores are streamed (`--cache-mb`, workers).
+pub struct DatabaseTerrain {
+    pub desc: RendererDesc,
+    pub store: StoreArgs,
+}
+
 /// The IG side of one run.
 pub struct IgDriver {
     link: IgLink,
@@ -109,7 +122,8 @@ pub struct IgDriver {
     geo: Option<GeoMapping>,
     choice: DatabaseChoice,
     loader: Option<DatabaseLoader>,
-    tile_size: u32,
+    /// How a database the host asks for is prepared.
+    prepare: DatabaseTerrain,
     ig_frame: u32,
     /// CPU time of each frame's answering (session, queries, encoding), µs, frames with at
     /// least one question.
@@ -121,8 +135,9 @@ pub struct IgDriver {
     lighting: Lighting,
     /// The host set the sun / the visibility (the light is not the default one).
     host_light: (bool, bool),
-    /// Database loads: (number, path, outcome).
-    loads: Vec<(i8, String, Result<(), String>)>,
+    /// Database loads: (number, path, outcome: streamed or in memory, and the seconds until
+    /// its first frame's samples were resident).
+    loads: Vec<(i8, String, Result<(bool, f64), String>)>,
     /// Other traffic (set by [`ig_driver`]).
     traffic: Option<TrafficDriver>,
     /// The datum of the host's geodetic heights, for its terrain queries (set by
@@ -140,6 +155,25 @@ fn queries_of(terrain: &Terrain) -> Option<DatasetQueries> {
             GeoMapping::of_source(terrain.grid()).ok(),
         )),
         (None, None) => None,
+    }
+}
+
+/// One line on a terrain just prepared: the dataset's summary, or the streamed store's grid.
+fn terrain_summary(terrain: &Terrain, path: &str) -> String {
+    match &terrain.dataset {
+        Some(ds) => ds.summary(),
+        None => {
+            let g = terrain.grid();
+            format!(
+                "{path}: {}x{} samples (padded to {}x{}), {} levels, first frame's data resident after {:.3} s",
+                g.valid_width,
+                g.valid_height,
+                g.width,
+                g.height,
+                terrain.bake.levels.len(),
+                terrain.prepare_s
+            )
+        }
     }
 }
 
@@ -162,7 +196,7 @@ impl IgDriver {
         databases: Databases,
         config_dir: &Path,
         dem: &Path,
-        tile_size: u32,
+        prepare: DatabaseTerrain,
     ) -> Self {
         Self {
             link,
@@ -170,7 +204,7 @@ impl IgDriver {
             geo: GeoMapping::of_source(terrain.grid()).ok(),
             choice: DatabaseChoice::new(databases, config_dir, dem),
             loader: None,
-            tile_size,
+            prepare,
             ig_frame: 0,
             answer_us: Vec::new(),
             step_us: Vec::new(),
@@ -230,7 +264,12 @@ impl IgDriver {
                 DatabaseAction::None => {}
                 DatabaseAction::Load(n, path) => {
                     eprintln!("CIGI host asks for database {n}: loading {}", path.display());
-                    self.loader = Some(DatabaseLoader::start(n, path, self.tile_size));
+                    self.loader = Some(DatabaseLoader::start(
+                        n,
+                        path,
+                        &self.prepare.desc,
+                        &self.prepare.store,
+                    ));
                 }
                 DatabaseAction::Unknown(n) => eprintln!(
                     "CIGI host asks for database {n}, which the configuration's [databases] table does not have (configured: {:?}); Start of Frame reports it unavailable",
@@ -243,7 +282,7 @@ impl IgDriver {
                 q.refresh();
                 self.step(&q);
                 // What the host asked over tiles not resident comes with the next request.
-                let q0 = self.tile_size - 1;
+                let q0 = self.prepare.desc.tile_size - 1;
                 let wants: Vec<SampleWant> = q
                     .take_pending()
                     .into_iter()
@@ -326,32 +365,35 @@ impl IgDriver {
         let n = loader.number;
         let path = loader.path.display().to_string();
         match result {
-            Ok(LoadedTerrain {
-                dataset: ds,
-                bake,
-                queries,
-            }) => {
+            Ok(LoadedTerrain { terrain, queries }) => {
                 renderer
-                    .load_terrain(ds.clone(), bake, eye)
+                    .load_source(terrain.source.clone(), terrain.bake.clone(), eye)
                     .map_err(|e| format!("database {n} ({path}): {e}"))?;
+                let geo = GeoMapping::of_source(terrain.grid());
                 self.queries = match queries {
-                    Ok(src) => Some(
-                        DatasetQueries::new(src, GeoMapping::of_dataset(&ds).ok())
-                            .with_host_heights(self.host_heights),
-                    ),
-                    Err(e) => {
+                    Some(Ok(src)) => Some(DatasetQueries::new(src, geo.clone().ok())),
+                    Some(Err(e)) => {
                         tracing::error!("database {n}: terrain queries unavailable: {e}");
                         None
                     }
-                };
-                let geo = GeoMapping::of_dataset(&ds);
+                    None => queries_of(&terrain),
+                }
+                .map(|q| q.with_host_heights(self.host_heights));
                 self.geo = geo.clone().ok();
                 if let Some(i) = input {
                     i.set_geo(geo);
                 }
-                eprintln!("database {n} ready: {}", ds.summary());
+                let how = match &terrain.streamed {
+                    Some(_) => "streamed",
+                    None => "in memory",
+                };
+                eprintln!(
+                    "database {n} ready ({how}): {}",
+                    terrain_summary(&terrain, &path)
+                );
                 self.choice.finished(n, true);
-                self.loads.push((n, path, Ok(())));
+                let outcome = (terrain.streamed.is_some(), terrain.prepare_s);
+                self.loads.push((n, path, Ok(outcome)));
             }
             Err(e) => {
                 eprintln!("database {n} ({path}) failed to load, keeping the current one: {e}");
@@ -412,6 +454,8 @@ impl IgDriver {
             "databases_configured": self.choice.configured(),
             "database_loads": self.loads.iter().map(|(n, p, r)| serde_json::json!({
                 "number": n, "path": p, "error": r.as_ref().err(),
+                "streamed": r.as_ref().ok().map(|o| o.0),
+                "ready_s": r.as_ref().ok().map(|o| o.1),
             })).collect::<Vec<_>>(),
             "lighting": {
                 "sun_enu": self.lighting.sun_enu,

@@ -38,7 +38,7 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
     let pass = straight_pass(&terrain, a, period_s);
     let input = open_input(&plan.settings, terrain.grid())?;
     let geo = GeoMapping::of_source(terrain.grid()).ok();
-    let ig = ig_driver(a, &plan, input.as_ref(), &terrain)?;
+    let ig = ig_driver(a, &plan, input.as_ref(), &terrain, &desc)?;
     // Predicted display: one frame after the frame starts (FIFO, frames in flight).
     let lead_s = 1.0 / 60.0;
     let mut source = RunPoses::new(
