@@ -108,6 +108,10 @@ struct TrafficDriver {
     started_s: Option<f64>,
 }
 
+/// A database load that succeeded: streamed (else in memory), and the seconds until its first
+/// frame's samples were resident.
+type LoadOutcome = (bool, f64);
+
 /// What a database load needs of the run: the renderer's description (tile size, start-up
 /// levels) and how stores are streamed (`--cache-mb`, workers).
 pub struct DatabaseTerrain {
@@ -137,7 +141,7 @@ pub struct IgDriver {
     host_light: (bool, bool),
     /// Database loads: (number, path, outcome: streamed or in memory, and the seconds until
     /// its first frame's samples were resident).
-    loads: Vec<(i8, String, Result<(bool, f64), String>)>,
+    loads: Vec<(i8, String, Result<LoadOutcome, String>)>,
     /// Other traffic (set by [`ig_driver`]).
     traffic: Option<TrafficDriver>,
     /// The datum of the host's geodetic heights, for its terrain queries (set by
