@@ -142,7 +142,7 @@ pub fn samples_crc32(samples: &[f32]) -> u32 {
     total.finalize()
 }
 
-fn le_bytes(s: &[f32]) -> std::borrow::Cow<'_, [u8]> {
+pub(crate) fn le_bytes(s: &[f32]) -> std::borrow::Cow<'_, [u8]> {
     if cfg!(target_endian = "little") {
         std::borrow::Cow::Borrowed(bytemuck::cast_slice(s))
     } else {

@@ -209,11 +209,42 @@ impl Acc {
     }
 }
 
+/// The full-resolution rows the bake reads: a dataset in memory, or a band of a source read a
+/// band at a time (the streamed import), which must hold every row [`rows_needed`] names.
+pub(crate) trait BakeRows: Sync {
+    /// Padded row `r` (row 0 = south), every padded sample of it.
+    fn row(&self, r: usize) -> &[f32];
+}
+
+impl BakeRows for Dataset {
+    #[inline]
+    fn row(&self, r: usize) -> &[f32] {
+        let w = self.hf.width;
+        &self.hf.heights[r * w..(r + 1) * w]
+    }
+}
+
+/// The rows outside `r0..r1` that baking rows `r0..r1` reads: each level's vertex rows (every
+/// 2^L-th row) bounding the band's cells, south and north, sorted, without repeats.
+pub(crate) fn rows_needed(levels: u32, height: usize, r0: usize, r1: usize) -> Vec<usize> {
+    let mut v = Vec::new();
+    for l in 1..levels as usize {
+        let s = 1usize << l;
+        let south = r0 - r0 % s;
+        let north = ((r1 - 1).div_ceil(s) * s).min(height - 1);
+        v.extend([south, north].into_iter().filter(|&r| r < r0 || r >= r1));
+    }
+    v.sort_unstable();
+    v.dedup();
+    v
+}
+
 /// Rows `r0..r1` into the worker's maxima, with AVX2 when the CPU has it (same IEEE
 /// operations in the same order either way, so the results are bit-identical).
 #[allow(clippy::too_many_arguments)]
-fn process_rows(
-    ds: &Dataset,
+fn process_rows<R: BakeRows>(
+    ds: &R,
+    valid: (usize, usize),
     geo: &[LevelGeom],
     q: usize,
     r0: usize,
@@ -225,10 +256,10 @@ fn process_rows(
     #[cfg(target_arch = "x86_64")]
     if simd && std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU supports AVX2 (checked just above).
-        unsafe { process_rows_avx2(ds, geo, q, r0, r1, acc, tile_max) };
+        unsafe { process_rows_avx2(ds, valid, geo, q, r0, r1, acc, tile_max) };
         return;
     }
-    process_rows_impl(ds, geo, q, r0, r1, acc, tile_max);
+    process_rows_impl(ds, valid, geo, q, r0, r1, acc, tile_max);
 }
 
 /// [`process_rows_impl`] compiled for AVX2.
@@ -238,8 +269,10 @@ fn process_rows(
 /// The CPU running it must support AVX2 (`is_x86_feature_detected!("avx2")`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn process_rows_avx2(
-    ds: &Dataset,
+#[allow(clippy::too_many_arguments)]
+unsafe fn process_rows_avx2<R: BakeRows>(
+    ds: &R,
+    valid: (usize, usize),
     geo: &[LevelGeom],
     q: usize,
     r0: usize,
@@ -247,12 +280,14 @@ unsafe fn process_rows_avx2(
     acc: &mut Acc,
     tile_max: &mut [f64],
 ) {
-    process_rows_impl(ds, geo, q, r0, r1, acc, tile_max);
+    process_rows_impl(ds, valid, geo, q, r0, r1, acc, tile_max);
 }
 
 #[inline(always)]
-fn process_rows_impl(
-    ds: &Dataset,
+#[allow(clippy::too_many_arguments)]
+fn process_rows_impl<R: BakeRows>(
+    ds: &R,
+    (valid_width, valid_height): (usize, usize),
     geo: &[LevelGeom],
     q: usize,
     r0: usize,
@@ -260,10 +295,8 @@ fn process_rows_impl(
     acc: &mut Acc,
     tile_max: &mut [f64],
 ) {
-    let w = ds.hf.width;
-    let heights = &ds.hf.heights;
     for r in r0..r1 {
-        let row = &heights[r * w..(r + 1) * w];
+        let row = ds.row(r);
         // Level 0: height bounds.
         let g = geo[0];
         let (lo, hi) = tile_rows_of(r, g.t, g.tiles_y);
@@ -284,16 +317,15 @@ fn process_rows_impl(
         // (a tile is real when its south-west sample is; all-padding tiles keep ε = 0).
         for (l, g) in geo.iter().enumerate().skip(1) {
             let (lo, hi) = tile_rows_of(r, g.t, g.tiles_y);
-            if lo * g.t >= ds.valid_height {
+            if lo * g.t >= valid_height {
                 continue;
             }
-            let real_tiles_x = ds.valid_width.div_ceil(g.t).min(g.tiles_x);
+            let real_tiles_x = valid_width.div_ceil(g.t).min(g.tiles_x);
             let s = 1usize << l;
             let j = r & (s - 1);
             let south = r - j;
             let north = if j == 0 { south } else { south + s };
-            let hs = &heights[south * w..(south + 1) * w];
-            let hn = &heights[north * w..(north + 1) * w];
+            let (hs, hn) = (ds.row(south), ds.row(north));
             let v = j as f64 / s as f64;
             let out = &mut tile_max[..real_tiles_x];
             match s {
@@ -332,80 +364,127 @@ pub(super) fn bake_with(
 ) -> ErrorBake {
     let levels = params.resolve_levels(ds).unwrap_or_else(|e| panic!("{e}"));
     let (w, h) = (ds.hf.width, ds.hf.height);
-    let q = (params.tile_size - 1) as usize;
-    let geo = level_geoms(q, w, h, levels);
+    let params = BakeParams {
+        tile_size: params.tile_size,
+        levels,
+    };
+    let mut acc = BakeAccumulator::new(params, (w, h), (ds.valid_width, ds.valid_height));
+    acc.simd = simd;
     let total = (w * h) as u64;
-    let chunks = h.div_ceil(CHUNK_ROWS);
-    let threads = std::thread::available_parallelism()
-        .map(|n| n.get())
-        .unwrap_or(1)
-        .clamp(1, chunks);
-    let next = AtomicUsize::new(0);
-    let rows_done = AtomicU64::new(0);
-    let finished = AtomicUsize::new(0);
     progress(0, total);
-    let accs: Vec<Acc> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads)
-            .map(|_| {
-                s.spawn(|| {
-                    let mut acc = Acc::new(&geo);
-                    let mut tile_max = vec![0f64; geo[0].tiles_x];
+    acc.add_rows(ds, 0, h, &|rows| progress(rows * w as u64, total));
+    progress(total, total);
+    acc.finish((ds.hf.spacing_x, ds.hf.spacing_y), ds.checksum())
+}
+
+/// The bake's running maxima over rows given a band at a time, in order or not: every row of
+/// the padded grid must be added exactly once (a row added twice changes nothing; one missing
+/// leaves its tiles unmeasured). [`bake`] adds them all at once; the streamed import adds a
+/// band at a time ([`BakeRows`] holding the band and its [`rows_needed`]).
+pub(crate) struct BakeAccumulator {
+    params: BakeParams,
+    size: (usize, usize),
+    valid: (usize, usize),
+    q: usize,
+    geo: Vec<LevelGeom>,
+    /// One per worker thread, merged by [`Self::finish`].
+    accs: Vec<Acc>,
+    tile_max: Vec<Vec<f64>>,
+    pub(crate) simd: bool,
+}
+
+impl BakeAccumulator {
+    /// For a padded grid of `size` samples with `valid` real ones; `params.levels` resolved
+    /// (≥ 1, fitting the grid).
+    pub(crate) fn new(params: BakeParams, size: (usize, usize), valid: (usize, usize)) -> Self {
+        let q = (params.tile_size - 1) as usize;
+        let geo = level_geoms(q, size.0, size.1, params.levels);
+        let threads = std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+            .clamp(1, size.1.div_ceil(CHUNK_ROWS));
+        BakeAccumulator {
+            params,
+            size,
+            valid,
+            q,
+            accs: (0..threads).map(|_| Acc::new(&geo)).collect(),
+            tile_max: (0..threads).map(|_| vec![0f64; geo[0].tiles_x]).collect(),
+            geo,
+            simd: true,
+        }
+    }
+
+    /// Rows `r0..r1` of `rows` on all cores; `progress(rows done of these)` from the calling
+    /// thread.
+    pub(crate) fn add_rows<R: BakeRows>(
+        &mut self,
+        rows: &R,
+        r0: usize,
+        r1: usize,
+        progress: &dyn Fn(u64),
+    ) {
+        let chunks = (r1 - r0).div_ceil(CHUNK_ROWS);
+        let threads = self.accs.len().min(chunks.max(1));
+        let next = AtomicUsize::new(0);
+        let rows_done = AtomicU64::new(0);
+        let finished = AtomicUsize::new(0);
+        let (geo, q, valid, simd) = (&self.geo, self.q, self.valid, self.simd);
+        std::thread::scope(|s| {
+            for (acc, tile_max) in self.accs.iter_mut().zip(&mut self.tile_max).take(threads) {
+                let (next, rows_done, finished) = (&next, &rows_done, &finished);
+                s.spawn(move || {
                     loop {
                         let c = next.fetch_add(1, Ordering::Relaxed);
                         if c >= chunks {
                             break;
                         }
-                        let r0 = c * CHUNK_ROWS;
-                        let r1 = (r0 + CHUNK_ROWS).min(h);
-                        process_rows(ds, &geo, q, r0, r1, &mut acc, &mut tile_max, simd);
-                        rows_done.fetch_add((r1 - r0) as u64, Ordering::Relaxed);
+                        let a = r0 + c * CHUNK_ROWS;
+                        let b = (a + CHUNK_ROWS).min(r1);
+                        process_rows(rows, valid, geo, q, a, b, acc, tile_max, simd);
+                        rows_done.fetch_add((b - a) as u64, Ordering::Relaxed);
                     }
                     finished.fetch_add(1, Ordering::Release);
-                    acc
-                })
-            })
-            .collect();
-        while finished.load(Ordering::Acquire) < threads {
-            std::thread::sleep(std::time::Duration::from_millis(50));
-            progress(rows_done.load(Ordering::Relaxed) * w as u64, total);
-        }
-        handles
-            .into_iter()
-            .map(|h| h.join().expect("bake worker panicked"))
-            .collect()
-    });
-    let mut accs = accs.into_iter();
-    let mut acc = accs.next().expect("at least one worker");
-    for o in accs {
-        acc.merge(&o);
+                });
+            }
+            while finished.load(Ordering::Acquire) < threads {
+                std::thread::sleep(std::time::Duration::from_millis(50));
+                progress(rows_done.load(Ordering::Relaxed));
+            }
+        });
     }
-    progress(total, total);
 
-    let eps: Vec<Vec<f32>> = acc
-        .eps
-        .iter()
-        .map(|e| e.iter().map(|&e| round_up_f32(e)).collect())
-        .collect();
-    let tables = build_tables(
-        &geo,
-        std::mem::take(&mut acc.min0),
-        std::mem::take(&mut acc.max0),
-        eps,
-        ds.valid_width,
-        ds.valid_height,
-    );
-    ErrorBake {
-        params: BakeParams {
-            tile_size: params.tile_size,
-            levels,
-        },
-        width: w as u32,
-        height: h as u32,
-        valid_width: ds.valid_width as u32,
-        valid_height: ds.valid_height as u32,
-        spacing_x: ds.hf.spacing_x,
-        spacing_y: ds.hf.spacing_y,
-        source_checksum: ds.checksum(),
-        levels: tables,
+    /// The bake of every row added: the workers' maxima merged, ε rounded up to f32, the
+    /// tables built; `spacing` and `checksum` (of the padded samples) recorded.
+    pub(crate) fn finish(self, spacing: (f64, f64), checksum: u32) -> ErrorBake {
+        let mut accs = self.accs.into_iter();
+        let mut acc = accs.next().expect("at least one worker");
+        for o in accs {
+            acc.merge(&o);
+        }
+        let eps: Vec<Vec<f32>> = acc
+            .eps
+            .iter()
+            .map(|e| e.iter().map(|&e| round_up_f32(e)).collect())
+            .collect();
+        let tables = build_tables(
+            &self.geo,
+            std::mem::take(&mut acc.min0),
+            std::mem::take(&mut acc.max0),
+            eps,
+            self.valid.0,
+            self.valid.1,
+        );
+        ErrorBake {
+            params: self.params,
+            width: self.size.0 as u32,
+            height: self.size.1 as u32,
+            valid_width: self.valid.0 as u32,
+            valid_height: self.valid.1 as u32,
+            spacing_x: spacing.0,
+            spacing_y: spacing.1,
+            source_checksum: checksum,
+            levels: tables,
+        }
     }
 }

@@ -70,7 +70,7 @@
 //! `aerie bake`.
 
 mod error;
-mod exact;
+pub(crate) mod exact;
 mod file;
 mod format;
 mod table;

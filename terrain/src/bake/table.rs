@@ -38,19 +38,30 @@ impl BakeParams {
 
     /// Levels that fit the dataset: `min(Kx, Ky) − j + 1`, or 0 when not even one tile fits.
     pub fn max_levels(&self, ds: &Dataset) -> Result<u32, BakeError> {
+        self.max_levels_for(ds.hf.width, ds.hf.height)
+    }
+
+    /// [`Self::max_levels`] for a padded grid of `width` × `height` (2^K + 1 each).
+    pub fn max_levels_for(&self, width: usize, height: usize) -> Result<u32, BakeError> {
         let j = self.log2_quads()?;
-        let (kx, ky) = ds.log2_sides();
+        let (kx, ky) = ((width - 1).trailing_zeros(), (height - 1).trailing_zeros());
         Ok((kx.min(ky) + 1).saturating_sub(j))
     }
 
     /// The number of levels a bake with these parameters has on `ds`, or why it cannot be made.
     pub fn resolve_levels(&self, ds: &Dataset) -> Result<u32, BakeError> {
-        let fit = self.max_levels(ds)?;
+        self.resolve_levels_for(ds.hf.width, ds.hf.height)
+    }
+
+    /// [`Self::resolve_levels`] for a padded grid of `width` × `height`.
+    pub fn resolve_levels_for(&self, width: usize, height: usize) -> Result<u32, BakeError> {
+        let (w, h) = (width, height);
+        let fit = self.max_levels_for(w, h)?;
         if fit == 0 {
             return Err(BakeError::Params {
                 reason: format!(
                     "the dataset ({}×{} padded samples) is smaller than one {}×{} tile; use a smaller tile size",
-                    ds.hf.width, ds.hf.height, self.tile_size, self.tile_size
+                    w, h, self.tile_size, self.tile_size
                 ),
             });
         }
@@ -60,8 +71,8 @@ impl BakeParams {
             n => Err(BakeError::Params {
                 reason: format!(
                     "{n} levels asked, but only {fit} fit a {}×{} dataset with {}×{} tiles (levels 0..={})",
-                    ds.hf.width,
-                    ds.hf.height,
+                    w,
+                    h,
                     self.tile_size,
                     self.tile_size,
                     fit - 1

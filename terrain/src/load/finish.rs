@@ -53,32 +53,8 @@ pub(crate) fn finish(
             format!("{} samples for a {}×{} grid", samples.len(), width, height),
         ));
     }
-    // Every loader names its keys first; this catches what a geo-reference computes (a lat/lon
-    // step of 1e300° is finite but not a grid), naming where the spacing came from.
-    if let Some(why) = implausible_spacing(spacing_x).or(implausible_spacing(spacing_y)) {
-        return Err(format_err(
-            path,
-            format!(
-                "{why} ({} m × {} m, {spacing_note})",
-                short(spacing_x),
-                short(spacing_y)
-            ),
-        ));
-    }
-    if let Some(i) = samples
-        .iter()
-        .position(|v| v.is_infinite() || v.abs() > MAX_HEIGHT_M)
-    {
-        return Err(format_err(
-            path,
-            format!(
-                "height out of range ({} m, plausible within ±{MAX_HEIGHT_M} m) at (col {}, row {}) in file order after scale/offset",
-                samples[i],
-                i % width,
-                i / width
-            ),
-        ));
-    }
+    check_spacing(path, spacing_x, spacing_y, &spacing_note)?;
+    check_heights(path, &samples, width, 0)?;
     if north_up {
         flip_rows(&mut samples, width);
     }
@@ -102,6 +78,52 @@ pub(crate) fn finish(
         voids_filled: voids,
         spacing_note,
     })
+}
+
+/// Every loader names its keys first; this catches what a geo-reference computes (a lat/lon
+/// step of 1e300° is finite but not a grid), naming where the spacing came from.
+pub(crate) fn check_spacing(
+    path: &Path,
+    spacing_x: f64,
+    spacing_y: f64,
+    spacing_note: &str,
+) -> Result<(), DemError> {
+    if let Some(why) = implausible_spacing(spacing_x).or(implausible_spacing(spacing_y)) {
+        return Err(format_err(
+            path,
+            format!(
+                "{why} ({} m × {} m, {spacing_note})",
+                short(spacing_x),
+                short(spacing_y)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Refuses an infinite or implausible height among `samples`, rows of `width` in file order
+/// starting at file row `first_row`, naming its column and row.
+pub(crate) fn check_heights(
+    path: &Path,
+    samples: &[f32],
+    width: usize,
+    first_row: usize,
+) -> Result<(), DemError> {
+    if let Some(i) = samples
+        .iter()
+        .position(|v| v.is_infinite() || v.abs() > MAX_HEIGHT_M)
+    {
+        return Err(format_err(
+            path,
+            format!(
+                "height out of range ({} m, plausible within ±{MAX_HEIGHT_M} m) at (col {}, row {}) in file order after scale/offset",
+                samples[i],
+                i % width,
+                first_row + i / width
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Reverses the row order in place.

@@ -18,12 +18,14 @@ mod npy;
 pub(crate) mod placement;
 mod png16;
 mod raw;
+mod raw_rows;
 mod sidecar;
 pub mod stitch;
 
 pub use dem::load_dem;
 pub use error::DemError;
 pub use geo::geographic_spacing_m;
+pub use raw_rows::RawRows;
 
 #[cfg(test)]
 mod limits_tests;

@@ -43,7 +43,7 @@ impl SampleFormat {
         }
     }
 
-    fn bytes(self) -> usize {
+    pub(crate) fn bytes(self) -> usize {
         match self {
             Self::F32Le | Self::F32Be => 4,
             Self::U16Le | Self::U16Be => 2,
@@ -55,7 +55,22 @@ impl SampleFormat {
     }
 }
 
-pub(super) fn load_raw(path: &Path, default: SampleFormat) -> Result<Heightfield, DemError> {
+/// A raw file's sidecar, read and checked against the file's length: what it holds and how.
+pub(crate) struct RawGrid {
+    pub width: usize,
+    pub height: usize,
+    pub format: SampleFormat,
+    pub scale: f64,
+    pub offset: f64,
+    pub north_up: bool,
+    pub place: Placement,
+    /// Bytes of samples (= the file's length).
+    pub bytes: u64,
+}
+
+/// Reads `path`'s sidecar and checks the file's length against it (nothing of the samples is
+/// read).
+pub(crate) fn raw_grid(path: &Path, default: SampleFormat) -> Result<RawGrid, DemError> {
     let sc = Sidecar::require(path, KEYS, "\"width\" and \"height\"")?;
     let width = sc
         .usize("width")?
@@ -119,8 +134,22 @@ pub(super) fn load_raw(path: &Path, default: SampleFormat) -> Result<Heightfield
     if found != expected {
         return Err(length_err(found));
     }
-    let samples = read_samples(path, expected, format, width, scale, offset)?;
-    finish(path, width, height, samples, north_up, place)
+    Ok(RawGrid {
+        width,
+        height,
+        format,
+        scale,
+        offset,
+        north_up,
+        place,
+        bytes: expected,
+    })
+}
+
+pub(super) fn load_raw(path: &Path, default: SampleFormat) -> Result<Heightfield, DemError> {
+    let g = raw_grid(path, default)?;
+    let samples = read_samples(path, g.bytes, g.format, g.width, g.scale, g.offset)?;
+    finish(path, g.width, g.height, samples, g.north_up, g.place)
 }
 
 /// Reads and decodes the file in 4 MiB pieces, so a 1 GB grid costs 1 GB of memory, not 2.
@@ -163,7 +192,7 @@ fn read_samples(
 
 /// Decodes whole samples of `bytes` onto `out`; `first` is the index of the first one in the file.
 #[allow(clippy::too_many_arguments)]
-fn decode(
+pub(crate) fn decode(
     path: &Path,
     bytes: &[u8],
     format: SampleFormat,

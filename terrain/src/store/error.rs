@@ -35,6 +35,10 @@ pub enum StoreError {
     /// The parameters or the data cannot make a store.
     #[error("{reason}")]
     Params { reason: String },
+    /// The source could not be read while a streamed import read it (a sample out of range,
+    /// a row that cannot be read); nothing was left under the final name.
+    #[error("{0}")]
+    Source(#[from] crate::load::DemError),
     /// Writing failed; nothing was left under the final name.
     #[error("{0}")]
     Write(#[from] aerie_io::WriteError),

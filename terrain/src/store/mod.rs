@@ -76,6 +76,7 @@ mod index;
 mod load;
 mod pages;
 mod read;
+mod rows_import;
 mod source;
 mod write;
 
@@ -87,6 +88,7 @@ pub use format::{
 pub use load::load_store;
 pub use pages::Page;
 pub use read::Store;
+pub use rows_import::{bake_rows, write_store_rows, write_store_rows_in};
 pub use source::StoreSource;
 pub use write::{write_store, write_store_in, ImportParams, StoreSummary};
 
@@ -94,5 +96,7 @@ pub use write::{write_store, write_store_in, ImportParams, StoreSummary};
 mod consistency_tests;
 #[cfg(test)]
 mod damage_tests;
+#[cfg(test)]
+mod rows_import_tests;
 #[cfg(test)]
 mod tests;

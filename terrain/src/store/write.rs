@@ -3,9 +3,9 @@
 //! bake section, index, trailer — atomically (temporary file + rename: an interrupted import leaves
 //! nothing under the store's name, and a cut file has no trailer, so it never opens).
 //!
-//! For now the dataset and its bake are in memory (a streamed import that loads the source
-//! a region at a time is a later step; the format needs no change for it: the index is
-//! written last).
+//! The samples come through [`PageSamples`], a page row at a time in index order: from a
+//! dataset in memory ([`write_store`]), or read a band of rows at a time from a source larger
+//! than memory (`super::rows_import`); the bytes written are the same.
 
 use std::io::Write;
 use std::path::Path;
@@ -97,6 +97,64 @@ pub fn write_store_in(
             bake.width, bake.height, bake.source_checksum, ds.hf.width, ds.hf.height
         )));
     }
+    let meta = SourceMeta {
+        spacing: (ds.hf.spacing_x, ds.hf.spacing_y),
+        voids_filled: ds.hf.voids_filled as u64,
+        geo: ds.hf.geo.clone(),
+        spacing_note: ds.hf.spacing_note.clone(),
+    };
+    write_pages_in(
+        fs,
+        path,
+        &meta,
+        bake,
+        params,
+        &mut DatasetPages(ds),
+        progress,
+    )
+}
+
+/// What the header records of the source besides the bake.
+pub(crate) struct SourceMeta {
+    /// Metres between columns and between rows.
+    pub spacing: (f64, f64),
+    pub voids_filled: u64,
+    pub geo: Option<crate::GeoReference>,
+    pub spacing_note: String,
+}
+
+/// The samples of the pages, a page row at a time in index order.
+pub(crate) trait PageSamples: Sync {
+    /// Called (in index order) before the pages of page row `py` of `level` are cut.
+    fn begin_row(&mut self, layout: &Layout, level: u32, py: u32) -> Result<(), StoreError>;
+    /// The samples of page `id` (of the row begun last), south row first.
+    fn samples(&self, layout: &Layout, id: PageId) -> Vec<f32>;
+}
+
+/// Pages cut from a dataset in memory.
+struct DatasetPages<'a>(&'a Dataset);
+
+impl PageSamples for DatasetPages<'_> {
+    fn begin_row(&mut self, _: &Layout, _: u32, _: u32) -> Result<(), StoreError> {
+        Ok(())
+    }
+
+    fn samples(&self, layout: &Layout, id: PageId) -> Vec<f32> {
+        cut_samples(self.0, layout, id)
+    }
+}
+
+/// The store at `path` from `bake` and the pages' samples (see the module documentation).
+pub(crate) fn write_pages_in(
+    fs: Arc<dyn FileSystem>,
+    path: &Path,
+    meta: &SourceMeta,
+    bake: &ErrorBake,
+    params: &ImportParams,
+    pages: &mut dyn PageSamples,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<StoreSummary, StoreError> {
+    let bad = |reason: String| StoreError::Params { reason };
     let q = bake.params.tile_size - 1;
     let levels = bake.levels.len() as u32;
     let layout = Layout::new(bake.width, bake.height, q, levels, params.page_tiles).ok_or_else(|| {
@@ -134,14 +192,14 @@ pub fn write_store_in(
         valid_width: bake.valid_width,
         valid_height: bake.valid_height,
         page_count: n as u32,
-        spacing_x: ds.hf.spacing_x,
-        spacing_y: ds.hf.spacing_y,
+        spacing_x: meta.spacing.0,
+        spacing_y: meta.spacing.1,
         source_checksum: bake.source_checksum,
-        voids_filled: ds.hf.voids_filled as u64,
+        voids_filled: meta.voids_filled,
         data_offset: 0,
         raw_sample_bytes,
-        geo: ds.hf.geo.clone(),
-        spacing_note: ds.hf.spacing_note.clone(),
+        geo: meta.geo.clone(),
+        spacing_note: meta.spacing_note.clone(),
         sources: params.sources.clone(),
         max_eps: max_eps.clone(),
     };
@@ -159,18 +217,28 @@ pub fn write_store_in(
         })
     };
     write(&mut f, &encode_header(&header))?;
-    // Pages are compressed a batch at a time on all cores and written in index order as
-    // each batch completes: memory holds one batch, not the file.
+    // Pages are compressed a page row at a time on all cores and written in index order as
+    // each row completes: memory holds one row of pages, not the file.
     let mut index = Vec::with_capacity(INDEX_ENTRY * n);
     let mut offset = header.data_offset;
     let mut counts = [0u32; 3];
     let done = AtomicU64::new(0);
-    for start in (0..n).step_by(BATCH_PAGES) {
-        let batch = start..(start + BATCH_PAGES).min(n);
-        let pages = compress_batch(ds, bake, &layout, batch.clone(), params.zstd_level, &|| {
-            progress(done.fetch_add(1, Ordering::Relaxed) + 1, n as u64)
-        })?;
-        for (i, (coding, bytes)) in batch.zip(&pages) {
+    let mut start = 0;
+    while start < n {
+        let (level, _, py) = layout.page_at(start).expect("in layout");
+        let row_pages = layout.levels[level as usize].pages_x as usize;
+        let batch = start..start + row_pages;
+        start = batch.end;
+        pages.begin_row(&layout, level, py)?;
+        let compressed = compress_batch(
+            &*pages,
+            bake,
+            &layout,
+            batch.clone(),
+            params.zstd_level,
+            &|| progress(done.fetch_add(1, Ordering::Relaxed) + 1, n as u64),
+        )?;
+        for (i, (coding, bytes)) in batch.zip(&compressed) {
             let (level, px, py) = layout.page_at(i).expect("in layout");
             let e = PageEntry {
                 level,
@@ -205,7 +273,7 @@ pub fn write_store_in(
     f.commit()?;
 
     Ok(StoreSummary {
-        real_samples: (ds.valid_width * ds.valid_height) as u64,
+        real_samples: u64::from(bake.valid_width) * u64::from(bake.valid_height),
         page_samples: raw_sample_bytes / 4,
         pages: n as u32,
         i16_pages: counts[Coding::I16Gradient.code() as usize],
@@ -219,12 +287,10 @@ pub fn write_store_in(
     })
 }
 
-/// Pages compressed per batch (≈ 256 × 25 kB held at m = 17 on SRTM).
-const BATCH_PAGES: usize = 256;
-
-/// Pages `batch` coded and compressed, in index order, on all cores; `tick` after each.
+/// Pages `batch` (one page row) coded and compressed, in index order, on all cores; `tick`
+/// after each.
 fn compress_batch(
-    ds: &Dataset,
+    pages: &dyn PageSamples,
     bake: &ErrorBake,
     layout: &Layout,
     batch: std::ops::Range<usize>,
@@ -251,7 +317,7 @@ fn compress_batch(
                         }
                         let (level, px, py) = layout.page_at(i).expect("in layout");
                         let id = PageId { level, px, py };
-                        let samples = cut_samples(ds, layout, id);
+                        let samples = pages.samples(layout, id);
                         let tables = cut_tables(bake, layout, id);
                         let rect = layout.rect(level, px, py);
                         let (coding, raw) = encode_payload(id, rect, &samples, &tables);

@@ -1,8 +1,9 @@
 //! `aerie import <files or folders…> --out <name>.aerie`: a tile store
 //! ([`aerie_terrain::store`]) built once from any DEM the loaders read — one file of any
 //! format, or SRTM tiles (files and folders of them, stitched) — with the error bake of every
-//! level written into its pages. Progress bars, throughput and a one-line summary; `--json`
-//! writes the summary as JSON.
+//! level written into its pages. A raw grid is read a band of rows at a time, so its size is
+//! not bounded by memory; other inputs are loaded whole. Progress bars, throughput and a
+//! one-line summary; `--json` writes the summary as JSON.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -16,8 +17,10 @@ use crate::tools::output::write_text;
 use aerie_terrain::bake::{bake, BakeParams};
 use aerie_terrain::dataset::{load_dataset, load_dataset_tiles, Dataset};
 use aerie_terrain::load::stitch::tile_files;
+use aerie_terrain::load::RawRows;
 use aerie_terrain::store::{
-    write_store, ImportParams, StoreError, StoreSummary, DEFAULT_PAGE_TILES, STORE_EXTENSION,
+    bake_rows, write_store, write_store_rows, ImportParams, StoreError, StoreSummary,
+    DEFAULT_PAGE_TILES, STORE_EXTENSION,
 };
 
 #[derive(Debug, Args)]
@@ -140,8 +143,103 @@ pub fn run(a: ImportArgs) -> Result<(), Failure> {
         });
     }
     let inputs = plan_inputs(&a.inputs, &folders).map_err(bad_input)?;
+    let sources = match &inputs {
+        Inputs::One(p) => vec![p.display().to_string()],
+        Inputs::Tiles(t) => t.iter().map(|p| p.display().to_string()).collect(),
+    };
+    let ip = ImportParams {
+        sources,
+        page_tiles: a.page_tiles,
+        zstd_level: a.zstd_level,
+    };
     let t = Instant::now();
-    let ds = load(&inputs)?;
+    // A raw grid is read a band of rows at a time (it may be larger than memory); any other
+    // input is loaded whole (SRTM mosaics are stitched and void-filled over the whole grid).
+    let rows = match &inputs {
+        Inputs::One(p) => RawRows::open(p).map_err(bad_input)?,
+        Inputs::Tiles(_) => None,
+    };
+    let (streamed, (s, load_s, bake_s, write_s)) = match rows {
+        Some(rows) => (true, import_streamed(&a, &rows, params, &ip)?),
+        None => (false, import_whole(&a, &inputs, params, &ip)?),
+    };
+    let total_s = t.elapsed().as_secs_f64();
+    println!(
+        "{}",
+        summary_line(&a.out, &s, load_s, bake_s, write_s, total_s)
+    );
+    if let Some(j) = &a.json {
+        prepare_out_file("--json", j)?;
+        let mut v = summary_json(&a.out, &s, load_s, bake_s, write_s, total_s);
+        v["streamed"] = serde_json::json!(streamed);
+        write_text(j, &format!("{v:#}\n")).map_err(runtime)?;
+    }
+    Ok(())
+}
+
+/// A store error as a failure: writing and reading are runtime, the rest bad input.
+fn store_failure(e: StoreError) -> Failure {
+    match e {
+        StoreError::Write(_) | StoreError::Io { .. } => runtime(e),
+        _ => bad_input(e),
+    }
+}
+
+/// (summary, load s, bake s, pages s) of a raw grid imported a band of rows at a time: nothing
+/// is loaded (load 0 s); the bake and the pages each read the file once.
+#[allow(clippy::type_complexity)]
+fn import_streamed(
+    a: &ImportArgs,
+    rows: &RawRows,
+    params: BakeParams,
+    ip: &ImportParams,
+) -> Result<(StoreSummary, f64, f64, f64), Failure> {
+    let (vw, vh) = rows.valid_size();
+    let (w, h) = rows.padded_size();
+    eprintln!(
+        "reading {} by rows: {vw}×{vh} samples (padded to {w}×{h}), {}",
+        rows.path().display(),
+        rows.spacing_note()
+    );
+    let levels = params
+        .resolve_levels_for(w, h)
+        .map_err(|e| bad_input(format!("--tile-size: {e}")))?;
+    let params = BakeParams { levels, ..params };
+    let bar = progress_bar((w * h) as u64, &format!("baking {levels} levels"));
+    let tb = Instant::now();
+    let b = bake_rows(rows, params, &|done, _| bar.set_position(done)).map_err(bad_input)?;
+    let bake_s = tb.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    let bar = count_bar(u64::from(page_count(&b, a)), "pages", "compressing");
+    let tw = Instant::now();
+    let s = write_store_rows(&a.out, rows, &b, ip, &|done, _| bar.set_position(done))
+        .map_err(store_failure)?;
+    bar.finish_and_clear();
+    Ok((s, 0.0, bake_s, tw.elapsed().as_secs_f64()))
+}
+
+fn page_count(b: &aerie_terrain::bake::ErrorBake, a: &ImportArgs) -> u32 {
+    aerie_terrain::store::Layout::new(
+        b.width,
+        b.height,
+        a.tile_size - 1,
+        b.levels.len() as u32,
+        a.page_tiles,
+    )
+    .map(|l| l.page_count())
+    .unwrap_or(0)
+}
+
+/// (summary, load s, bake s, pages s) of inputs loaded whole.
+#[allow(clippy::type_complexity)]
+fn import_whole(
+    a: &ImportArgs,
+    inputs: &Inputs,
+    params: BakeParams,
+    ip: &ImportParams,
+) -> Result<(StoreSummary, f64, f64, f64), Failure> {
+    let t = Instant::now();
+    let ds = load(inputs)?;
     let load_s = t.elapsed().as_secs_f64();
     eprintln!(
         "loaded {}: {}, {} voids filled; {} ({load_s:.2} s)",
@@ -160,41 +258,12 @@ pub fn run(a: ImportArgs) -> Result<(), Failure> {
     let b = bake(&ds, params, &|done, _| bar.set_position(done));
     let bake_s = tb.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    let sources = match &inputs {
-        Inputs::One(p) => vec![p.display().to_string()],
-        Inputs::Tiles(t) => t.iter().map(|p| p.display().to_string()).collect(),
-    };
-    let ip = ImportParams {
-        sources,
-        page_tiles: a.page_tiles,
-        zstd_level: a.zstd_level,
-    };
-    let layout_pages =
-        aerie_terrain::store::Layout::new(b.width, b.height, a.tile_size - 1, levels, a.page_tiles)
-            .map(|l| l.page_count())
-            .unwrap_or(0);
-    let bar = count_bar(u64::from(layout_pages), "pages", "compressing");
+    let bar = count_bar(u64::from(page_count(&b, a)), "pages", "compressing");
     let tw = Instant::now();
-    let s =
-        write_store(&a.out, &ds, &b, &ip, &|done, _| bar.set_position(done)).map_err(
-            |e| match e {
-                StoreError::Write(_) | StoreError::Io { .. } => runtime(e),
-                _ => bad_input(e),
-            },
-        )?;
-    let write_s = tw.elapsed().as_secs_f64();
+    let s = write_store(&a.out, &ds, &b, ip, &|done, _| bar.set_position(done))
+        .map_err(store_failure)?;
     bar.finish_and_clear();
-    let total_s = t.elapsed().as_secs_f64();
-    println!(
-        "{}",
-        summary_line(&a.out, &s, load_s, bake_s, write_s, total_s)
-    );
-    if let Some(j) = &a.json {
-        prepare_out_file("--json", j)?;
-        let v = summary_json(&a.out, &s, load_s, bake_s, write_s, total_s);
-        write_text(j, &format!("{v:#}\n")).map_err(runtime)?;
-    }
-    Ok(())
+    Ok((s, load_s, bake_s, tw.elapsed().as_secs_f64()))
 }
 
 fn max_eps_text(s: &StoreSummary) -> String {
