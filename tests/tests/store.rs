@@ -472,3 +472,58 @@ fn a_raw_grid_is_imported_by_rows() {
     let o = aerie(&["info", &out_s, "--verify"]);
     assert!(o.status.success(), "{}", text(&o));
 }
+
+/// A page cache too small for the first frame is refused at once, naming the flag, what the
+/// frame needs and a budget that holds it — which then renders (before, start-up waited 30 s
+/// for pages that evicted each other).
+#[test]
+fn a_cache_too_small_for_the_first_frame_is_refused_with_a_budget_that_fits() {
+    let tmp = tempfile::tempdir().unwrap();
+    let raw = tmp.path().join("g.f32");
+    let store = tmp.path().join("g.aerie");
+    let (raw_s, store_s) = (raw.to_str().unwrap(), store.to_str().unwrap());
+    let o = aerie(&[
+        "gen-dem",
+        "--size",
+        "1025",
+        "--spacing",
+        "30",
+        "--kind",
+        "ridged",
+        "--out",
+        raw_s,
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = aerie(&["import", raw_s, "--out", store_s, "--page-tiles", "2"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let render = |cache: &str| {
+        let png = tmp.path().join(format!("c{cache}.png"));
+        aerie(&[
+            "render",
+            "--dem",
+            store_s,
+            "--cache-mb",
+            cache,
+            "--size",
+            "64x36",
+            "--camera",
+            "15000,15000,4000,0,-30,0",
+            "--out",
+            png.to_str().unwrap(),
+        ])
+    };
+    let o = render("2");
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let msg = text(&o);
+    assert!(
+        msg.contains("--cache-mb 2: the first frame needs") && msg.contains("give --cache-mb "),
+        "{msg}"
+    );
+    let enough = msg
+        .split("give --cache-mb ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .expect("a budget");
+    let o = render(enough);
+    assert!(o.status.success(), "--cache-mb {enough}: {}", text(&o));
+}

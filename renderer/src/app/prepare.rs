@@ -107,6 +107,18 @@ pub fn prepare_source(
     }
     let opened_s = t.elapsed().as_secs_f64();
     let rects = desc.start_up_rects(streamed.grid());
+    let need = streamed.bytes_resident_for(&rects, true);
+    if need > store.cache_mb << 20 {
+        // The pins take at most a quarter of the budget, so 4/3 of the rest always fits.
+        let enough = (streamed.bytes_resident_for(&rects, false) * 4).div_ceil(3 << 20);
+        return Err(bad_input(format!(
+            "{}: --cache-mb {}: the first frame needs {:.1} MiB of decoded pages resident at once (the coarsest clipmap level{} beside the pinned levels); give --cache-mb {enough} or more",
+            path.display(),
+            store.cache_mb,
+            need as f64 / (1 << 20) as f64,
+            if desc.normal_maps { " with its normals' footprint" } else { "" },
+        )));
+    }
     streamed
         .wait_resident(&rects, START_UP_TIMEOUT)
         .map_err(|e| runtime(format!("{}: start-up: {e}", path.display())))?;

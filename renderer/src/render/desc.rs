@@ -64,7 +64,10 @@ impl Default for RendererDesc {
             // r = 5: a 1,000 km flight 300 m above ridged terrain (1920×1080, τ = 1) draws up
             // to 32 such ring tiles in one frame; 16 slots left ~7 of them late every frame
             // (5.8 % of tile-frames there). 40 slots (1 MiB each) keep 8 for prefetch.
-            pool_capacity: [256, 128, 48, 32, 40, 0],
+            // r = 3: a 1,000 km flight 600 m above ridged terrain at 30 m (32769² store,
+            // 1280×720) drew up to 65 such tiles a frame; 48 slots left 1.36 % of its
+            // tile-frames late for want of a slot. 96 slots (65 KiB each) cost 3 MiB more.
+            pool_capacity: [256, 128, 96, 32, 40, 0],
             select: SelectParams::default(),
             debug_tiles: false,
             look: Look::default(),
@@ -173,13 +176,15 @@ mod tests {
         }
         // 40 r = 5 slots of 513² f32, 32 of 257², ...: the arithmetic, checked once.
         let pools =
-            4 * (256 * 33 * 33 + 128 * 65 * 65 + 48 * 129 * 129 + 32 * 257 * 257 + 40 * 513 * 513);
+            4 * (256 * 33 * 33 + 128 * 65 * 65 + 96 * 129 * 129 + 32 * 257 * 257 + 40 * 513 * 513);
         // 9 clipmap levels of 192² texels (the coarsest holds the whole 32769² grid).
         let levels = 4 * 9 * 192 * 192;
         assert_eq!(d.terrain_texture_bytes(&grid(32769)), pools + levels);
         // The peak of r = 5 ring tiles one frame drew on the 1,000 km flight, and room to
         // prefetch beside it.
         assert!(d.pool_capacity[4] >= 32 + 8, "{:?}", d.pool_capacity);
+        // And of r = 3 tiles on the 32769² flight.
+        assert!(d.pool_capacity[2] >= 65 + 8, "{:?}", d.pool_capacity);
     }
 
     #[test]

@@ -287,6 +287,25 @@ impl StreamedStore {
         self.wait_pages(&ids, timeout)
     }
 
+    /// Decoded bytes that must be resident at once for `rects` to be, with the pinned levels
+    /// (pages counted once) when `with_pins`: above the cache budget, [`Self::wait_resident`]
+    /// on them cannot succeed, since pages read for it evict each other.
+    pub fn bytes_resident_for(&self, rects: &[SampleRect], with_pins: bool) -> u64 {
+        let layout = self.shared.store().layout();
+        let mut ids: Vec<PageId> = rects
+            .iter()
+            .flat_map(|r| self.pages_of(r).pages().collect::<Vec<_>>())
+            .filter(|id| !(with_pins && self.pinned.contains(&id.level)))
+            .collect();
+        ids.sort_by_key(|p| (p.level, p.py, p.px));
+        ids.dedup();
+        let pins = if with_pins { self.pinned_bytes } else { 0 };
+        pins + ids
+            .iter()
+            .map(|&id| Loaded::bytes_of(layout, id))
+            .sum::<u64>()
+    }
+
     /// [`StreamedStore::wait_resident`] for the pinned levels (start-up: the renderer then
     /// always has something to draw).
     pub fn wait_pinned(&self, timeout: Duration) -> Result<(), NotResident> {
