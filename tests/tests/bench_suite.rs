@@ -273,3 +273,51 @@ fn feature_costs_draw_the_first_configuration_with_each_feature_off() {
     assert!(md.contains("## What each feature costs"), "{md}");
     assert!(md.contains("| normal maps |"), "{md}");
 }
+
+/// `--no-holes` measures the image-space error without drawing the `full` reference: no
+/// reference lane, every frame's error measured, zero holes, and the report says why.
+#[test]
+fn no_holes_measures_the_error_without_the_full_reference() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = dir.path().join("N47E011.hgt.zip");
+    std::fs::copy(aerie_tests::demo_dem(), &dem).unwrap();
+    let out = dir.path().join("out");
+    aerie(&[
+        "bench",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--modes",
+        "bounded",
+        "--tau",
+        "1",
+        "--frames",
+        "3",
+        "--warmup",
+        "0",
+        "--size",
+        "160x90",
+        "--oracle-nodes",
+        "0",
+        "--no-holes",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .map_err(|f| f.message)
+    .expect("bench runs");
+    let rows = table(&out.join("results.csv"));
+    assert_eq!(
+        rows.len(),
+        3,
+        "one configuration, no reference lane: {rows:?}"
+    );
+    for r in &rows {
+        assert_eq!(r["mode"], "bounded", "{r:?}");
+        let measured: u64 = r["img_measured_px"].parse().unwrap();
+        assert!(measured > 0, "{r:?}");
+        let max: f64 = r["img_confirmed_max_px"].parse().unwrap();
+        assert!(max.is_finite() && max <= 1.5, "{r:?}");
+        assert_eq!(r["img_holes_px"], "0", "{r:?}");
+    }
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(md.contains("Holes not measured (`--no-holes`"), "{md}");
+}

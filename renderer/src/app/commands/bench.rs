@@ -23,6 +23,7 @@
 //! `--cdlod-range`), so that it is a curve like `bounded` over τ; `--suite` runs a TOML file of
 //! datasets × flights and writes one combined report (`suite.rs`).
 
+mod args;
 mod config;
 pub mod curves;
 mod features;
@@ -35,13 +36,11 @@ mod suite_config;
 mod suite_report;
 
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-use clap::Args;
-
-use crate::app::args::{read_waypoints, LookArg, PassArgs, StoreArgs, Switch};
+use crate::app::args::read_waypoints;
 use crate::app::failure::{bad_input, renderer_failure, runtime, Failure};
 use crate::app::flight_plan::FlightPlan;
 use crate::app::out_path::{prepare_run_folder, WriteFailures, BENCH_FILES};
@@ -60,116 +59,12 @@ use aerie_terrain::dataset::Dataset;
 use aerie_terrain::select::{select_tiles, LodMode, Selection};
 use aerie_terrain::source::{InMemoryTerrain, TerrainSource};
 
+pub use args::BenchArgs;
 pub use config::{
     configurations, mode_name, parse_modes, parse_positive_list, parse_taus, BenchConfig, Sweeps,
 };
 pub use report::{pareto_front, Quantiles};
 use rows::{FrameRow, ImageRow};
-
-#[derive(Debug, Clone, Args)]
-pub struct BenchArgs {
-    /// Elevation model (any format `render` reads); its bake is read from or written next to it.
-    /// A tile store (`<name>.aerie`) is streamed to the measured configurations, and read
-    /// whole besides for the oracles, the image-space error and its `full` reference.
-    #[arg(long, required_unless_present = "suite")]
-    pub dem: Option<PathBuf>,
-    /// A bench suite (TOML: datasets × flights, the run's settings): every flight is benched
-    /// into its own folder under --out, with one combined report (suite.md, ratios.csv).
-    #[arg(long, conflicts_with_all = ["dem", "flight"])]
-    pub suite: Option<PathBuf>,
-    /// Folder the suite's relative dataset paths start from (default: the suite file's folder).
-    #[arg(long, requires = "suite")]
-    pub data: Option<PathBuf>,
-    #[command(flatten)]
-    pub store: StoreArgs,
-    /// Output folder (created, with the folders above it): results.csv, summary.csv, summary.md, time_vs_error.png, ...
-    /// It must be empty unless --overwrite.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Reuse a non-empty --out folder: first remove the files an earlier `aerie bench` wrote
-    /// there (results.csv, summary.csv, summary.md, the charts, heatmap_*.png); anything else in
-    /// it is kept.
-    #[arg(long)]
-    pub overwrite: bool,
-    /// Timed waypoints (`t_s,x_m,y_m,z_m,heading,pitch,roll` per line; after a first line `geo`,
-    /// `t_s,lat,lon,alt,heading,pitch,roll` on a geo-referenced dataset) instead of the built-in
-    /// straight pass through the dataset's centre.
-    #[arg(long)]
-    pub flight: Option<PathBuf>,
-    /// Measured frames (every configuration renders each).
-    #[arg(long, default_value_t = 60)]
-    pub frames: u32,
-    /// Frames rendered first and left out of the summaries (caches, pools, pipelines warm up).
-    #[arg(long, default_value_t = 3)]
-    pub warmup: u32,
-    /// Simulated frame rate: frame k is the pose at k / fps seconds.
-    #[arg(long, default_value_t = 30.0)]
-    pub fps: f64,
-    #[command(flatten)]
-    pub pass: PassArgs,
-    #[command(flatten)]
-    pub drape: crate::app::args::DrapeArgs,
-    /// Output size, WxH pixels.
-    #[arg(long, default_value = "1920x1080")]
-    pub size: String,
-    /// Horizontal field of view, degrees (0 < fov < 180).
-    #[arg(long, default_value_t = 90.0)]
-    pub fov: f64,
-    /// LOD modes, comma-separated: bounded, clipmap, distance, cdlod, full.
-    #[arg(long, default_value = "bounded,clipmap,distance,cdlod,full")]
-    pub modes: String,
-    /// τ values (px) for `bounded`, comma-separated; the other modes ignore τ and run once.
-    #[arg(long, default_value = "0.5,1,2,5,10")]
-    pub tau: String,
-    /// Clipmap patch side n in vertices (129 or 257).
-    #[arg(long, default_value_t = 129)]
-    pub patch: u32,
-    /// Sweep `clipmap` over these patch sides n (comma-separated, each P·16+1 with P even ≥ 8,
-    /// e.g. 129,257,513); empty: once at --patch.
-    #[arg(long, default_value = "")]
-    pub clipmap_n: String,
-    /// Sweep `distance` over these scales of its split distance (e.g. 0.5,1,2,4); empty: once
-    /// at scale 1.
-    #[arg(long, default_value = "")]
-    pub distance_scale: String,
-    /// Sweep `cdlod` over these LOD ranges, in node sides of each level (e.g. 2,4,8,16); empty:
-    /// once at the default (6).
-    #[arg(long, default_value = "")]
-    pub cdlod_range: String,
-    /// Sweep `tess` over these scales of its global tessellation factor (e.g.
-    /// 0.25,0.5,1,2,4); empty: once at scale 1.
-    #[arg(long, default_value = "")]
-    pub tess_density: String,
-    /// Draw a flat Earth (no curvature drop).
-    #[arg(long)]
-    pub no_curvature: bool,
-    /// Bounded: drop tiles hidden behind nearer terrain (a conservative CPU horizon).
-    #[arg(long, value_enum, default_value_t = Switch::Off)]
-    pub horizon_cull: Switch,
-    /// Nodes per frame the CPU oracle checks by brute force (0: no oracle).
-    #[arg(long, default_value_t = 12)]
-    pub oracle_nodes: u32,
-    /// Skip the image-space error (and the `full` reference render it needs).
-    #[arg(long)]
-    pub no_image_error: bool,
-    /// Use the first Vulkan device whose name contains this (case-insensitive).
-    #[arg(long)]
-    pub gpu: Option<String>,
-    /// Enable the Khronos validation layer (always on in debug builds; slows every frame).
-    #[arg(long)]
-    pub validate: bool,
-    /// Shading of every configuration: full, plain (the cost baseline) or classes.
-    #[arg(long, value_enum, default_value_t = LookArg::Full)]
-    pub look: LookArg,
-    /// Normal maps from the full-resolution heights on level tiles (on) or per-vertex normals.
-    #[arg(long, value_enum, default_value_t = Switch::On)]
-    pub normal_maps: Switch,
-    /// Also draw the first configuration once with each look feature off (land cover, sky
-    /// and atmosphere; normal maps; draped rasters) on the same frames: features.csv and a
-    /// table in summary.md give the terrain pass's GPU time of each.
-    #[arg(long)]
-    pub feature_costs: bool,
-}
 
 /// Validated arguments.
 struct Plan {
@@ -409,7 +304,7 @@ fn run_flight(
     let image_error = !a.no_image_error;
     let mut lane_configs: Vec<(BenchConfig, bool)> = p.configs.iter().map(|&c| (c, true)).collect();
     let has_full = p.configs.iter().any(|c| c.mode == LodMode::Full);
-    if image_error && !has_full {
+    if image_error && !has_full && !a.no_holes {
         lane_configs.push((
             BenchConfig {
                 mode: LodMode::Full,
@@ -717,6 +612,9 @@ fn run_flight(
         write_text(&path, &report::summary_csv(&summaries)),
     );
     let mut md = report::summary_md(&meta, &summaries);
+    if a.no_holes && !p.configs.iter().any(|c| c.mode == LodMode::Full) {
+        md.push_str("\nHoles not measured (`--no-holes`: no `full` reference was drawn); the holes column is 0.\n");
+    }
     if let Some(c) = &costs {
         md.push_str(&c.markdown());
         let path = out.join("features.csv");

@@ -1,0 +1,117 @@
+//! `aerie bench`'s command line.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::app::args::{LookArg, PassArgs, StoreArgs, Switch};
+
+#[derive(Debug, Clone, Args)]
+pub struct BenchArgs {
+    /// Elevation model (any format `render` reads); its bake is read from or written next to it.
+    /// A tile store (`<name>.aerie`) is streamed to the measured configurations, and read
+    /// whole besides for the oracles, the image-space error and its `full` reference.
+    #[arg(long, required_unless_present = "suite")]
+    pub dem: Option<PathBuf>,
+    /// A bench suite (TOML: datasets × flights, the run's settings): every flight is benched
+    /// into its own folder under --out, with one combined report (suite.md, ratios.csv).
+    #[arg(long, conflicts_with_all = ["dem", "flight"])]
+    pub suite: Option<PathBuf>,
+    /// Folder the suite's relative dataset paths start from (default: the suite file's folder).
+    #[arg(long, requires = "suite")]
+    pub data: Option<PathBuf>,
+    #[command(flatten)]
+    pub store: StoreArgs,
+    /// Output folder (created, with the folders above it): results.csv, summary.csv, summary.md, time_vs_error.png, ...
+    /// It must be empty unless --overwrite.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Reuse a non-empty --out folder: first remove the files an earlier `aerie bench` wrote
+    /// there (results.csv, summary.csv, summary.md, the charts, heatmap_*.png); anything else in
+    /// it is kept.
+    #[arg(long)]
+    pub overwrite: bool,
+    /// Timed waypoints (`t_s,x_m,y_m,z_m,heading,pitch,roll` per line; after a first line `geo`,
+    /// `t_s,lat,lon,alt,heading,pitch,roll` on a geo-referenced dataset) instead of the built-in
+    /// straight pass through the dataset's centre.
+    #[arg(long)]
+    pub flight: Option<PathBuf>,
+    /// Measured frames (every configuration renders each).
+    #[arg(long, default_value_t = 60)]
+    pub frames: u32,
+    /// Frames rendered first and left out of the summaries (caches, pools, pipelines warm up).
+    #[arg(long, default_value_t = 3)]
+    pub warmup: u32,
+    /// Simulated frame rate: frame k is the pose at k / fps seconds.
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f64,
+    #[command(flatten)]
+    pub pass: PassArgs,
+    #[command(flatten)]
+    pub drape: crate::app::args::DrapeArgs,
+    /// Output size, WxH pixels.
+    #[arg(long, default_value = "1920x1080")]
+    pub size: String,
+    /// Horizontal field of view, degrees (0 < fov < 180).
+    #[arg(long, default_value_t = 90.0)]
+    pub fov: f64,
+    /// LOD modes, comma-separated: bounded, clipmap, distance, cdlod, full.
+    #[arg(long, default_value = "bounded,clipmap,distance,cdlod,full")]
+    pub modes: String,
+    /// τ values (px) for `bounded`, comma-separated; the other modes ignore τ and run once.
+    #[arg(long, default_value = "0.5,1,2,5,10")]
+    pub tau: String,
+    /// Clipmap patch side n in vertices (129 or 257).
+    #[arg(long, default_value_t = 129)]
+    pub patch: u32,
+    /// Sweep `clipmap` over these patch sides n (comma-separated, each P·16+1 with P even ≥ 8,
+    /// e.g. 129,257,513); empty: once at --patch.
+    #[arg(long, default_value = "")]
+    pub clipmap_n: String,
+    /// Sweep `distance` over these scales of its split distance (e.g. 0.5,1,2,4); empty: once
+    /// at scale 1.
+    #[arg(long, default_value = "")]
+    pub distance_scale: String,
+    /// Sweep `cdlod` over these LOD ranges, in node sides of each level (e.g. 2,4,8,16); empty:
+    /// once at the default (6).
+    #[arg(long, default_value = "")]
+    pub cdlod_range: String,
+    /// Sweep `tess` over these scales of its global tessellation factor (e.g.
+    /// 0.25,0.5,1,2,4); empty: once at scale 1.
+    #[arg(long, default_value = "")]
+    pub tess_density: String,
+    /// Draw a flat Earth (no curvature drop).
+    #[arg(long)]
+    pub no_curvature: bool,
+    /// Bounded: drop tiles hidden behind nearer terrain (a conservative CPU horizon).
+    #[arg(long, value_enum, default_value_t = Switch::Off)]
+    pub horizon_cull: Switch,
+    /// Nodes per frame the CPU oracle checks by brute force (0: no oracle).
+    #[arg(long, default_value_t = 12)]
+    pub oracle_nodes: u32,
+    /// Skip the image-space error (and the `full` reference render it needs).
+    #[arg(long)]
+    pub no_image_error: bool,
+    /// Measure the image-space error without the `full` reference render (holes, sky where
+    /// the full-resolution terrain is, are then not counted): long flights at a fraction of
+    /// the cost, since the reference draws every visible sample.
+    #[arg(long, conflicts_with = "no_image_error")]
+    pub no_holes: bool,
+    /// Use the first Vulkan device whose name contains this (case-insensitive).
+    #[arg(long)]
+    pub gpu: Option<String>,
+    /// Enable the Khronos validation layer (always on in debug builds; slows every frame).
+    #[arg(long)]
+    pub validate: bool,
+    /// Shading of every configuration: full, plain (the cost baseline) or classes.
+    #[arg(long, value_enum, default_value_t = LookArg::Full)]
+    pub look: LookArg,
+    /// Normal maps from the full-resolution heights on level tiles (on) or per-vertex normals.
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub normal_maps: Switch,
+    /// Also draw the first configuration once with each look feature off (land cover, sky
+    /// and atmosphere; normal maps; draped rasters) on the same frames: features.csv and a
+    /// table in summary.md give the terrain pass's GPU time of each.
+    #[arg(long)]
+    pub feature_costs: bool,
+}
