@@ -102,6 +102,21 @@ fn message(frame: u32, db: i8, extra: &[Vec<u8>]) -> Vec<u8> {
     m
 }
 
+/// The demo DEM copied to `dir/inn/` and `dir/ig.toml` naming it database 1 and `db2`
+/// (relative to `dir`) database 2: (the DEM, the config).
+fn demo_and_databases(dir: &Path, db2: &str) -> (std::path::PathBuf, std::path::PathBuf) {
+    let inn = dir.join("inn/N47E011.hgt.zip");
+    std::fs::create_dir_all(inn.parent().unwrap()).unwrap();
+    std::fs::copy(aerie_tests::demo_dem(), &inn).unwrap();
+    let cfg = dir.join("ig.toml");
+    std::fs::write(
+        &cfg,
+        format!("[databases]\n1 = \"inn/N47E011.hgt.zip\"\n2 = \"{db2}\"\n"),
+    )
+    .unwrap();
+    (inn, cfg)
+}
+
 /// What a host saw: (database in Start of Frame, valid HOT answers of that message) per IG
 /// message, the run's JSON summary and its stderr.
 type Switch = (Vec<(i8, Vec<f64>)>, serde_json::Value, String);
@@ -228,16 +243,8 @@ fn switch_to_database_2(dir: &Path, cfg: &Path, inn: &Path) -> Switch {
 #[test]
 fn database_number_switches_datasets_and_the_host_sets_the_light() {
     let dir = tempfile::tempdir().unwrap();
-    let inn = dir.path().join("inn/N47E011.hgt.zip");
-    std::fs::create_dir_all(inn.parent().unwrap()).unwrap();
-    std::fs::copy(aerie_tests::demo_dem(), &inn).unwrap();
     write_flat_tile(&dir.path().join("flat/N47E011.hgt"));
-    let cfg = dir.path().join("ig.toml");
-    std::fs::write(
-        &cfg,
-        "[databases]\n1 = \"inn/N47E011.hgt.zip\"\n2 = \"flat/N47E011.hgt\"\n",
-    )
-    .unwrap();
+    let (inn, cfg) = demo_and_databases(dir.path(), "flat/N47E011.hgt");
     let hot_inn = oracle_hot(&inn);
 
     let (seen, summary, _) = switch_to_database_2(dir.path(), &cfg, &inn);
@@ -319,9 +326,6 @@ fn database_number_switches_datasets_and_the_host_sets_the_light() {
 #[test]
 fn a_database_that_is_a_tile_store_is_streamed() {
     let dir = tempfile::tempdir().unwrap();
-    let inn = dir.path().join("inn/N47E011.hgt.zip");
-    std::fs::create_dir_all(inn.parent().unwrap()).unwrap();
-    std::fs::copy(aerie_tests::demo_dem(), &inn).unwrap();
     let flat = dir.path().join("flat/N47E011.hgt");
     write_flat_tile(&flat);
     let store = dir.path().join("flat.aerie");
@@ -337,12 +341,7 @@ fn a_database_that_is_a_tile_store_is_streamed() {
     );
     // The tile itself is gone: database 2 can only be read from the store.
     std::fs::remove_dir_all(flat.parent().unwrap()).unwrap();
-    let cfg = dir.path().join("ig.toml");
-    std::fs::write(
-        &cfg,
-        "[databases]\n1 = \"inn/N47E011.hgt.zip\"\n2 = \"flat.aerie\"\n",
-    )
-    .unwrap();
+    let (inn, cfg) = demo_and_databases(dir.path(), "flat.aerie");
     let hot_inn = oracle_hot(&inn);
 
     let (seen, summary, stderr) = switch_to_database_2(dir.path(), &cfg, &inn);
