@@ -68,3 +68,19 @@ struct EntityPush {
     vec4 sun_dir;                // as FrameUniforms
     vec4 sky_colour;             // as FrameUniforms
 };
+
+// Push constants of the GPU normal pass (shaders/normal_map.comp, render/normal_pass.rs): one
+// job, `size` texels of level `layer` from level-L sample `origin` (texel = sample mod side),
+// its neighbours read within the level's cache region [region_lo, region_hi].
+struct NormalPush {
+    ivec2 origin;        // level-L sample of the job's first texel
+    uvec2 size;          // texels, row-major in the output
+    ivec2 region_lo;     // the level's cache region, level-L samples, first
+    ivec2 region_hi;     // and last
+    uvec2 texel_lo;      // texel of region_lo (region_lo mod side, taken on the CPU)
+    vec2 spacing;        // metres between level-L samples, east and north
+    uint layer;          // level
+    uint side;           // texels per level-texture side
+    uint offset;         // first uint of the job's packed texels in the output buffer
+    uint pad;
+};

@@ -259,7 +259,11 @@ fn feature_costs_draw_the_first_configuration_with_each_feature_off() {
     .expect("bench runs");
     let rows = table(&out.join("features.csv"));
     let off: Vec<&str> = rows.iter().map(|r| r["feature_off"].as_str()).collect();
-    assert_eq!(off, ["none", "look_plain", "no_normal_maps"], "{rows:?}");
+    assert_eq!(
+        off,
+        ["none", "look_plain", "no_normal_maps", "normals_gpu"],
+        "{rows:?}"
+    );
     for r in &rows {
         assert_eq!(r["configuration"], "bounded τ=2", "{r:?}");
         assert_eq!(r["frames"], "3", "{r:?}");

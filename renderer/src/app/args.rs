@@ -56,11 +56,31 @@ pub struct GpuArgs {
     /// with the drawn level's per-vertex normals (off: the before/after and the cost).
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub normal_maps: Switch,
+    /// Where the normal maps' texels are computed: cpu (the full-resolution footprint mean,
+    /// staged with each strip) or gpu (a compute pass over each level's own heights).
+    #[arg(long = "normals", value_enum, default_value_t = NormalsArg::Cpu)]
+    pub normals: NormalsArg,
     #[command(flatten)]
     pub drape: DrapeArgs,
     /// Bounded: drop tiles hidden behind nearer terrain (a conservative CPU horizon).
     #[arg(long, value_enum, default_value_t = Switch::Off)]
     pub horizon_cull: Switch,
+}
+
+/// `--normals`: where the normal maps' texels are computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum NormalsArg {
+    Cpu,
+    Gpu,
+}
+
+impl NormalsArg {
+    pub fn source(self) -> crate::render::desc::NormalSource {
+        match self {
+            NormalsArg::Cpu => crate::render::desc::NormalSource::Cpu,
+            NormalsArg::Gpu => crate::render::desc::NormalSource::Gpu,
+        }
+    }
 }
 
 /// A feature turned on or off.

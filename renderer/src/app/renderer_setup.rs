@@ -7,7 +7,7 @@ use std::sync::Arc;
 use crate::app::args::{DrapeArgs, GpuArgs};
 use crate::app::failure::{bad_input, Failure};
 use crate::render::drape_textures::{DrapeInput, SharedDrapeInput};
-use crate::render::frame::RendererDesc;
+use crate::render::frame::{NormalSource, RendererDesc};
 use crate::render::uniforms::Look;
 use crate::vk::DeviceDesc;
 use aerie_config::parse_size;
@@ -68,6 +68,7 @@ pub struct RendererChoice {
     pub debug_tiles: bool,
     pub look: Look,
     pub normal_maps: bool,
+    pub normal_source: NormalSource,
     /// Bounded: drop tiles hidden behind nearer terrain.
     pub horizon_cull: bool,
 }
@@ -94,6 +95,7 @@ pub fn renderer_desc(c: &RendererChoice) -> RendererDesc {
         debug_tiles: c.debug_tiles,
         look: c.look,
         normal_maps: c.normal_maps,
+        normal_source: c.normal_source,
         select: SelectParams {
             mode: c.mode,
             tau_px: c.tau_px,
@@ -145,6 +147,7 @@ pub fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
         debug_tiles: g.debug_tiles,
         look: g.look.look(),
         normal_maps: g.normal_maps.on(),
+        normal_source: g.normals.source(),
         horizon_cull: g.horizon_cull.on(),
     });
     desc.drape = drape_input(&g.drape)?;
@@ -269,6 +272,7 @@ mod tests {
             debug_tiles: true,
             look: Look::Classes,
             normal_maps: false,
+            normal_source: NormalSource::Cpu,
             horizon_cull: true,
         }
     }

@@ -10,6 +10,18 @@ use crate::vk::DeviceDesc;
 /// Vertices per tile side (m = 2^j + 1). DESIGN.md default.
 pub const DEFAULT_TILE_SIZE: u32 = 17;
 
+/// Where the normal maps' texels are computed (issue 17; README "Normal maps").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum NormalSource {
+    /// On the CPU with each strip, from the full-resolution samples (the mean level-0 gradient
+    /// over each texel's footprint, `render/normal_map.rs`), staged after its heights.
+    #[default]
+    Cpu,
+    /// On the GPU after the strips' copies, from each level's own heights (central differences
+    /// of the level's samples, `render/normal_pass.rs`): nothing computed or staged on the CPU.
+    Gpu,
+}
+
 /// How to build a [`crate::render::frame::TerrainRenderer`].
 #[derive(Debug, Clone)]
 pub struct RendererDesc {
@@ -38,6 +50,8 @@ pub struct RendererDesc {
     /// Keep normal maps of the full-resolution heights for the level textures and light level
     /// tiles with them (`render/normal_map.rs`); off: per-vertex normals of the drawn level.
     pub normal_maps: bool,
+    /// Where the normal maps' texels are computed (with `normal_maps` on).
+    pub normal_source: NormalSource,
     /// Skirt depth = factor × ½(ε + the largest of ε and its edge neighbours' ε) + minimum
     /// (metres): at the default 2, ε + max(ε, neighbours' ε), which closes the cracks a
     /// neighbour drawn at another level can open (`select::neighbour_eps`). Must be ≥ 1.
@@ -72,6 +86,7 @@ impl Default for RendererDesc {
             debug_tiles: false,
             look: Look::default(),
             normal_maps: true,
+            normal_source: NormalSource::Cpu,
             skirt_factor: 2.0,
             skirt_min_m: 1.0,
             prefetch_frames: 20.0,
@@ -96,7 +111,7 @@ impl RendererDesc {
     /// level's whole texture (it never moves). A caller streaming its terrain waits for these
     /// once before loading it — the only wait — so that the first frame has the whole terrain
     /// to draw, coarse, and never anything stale; with normal maps, with the level its normal
-    /// texels are computed from. Empty for a clipmap that cannot be laid.
+    /// texels are computed from on the CPU. Empty for a clipmap that cannot be laid.
     pub fn start_up_rects(&self, grid: &aerie_terrain::source::SourceGrid) -> Vec<SampleRect> {
         let clipmap = self.clipmap(grid);
         if clipmap.validate().is_err() {
@@ -108,7 +123,7 @@ impl RendererDesc {
             size: [clipmap.texture_side(); 2],
         };
         let mut rects = vec![coarsest];
-        if self.normal_maps {
+        if self.normal_maps && self.normal_source == NormalSource::Cpu {
             // Its normal texels' footprints (render/normal_map.rs), read with it.
             let fp = crate::render::normal_map::NormalFootprint::of_level(coarsest.level);
             rects.push(fp.rect(coarsest.origin, coarsest.size));

@@ -11,6 +11,7 @@ use gpu_allocator::MemoryLocation;
 
 use aerie_terrain::bake::ErrorBake;
 use aerie_terrain::camera::Camera;
+use aerie_terrain::clipmap::CacheRegion;
 use aerie_terrain::dataset::Dataset;
 use aerie_terrain::geodesy::GeoGrid;
 use aerie_terrain::mesh::skirted_tile_indices;
@@ -21,23 +22,22 @@ use crate::render::drape_textures::{register, DrapeTextures, DrapedRasters, MAX_
 use crate::render::entity_instances::{EntityDraw, EntityFrameStats};
 use crate::render::entity_lod::{LodParams, LodView};
 use crate::render::entity_pass::EntityPass;
+use crate::render::frame_record::RecordParts;
 use crate::render::gathered::SampleCursor;
-use crate::render::gpu::{EntityPush, FrameUniforms, TileInstance};
+use crate::render::gpu::EntityPush;
 use crate::render::jobs::{split_level_uploads, ImageUpload, PlanError, StagingBudget};
 use crate::render::models::{Model, ModelLibrary};
-use crate::render::overlay_pass::{record_panel_copy, Panel};
-use crate::render::plan::{plan_frame, select_frame, FrameInputs, FramePlan};
+use crate::render::normal_map::NormalTexel;
+use crate::render::normal_pass::{read_texture_layer, NormalBatch, NormalPass, NormalTargets};
+use crate::render::overlay_pass::Panel;
+use crate::render::plan::{plan_frame, select_frame, FrameInputs};
 use crate::render::resources::{reserve_instances, GpuTerrain};
-use crate::render::terrain_pass::{
-    descriptor_pool_sizes, record_terrain_pass, write_descriptors, DESCRIPTOR_SETS,
-};
-use crate::render::tess_pass::{FragmentImages, TessTerrain};
+use crate::render::terrain_pass::{descriptor_pool_sizes, DESCRIPTOR_SETS};
+use crate::render::tess_pass::TessTerrain;
 use crate::render::uniforms::{frame_uniforms, FLAG_NORMAL_MAP};
 use crate::render::upload::{
-    initialise_images, record_image_copies, stage_frame, stream_buffer, stream_image_uploads,
-    StagedFrame,
+    initialise_images, stage_frame, stream_buffer, stream_image_uploads, GpuNormals, SAMPLED,
 };
-use crate::vk::access::{memory_barrier, Access};
 use crate::vk::frame_context::{FrameContext, FrameRing};
 use crate::vk::pipeline::TerrainPipeline;
 use crate::vk::swapchain::{PresentTarget, ACQUIRE_WAIT_STAGE};
@@ -45,7 +45,7 @@ use crate::vk::target::OffscreenTarget;
 use crate::vk::timestamps::Pass;
 use crate::vk::{Buffer, Device, Instance, ValidationCounters, VkError, VkResultExt};
 
-pub use crate::render::desc::{RendererDesc, DEFAULT_TILE_SIZE};
+pub use crate::render::desc::{NormalSource, RendererDesc, DEFAULT_TILE_SIZE};
 pub use crate::render::stats::{FrameStats, UploadStats};
 pub use crate::render::uniforms::{Lighting, Look, SKY_LINEAR};
 
@@ -62,6 +62,8 @@ pub struct TerrainRenderer {
     /// Indices of one skirted tile in `tile_index_buffer`: (first, count).
     tile_indices: (u32, u32),
     terrain: Option<GpuTerrain>,
+    /// `--normals gpu`: the compute pass making the normal texels (made at load).
+    gpu_normals: Option<NormalPass>,
     /// `--lod tess`: the tessellation baseline's heights, density and pipeline (made at load).
     tess: Option<TessTerrain>,
     desc: RendererDesc,
@@ -141,6 +143,7 @@ impl TerrainRenderer {
             tile_index_buffer,
             tile_indices: (0, indices.len() as u32),
             terrain: None,
+            gpu_normals: None,
             tess: None,
             desc: desc.clone(),
             frame_counter: 0,
@@ -414,32 +417,48 @@ impl TerrainRenderer {
             let geo = GeoGrid::of(grid.geo.as_ref(), grid.spacing_x, grid.spacing_y);
             self.tess = Some(TessTerrain::new(d, &mut self.ring, &source, geo.is_some())?);
         }
-        let normal_maps = self.desc.normal_maps;
-        let mut t = GpuTerrain::new(
-            d,
-            source,
-            bake,
-            clipmap,
-            &self.desc.pool_capacity,
-            normal_maps,
-        )?;
+        if let Some(mut old) = self.gpu_normals.take() {
+            old.destroy(d);
+        }
+        let normals = self.desc.normal_maps.then_some(self.desc.normal_source);
+        if normals == Some(NormalSource::Gpu) {
+            self.gpu_normals = Some(NormalPass::new(d, [grid.spacing_x, grid.spacing_y])?);
+        }
+        let mut t = GpuTerrain::new(d, source, bake, clipmap, &self.desc.pool_capacity, normals)?;
+        let staged_normals = normals == Some(NormalSource::Cpu);
         // First fill of every level around the eye, streamed.
         let strips = t.plan.strips_around(eye);
+        let height_sampler = self.pipeline.height_sampler;
+        let gpu_normals = self.gpu_normals.as_mut();
         let loaded = initialise_images(d, &mut self.ring, t.images()).and_then(|()| {
             let (budget, align) = (self.ring.staging_budget(), self.ring.staging_alignment());
             let submissions =
-                split_level_uploads(&strips, budget, align, normal_maps).map_err(plan_error)?;
+                split_level_uploads(&strips, budget, align, staged_normals).map_err(plan_error)?;
             let image = t.levels.raw;
             let gatherer = &t.plan.feed.gatherer;
             let mut samples = SampleCursor::new(gatherer.samples());
             let mut normals = SampleCursor::new(gatherer.normals());
-            let normals = normal_maps.then_some((t.normals.raw, &mut normals));
+            let normals = staged_normals.then_some((t.normals.raw, &mut normals));
+            let targets = normal_targets(&t, height_sampler);
+            let caches = &t.plan.feed.caches;
+            let mut hook = gpu_normals.map(|p| {
+                move |f: &mut FrameContext, cmd, jobs: &[ImageUpload]| {
+                    p.record(
+                        d,
+                        f,
+                        cmd,
+                        &targets,
+                        &NormalBatch::new(jobs, caches, targets.side)?,
+                    )
+                }
+            });
             stream_image_uploads(
                 d,
                 &mut self.ring,
                 &mut samples,
                 image,
                 normals,
+                hook.as_mut().map(|h| h as &mut GpuNormals),
                 &submissions,
             )
         });
@@ -513,14 +532,29 @@ impl TerrainRenderer {
         let mut samples = SampleCursor::new(t.plan.feed.gatherer.samples());
         let mut normals = SampleCursor::new(t.plan.feed.gatherer.normals());
         let spilled_normals = plan.normal_maps.then_some((t.normals.raw, &mut normals));
+        let targets = normal_targets(t, self.pipeline.height_sampler);
+        let (caches, side) = (&t.plan.feed.caches, targets.side);
+        let mut hook = self.gpu_normals.as_mut().map(|p| {
+            move |f: &mut FrameContext, cmd, jobs: &[ImageUpload]| {
+                p.record(
+                    d,
+                    f,
+                    cmd,
+                    &targets,
+                    &NormalBatch::new(jobs, caches, targets.side)?,
+                )
+            }
+        });
         stream_image_uploads(
             d,
             &mut self.ring,
             &mut samples,
             levels,
             spilled_normals,
+            hook.as_mut().map(|h| h as &mut GpuNormals),
             &plan.spilled_strips,
         )?;
+        drop(hook);
         let mut frame = self.ring.begin_frame(d)?;
         reserve_instances(&mut t.frame_buffers, d, &mut frame, plan.instances.len())?;
         let tess_stats = match self.tess.as_mut() {
@@ -543,7 +577,7 @@ impl TerrainRenderer {
             self.desc.look,
             &self.lighting,
         );
-        if plan.normal_maps && !tess_mode {
+        if self.desc.normal_maps && !tess_mode {
             uniforms.grid_size[3] |= FLAG_NORMAL_MAP;
         }
         let overlay = self.overlay.as_ref();
@@ -598,7 +632,12 @@ impl TerrainRenderer {
                 .as_ref()
                 .ok_or_else(|| VkError::Other("draped textures missing".into()))?,
             tess: self.tess.as_ref().filter(|_| tess_mode),
+            gpu_normals: match self.gpu_normals.as_mut() {
+                Some(p) => Some((p, NormalBatch::new(&plan.strips, caches, side)?)),
+                None => None,
+            },
         };
+        let mut parts = parts;
         let cmd = parts.record(d, &mut frame, &plan, &staged)?;
         let previous_gpu = frame.previous_gpu_ms();
 
@@ -622,9 +661,33 @@ impl TerrainRenderer {
         if let Some(gpu) = gpu {
             stats.gpu_upload_ms = gpu[Pass::Upload as usize];
             stats.gpu_terrain_ms = gpu[Pass::Terrain as usize];
+            stats.gpu_normals_ms = gpu[Pass::Normals as usize];
         }
         self.frame_counter += 1;
         Ok(stats)
+    }
+
+    /// Layer `level` of the normal texture (side² texels, row-major, texel = sample mod side),
+    /// read back after the frames rendered so far: for the tests of the normal maps.
+    pub fn read_normal_layer(&mut self, level: u32) -> Result<Vec<NormalTexel>, VkError> {
+        let Some(t) = self.terrain.as_ref() else {
+            return Err(VkError::Other("no terrain loaded".into()));
+        };
+        let side = t.normals.desc.width;
+        let (image, d) = (t.normals.raw, &self.device);
+        let bytes = read_texture_layer(d, &mut self.ring, image, level, side, 2, &SAMPLED)?;
+        Ok(bytes
+            .chunks_exact(2)
+            .map(|c| [c[0] as i8, c[1] as i8])
+            .collect())
+    }
+
+    /// Each level's cache region (level-L vertices; None before it is placed) and the level
+    /// textures' side.
+    pub fn level_regions(&self) -> (Vec<Option<CacheRegion>>, u32) {
+        self.terrain.as_ref().map_or((Vec::new(), 0), |t| {
+            (t.plan.feed.caches.clone(), t.plan.clipmap.texture_side())
+        })
     }
 
     /// RGBA8 (sRGB) of the last rendered frame, rows top to bottom.
@@ -653,6 +716,9 @@ impl TerrainRenderer {
         if let Some(mut p) = self.entities.take() {
             p.destroy(d);
         }
+        if let Some(mut p) = self.gpu_normals.take() {
+            p.destroy(d);
+        }
         if let Some(mut t) = self.terrain.take() {
             t.destroy(d);
         }
@@ -677,123 +743,12 @@ impl Drop for TerrainRenderer {
     }
 }
 
-/// What recording a frame reads besides its context.
-struct RecordParts<'a> {
-    terrain: &'a GpuTerrain,
-    pipeline: &'a TerrainPipeline,
-    target: &'a OffscreenTarget,
-    tile_index_buffer: vk::Buffer,
-    overlay: Option<&'a Panel>,
-    /// Draw the sky where no terrain is (the full look).
-    sky: bool,
-    entities: Option<(&'a EntityPass, EntityPush)>,
-    drape: &'a DrapeTextures,
-    /// The tessellation baseline, drawn instead of the tiles.
-    tess: Option<&'a TessTerrain>,
-}
-
-impl RecordParts<'_> {
-    /// Records the frame up to (not including) the read-back or present blit: the staged
-    /// buffer and texture copies (timed as the upload pass), the terrain pass (timed), the
-    /// overlay copy. Returns the command buffer, still recording.
-    fn record(
-        &self,
-        d: &Device,
-        frame: &mut FrameContext,
-        plan: &FramePlan,
-        staged: &StagedFrame,
-    ) -> Result<vk::CommandBuffer, VkError> {
-        let t = self.terrain;
-        let fb = &t.frame_buffers[frame.index()];
-        let set = frame.allocate_set(d, self.pipeline.set_layout)?;
-        let samplers = (self.pipeline.height_sampler, self.pipeline.normal_sampler);
-        write_descriptors(d, set, fb, t, samplers.0, samplers.1, self.drape);
-        // The tessellation set shares the fragment shader's textures (normal maps, drape).
-        let fragment_images = FragmentImages {
-            normals: (t.normals.view, self.pipeline.normal_sampler),
-            imagery: (self.drape.imagery_view(), self.drape.linear),
-            classes: (self.drape.classes_view(), self.drape.nearest),
-        };
-        let tess = match self.tess {
-            Some(tess) => Some((
-                tess,
-                tess.write_set(d, frame, fb.uniforms.raw, &fragment_images)?,
-            )),
-            None => None,
-        };
-        let src = frame.staging_buffer();
-        let cmd = frame.begin_recording(d)?;
-        frame.reset_timestamps(d, cmd);
-        frame.time_begin(d, cmd, Pass::Upload);
-        let copy = |dst: vk::Buffer, offset: u64, size: usize| {
-            let region = vk::BufferCopy {
-                src_offset: offset,
-                dst_offset: 0,
-                size: size as u64,
-            };
-            // `size` bytes were staged at `offset` of the live staging buffer, and `dst` is this
-            // frame's live buffer, sized for them (the instance buffer was grown to the plan's
-            // count before staging).
-            // SAFETY: `cmd` is recording.
-            unsafe { d.raw.cmd_copy_buffer(cmd, src, dst, &[region]) }
-        };
-        copy(
-            fb.uniforms.raw,
-            staged.uniforms,
-            std::mem::size_of::<FrameUniforms>(),
-        );
-        copy(
-            fb.indirect.raw,
-            staged.draws,
-            std::mem::size_of_val(&plan.draws),
-        );
-        if let Some(off) = staged.instances {
-            let size = plan.instances.len() * std::mem::size_of::<TileInstance>();
-            copy(fb.instances.raw, off, size);
-        }
-        record_image_copies(d, cmd, src, t.levels.raw, &staged.strip_copies);
-        record_image_copies(d, cmd, src, t.normals.raw, &staged.normal_copies);
-        for (image, copies) in t.pool_images.iter().zip(&staged.pool_copies) {
-            record_image_copies(d, cmd, src, image.raw, copies);
-        }
-        let mut readers = vec![
-            Access::IndirectBuffer,
-            Access::AnyShaderReadUniformBuffer,
-            Access::VertexShaderReadStorageBuffer,
-        ];
-        if tess.is_some() {
-            // The uniforms and (since the load's upload) the heights, read past the vertex stage.
-            readers.push(Access::TessellationShaderRead);
-        }
-        memory_barrier(d, cmd, &[Access::TransferWrite], &readers);
-        frame.time_end(d, cmd, Pass::Upload);
-
-        frame.time_begin(d, cmd, Pass::Terrain);
-        self.target.record_begin(d, cmd);
-        record_terrain_pass(
-            d,
-            cmd,
-            self.target,
-            self.pipeline,
-            set,
-            self.tile_index_buffer,
-            fb.indirect.raw,
-            plan.draw_count,
-            self.sky,
-            &|cmd| {
-                if let Some((tess, set)) = tess {
-                    tess.record_draw(d, cmd, set);
-                }
-            },
-        );
-        if let Some((p, push)) = &self.entities {
-            p.record(d, cmd, frame.index(), self.target, push);
-        }
-        frame.time_end(d, cmd, Pass::Terrain);
-        if let (Some(p), Some(off)) = (self.overlay, staged.overlay) {
-            let extent = (self.target.width, self.target.height);
-            record_panel_copy(d, cmd, src, off, self.target.colour.raw, extent, p);
-        }
-        Ok(cmd)
+/// What the GPU normal pass reads and writes of `t` (the heights fetched through `height_sampler`).
+fn normal_targets(t: &GpuTerrain, height_sampler: vk::Sampler) -> NormalTargets {
+    NormalTargets {
+        levels_view: t.levels.view,
+        height_sampler,
+        normals: t.normals.raw,
+        side: t.plan.clipmap.texture_side(),
     }
 }

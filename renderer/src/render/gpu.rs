@@ -87,6 +87,23 @@ pub struct EntityPush {
     pub sky_colour: [f32; 4],
 }
 
+/// Push constants of the GPU normal pass (std430 as push constants are laid out): one job of
+/// `render/normal_pass.rs`, see `shaders/gpu_types.glsl`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
+pub struct NormalPush {
+    pub origin: [i32; 2],
+    pub size: [u32; 2],
+    pub region_lo: [i32; 2],
+    pub region_hi: [i32; 2],
+    pub texel_lo: [u32; 2],
+    pub spacing: [f32; 2],
+    pub layer: u32,
+    pub side: u32,
+    pub offset: u32,
+    pub pad: u32,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -237,6 +254,15 @@ mod tests {
             EntityPush,
             Rules::Std430,
             [relative_world_to_clip, sun_dir, sky_colour]
+        );
+    }
+
+    #[test]
+    fn normal_push_matches_glsl_std430() {
+        check!(
+            NormalPush,
+            Rules::Std430,
+            [origin, size, region_lo, region_hi, texel_lo, spacing, layer, side, offset, pad]
         );
     }
 

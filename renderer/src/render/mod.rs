@@ -8,7 +8,9 @@
 //!   `overlay_pass` (the statistics panel copy), `uniforms`, `resources` (the dataset's GPU
 //!   objects), `gpu` (GPU struct layouts), `geo_instances` (pure: nodes' relative-to-eye
 //!   frames on the ellipsoid), `normal_map` (pure: the levels' normal-map texels from the
-//!   full-resolution heights);
+//!   full-resolution heights, and the CPU twin of the GPU pass), `normal_pass` (`--normals
+//!   gpu`: the compute pass that makes them from the level textures), `frame_record` (recording
+//!   one frame's passes);
 //! - `atmosphere` (pure: the Preetham sky, sun colour, height fog) and `landcover` (pure: the
 //!   derived class rules), the CPU twins of `shaders/atmosphere.glsl` and `landcover.glsl`;
 //! - `entity_lod` (pure: discrete LOD by projected size), `models` (pure: meshes, LOD chains,
@@ -26,6 +28,7 @@ pub mod entity_lod;
 pub mod entity_pass;
 pub mod feed;
 pub mod frame;
+pub mod frame_record;
 pub mod gathered;
 pub mod geo_instances;
 pub mod gltf_model;
@@ -34,6 +37,7 @@ pub mod jobs;
 pub mod landcover;
 pub mod models;
 pub mod normal_map;
+pub mod normal_pass;
 pub mod overlay_pass;
 pub mod plan;
 pub mod resources;

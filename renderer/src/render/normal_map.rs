@@ -23,6 +23,7 @@
 //! coarsest level's footprints. (The arithmetic also takes a coarser source, down to level L
 //! itself, where the footprint widens to two level-L samples: `NormalFootprint::candidates`.)
 
+use aerie_terrain::clipmap::{toroidal_pieces, VertexRect};
 use aerie_terrain::source::SampleRect;
 
 /// Bytes per normal texel (RG8_SNORM: x and y; z ≥ 0 is reconstructed, a height field's normal
@@ -173,6 +174,131 @@ pub fn normal_texels(
 ) {
     let g = footprint_gradients(fp, block, size, spacing);
     out.extend(g.iter().map(|g| encode_normal(g[0], g[1])));
+}
+
+/// The level-L samples a level texture holds, `[lo, hi]` per axis (its cache region): what the
+/// GPU normal pass ([`level_normal_texel`]) may read around a sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LevelRegion {
+    pub lo: [i64; 2],
+    pub hi: [i64; 2],
+}
+
+impl LevelRegion {
+    /// The region of a level texture of `side` texels whose first sample is `origin`
+    /// (`clipmap::CacheRegion`).
+    pub fn of_cache(origin: [i64; 2], side: u32) -> LevelRegion {
+        LevelRegion {
+            lo: origin,
+            hi: origin.map(|o| o + side as i64 - 1),
+        }
+    }
+}
+
+/// `--normals gpu`: the normal texel of level-`level` sample `s` (level-L coordinates) from the
+/// level's own heights — what `shaders/normal_map.comp` computes, in the same f32 arithmetic —,
+/// the central difference of the level-L samples either side, 2^L × `spacing` metres apart.
+/// A neighbour outside `region` is not in the level texture (its texel holds the other side of
+/// the torus): it is clamped to the region, so the region's edge samples take the one-sided
+/// difference. `h` gives a level-L sample's height (the source's, clamped to the grid as the
+/// uploader clamps it).
+pub fn level_normal_texel(
+    h: &impl Fn([i64; 2]) -> f32,
+    s: [i64; 2],
+    region: &LevelRegion,
+    level_spacing: [f32; 2],
+) -> NormalTexel {
+    let lo = [0, 1].map(|a| (s[a] - 1).max(region.lo[a]));
+    let hi = [0, 1].map(|a| (s[a] + 1).min(region.hi[a]));
+    let gx = (h([hi[0], s[1]]) - h([lo[0], s[1]]))
+        / (((hi[0] - lo[0]).max(1)) as f32 * level_spacing[0]);
+    let gy = (h([s[0], hi[1]]) - h([s[0], lo[1]]))
+        / (((hi[1] - lo[1]).max(1)) as f32 * level_spacing[1]);
+    let len = (gx * gx + gy * gy + 1.0).sqrt();
+    // packSnorm4x8: round(clamp(v, −1, 1) · 127).
+    let q = |v: f32| ((v / len).clamp(-1.0, 1.0) * 127.0).round() as i8;
+    [q(-gx), q(-gy)]
+}
+
+/// [`level_normal_texel`] of the `size` level-L samples from `origin` (level-L coordinates),
+/// appended to `out` row-major: the texels of one GPU normal job.
+pub fn level_normal_texels(
+    h: &impl Fn([i64; 2]) -> f32,
+    origin: [i64; 2],
+    size: [u32; 2],
+    region: &LevelRegion,
+    level_spacing: [f32; 2],
+    out: &mut Vec<NormalTexel>,
+) {
+    for j in 0..size[1] as i64 {
+        for i in 0..size[0] as i64 {
+            let s = [origin[0] + i, origin[1] + j];
+            out.push(level_normal_texel(h, s, region, level_spacing));
+        }
+    }
+}
+
+/// Metres between level-`level` samples for the GPU pass (f32, as pushed).
+pub fn level_spacing(spacing: [f64; 2], level: u32) -> [f32; 2] {
+    spacing.map(|s| (s * (1u64 << level) as f64) as f32)
+}
+
+/// The level-L vertex rectangle whose normal texels the GPU pass recomputes when `rect` (level-L
+/// vertices, inside `region`) is uploaded: `rect` and the samples one beyond it on each side,
+/// whose central differences read `rect`'s new heights, within the region. A sample's normal
+/// reads only its neighbours, so after the last of its neighbourhood arrives it is recomputed
+/// from resident heights (neighbours in pending cells are stale until they arrive, and their
+/// arrival recomputes it; a tile is drawn only once its neighbour cells are resident).
+pub fn gpu_normal_rect(
+    origin: [i64; 2],
+    size: [u32; 2],
+    region: &LevelRegion,
+) -> ([i64; 2], [u32; 2]) {
+    let lo = [0, 1].map(|a| (origin[a] - 1).max(region.lo[a]));
+    let hi = [0, 1].map(|a| (origin[a] + size[a] as i64).min(region.hi[a]));
+    (lo, [0, 1].map(|a| (hi[a] - lo[a] + 1).max(0) as u32))
+}
+
+/// One piece of the GPU normal pass: `size` texels of layer `level` from `texel` (no toroidal
+/// wrap inside), the level-L samples from `sample`, read within `region`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct NormalJob {
+    pub level: u32,
+    pub texel: [u32; 2],
+    pub size: [u32; 2],
+    pub sample: [i64; 2],
+    pub region: LevelRegion,
+}
+
+impl NormalJob {
+    pub fn texels(&self) -> u64 {
+        self.size[0] as u64 * self.size[1] as u64
+    }
+}
+
+/// The GPU normal jobs of a level upload of `size` level-`level` samples from `origin` (level-L
+/// vertices; a piece of a strip, inside the level's cache region from `cache_origin`, in a
+/// texture of `side` texels): its [`gpu_normal_rect`], split where it wraps around the torus.
+pub fn gpu_normal_jobs(
+    level: u32,
+    origin: [i64; 2],
+    size: [u32; 2],
+    cache_origin: [i64; 2],
+    side: u32,
+) -> Vec<NormalJob> {
+    let region = LevelRegion::of_cache(cache_origin, side);
+    let (lo, size) = gpu_normal_rect(origin, size, &region);
+    let rect = VertexRect { origin: lo, size };
+    toroidal_pieces(&rect, side)
+        .into_iter()
+        .map(|p| NormalJob {
+            level,
+            texel: p.texel,
+            size: p.size,
+            sample: [0, 1].map(|a| lo[a] + p.src_offset[a] as i64),
+            region,
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -343,5 +469,98 @@ mod tests {
             .map(|(a, b)| (a[0] - b[0]).abs().max((a[1] - b[1]).abs()))
             .fold(0.0, f64::max);
         assert!(most > 0.05, "largest slope difference {most}");
+    }
+
+    /// Level-L heights of the rough test terrain at sample `s` of level `level`.
+    fn level_height(level: u32) -> impl Fn([i64; 2]) -> f32 {
+        move |s: [i64; 2]| h0(s[0] << level, s[1] << level) as f32
+    }
+
+    fn within_one_step(got: NormalTexel, want: NormalTexel) -> bool {
+        (0..2).all(|a| (i32::from(got[a]) - i32::from(want[a])).abs() <= 1)
+    }
+
+    #[test]
+    fn gpu_texel_is_the_central_difference_inside_and_one_sided_at_the_region_edge() {
+        let region = LevelRegion::of_cache([10, 20], 16);
+        assert_eq!(region.hi, [25, 35]);
+        for level in [0, 2, 5] {
+            let h = level_height(level);
+            let sp = level_spacing(SPACING, level);
+            let d = [0, 1].map(|a| SPACING[a] * (1u64 << level) as f64);
+            let hf = |c: i64, r: i64| f64::from(h([c, r]));
+            for s in [[15, 27], [10, 27], [25, 35], [10, 20]] {
+                let (w, e) = ((s[0] - 1).max(10), (s[0] + 1).min(25));
+                let (south, north) = ((s[1] - 1).max(20), (s[1] + 1).min(35));
+                let gx = (hf(e, s[1]) - hf(w, s[1])) / ((e - w) as f64 * d[0]);
+                let gy = (hf(s[0], north) - hf(s[0], south)) / ((north - south) as f64 * d[1]);
+                let got = level_normal_texel(&h, s, &region, sp);
+                let want = encode_normal(gx, gy);
+                assert!(
+                    within_one_step(got, want),
+                    "level {level} sample {s:?}: {got:?} vs {want:?}"
+                );
+            }
+        }
+        // A plane: the one-sided edges give the same normal as the interior.
+        let plane = |s: [i64; 2]| (3.0 * s[0] as f64 - 2.0 * s[1] as f64) as f32;
+        let want = encode_normal(3.0 / 30.0, -2.0 / 20.0);
+        for s in [[10, 20], [17, 28], [25, 35]] {
+            assert_eq!(level_normal_texel(&plane, s, &region, [30.0, 20.0]), want);
+        }
+    }
+
+    #[test]
+    fn gpu_texels_at_level0_are_the_cpu_texels_inside_the_region() {
+        let fp = NormalFootprint::of_level(0);
+        let (origin, size) = ([40, 50], [24u32, 9u32]);
+        let mut cpu = Vec::new();
+        normal_texels(&fp, &block_of(&fp, origin, size), size, SPACING, &mut cpu);
+        let region = LevelRegion::of_cache([0, 0], 128);
+        let mut gpu = Vec::new();
+        let sp = level_spacing(SPACING, 0);
+        level_normal_texels(&level_height(0), origin, size, &region, sp, &mut gpu);
+        assert_eq!(cpu.len(), gpu.len());
+        for (k, (c, g)) in cpu.iter().zip(&gpu).enumerate() {
+            assert!(within_one_step(*g, *c), "texel {k}: gpu {g:?}, cpu {c:?}");
+        }
+    }
+
+    #[test]
+    fn gpu_jobs_cover_the_upload_and_its_border_within_the_region_without_wrapping() {
+        let side = 32u32;
+        // A region straddling the torus' seam and negative samples.
+        let cache = [-7i64, 40];
+        let region = LevelRegion::of_cache(cache, side);
+        let cases = [
+            // An inner strip: one sample of border on every side.
+            ([0i64, 45i64], [8u32, 5u32], [-1i64, 44i64], [10u32, 7u32]),
+            // At the region's west and south edges: no border beyond them.
+            ([-7, 40], [4, 32], [-7, 40], [5, 32]),
+            // At the east and north edges.
+            ([20, 70], [5, 2], [19, 69], [6, 3]),
+        ];
+        for (origin, size, lo, ext) in cases {
+            assert_eq!(gpu_normal_rect(origin, size, &region), (lo, ext));
+            let jobs = gpu_normal_jobs(3, origin, size, cache, side);
+            let mut seen = std::collections::HashSet::new();
+            for j in &jobs {
+                assert_eq!(j.level, 3);
+                assert_eq!(j.region, region);
+                for a in 0..2 {
+                    assert!(j.texel[a] + j.size[a] <= side, "{j:?} wraps");
+                    let t = j.sample[a].rem_euclid(side as i64);
+                    assert_eq!(t, j.texel[a] as i64, "{j:?}: texel = sample mod side");
+                }
+                for y in 0..j.size[1] as i64 {
+                    for x in 0..j.size[0] as i64 {
+                        let s = [j.sample[0] + x, j.sample[1] + y];
+                        assert!((0..2).all(|a| s[a] >= region.lo[a] && s[a] <= region.hi[a]));
+                        assert!(seen.insert(s), "{s:?} twice");
+                    }
+                }
+            }
+            assert_eq!(seen.len() as u32, ext[0] * ext[1], "{origin:?}");
+        }
     }
 }

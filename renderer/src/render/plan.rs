@@ -364,6 +364,7 @@ pub fn plan_frame(
     let strip_bytes: u64 = strips.iter().map(ImageUpload::bytes).sum();
     let normal_total: u64 = strips.iter().map(|s| normal_bytes(s.size, normals)).sum();
     plan.stats.bytes_clipmap = strip_bytes + normal_total;
+    plan.stats.bytes_normals = normal_total;
     let allocations = strips.len() as u64 * (1 + normals as u64);
     if strip_bytes + normal_total + reserve + STRIP_SLACK_BYTES * allocations > budget.capacity() {
         // A jump (or a tiny budget).
@@ -389,6 +390,7 @@ pub fn plan_frame(
     let gatherer = &mut state.feed.gatherer;
     gatherer.send_requests();
     plan.stats.cpu_terrain_data_us = gatherer.time().as_secs_f64() * 1e6;
+    plan.stats.cpu_normals_us = gatherer.normal_time().as_secs_f64() * 1e6;
     plan.stats.set_stream(&gatherer.stream_stats());
     plan.stats.cells_pending = state.feed.pending_cells();
 

@@ -12,6 +12,7 @@ use aerie_terrain::clipmap::ClipmapDesc;
 use aerie_terrain::select::MAX_REFINEMENT;
 use aerie_terrain::source::{SourceGrid, TerrainSource};
 
+use crate::render::desc::NormalSource;
 use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, TileInstance};
 use crate::render::plan::{PlanState, MAX_INSTANCES};
 use crate::render::stats::RESOLUTIONS;
@@ -116,8 +117,9 @@ impl GpuTerrain {
         bake: Arc<ErrorBake>,
         clipmap: ClipmapDesc,
         pool_capacity: &[u32; MAX_REFINEMENT as usize],
-        normal_maps: bool,
+        normals: Option<NormalSource>,
     ) -> Result<Self, VkError> {
+        let normal_maps = normals.is_some();
         Self::check_level_limits(d, &clipmap)?;
         let level_count = clipmap.level_count();
         let side = clipmap.texture_side();
@@ -137,7 +139,8 @@ impl GpuTerrain {
             layers,
         };
         let levels = Image2d::new(d, "level textures", image_desc(side, level_count))?;
-        if normal_maps {
+        if normals == Some(NormalSource::Cpu) {
+            // On the GPU the texels are computed from the level textures (`normal_pass.rs`).
             plan.feed
                 .gatherer
                 .set_normal_maps(Some([grid.spacing_x, grid.spacing_y]));

@@ -61,10 +61,16 @@ pub struct FrameStats {
     pub cpu_record_us: f64,
     pub gpu_upload_ms: f64,
     pub gpu_terrain_ms: f64,
+    /// Normal maps: time the frame thread spent computing normal texels (`--normals cpu`;
+    /// also in `cpu_terrain_data_us`), the bytes of normal texels staged (included in
+    /// `bytes_clipmap`), and the GPU normal pass's milliseconds (`--normals gpu`).
+    pub cpu_normals_us: f64,
+    pub bytes_normals: u64,
+    pub gpu_normals_ms: f64,
 }
 
 impl FrameStats {
-    pub const CSV_HEADER: &'static str = "frame,finest_level,tiles_considered,tiles_culled,tiles_drawn,refined_r0,refined_r1,refined_r2,refined_r3,refined_r4,refined_r5,refined_r6,instances,tiles_late,tiles_late_stream,tiles_unbounded,triangles,draw_calls,bytes_clipmap,bytes_refined,bytes_uploaded,budget_spills,pool_hits,pool_misses,prefetched,cells_pending,stream_hits,stream_misses,stream_loaded,stream_failed,stream_resident_bytes,stream_budget_bytes,cpu_terrain_data_us,cpu_select_us,cpu_upload_us,cpu_record_us,gpu_upload_ms,gpu_terrain_ms,tiles_hidden";
+    pub const CSV_HEADER: &'static str = "frame,finest_level,tiles_considered,tiles_culled,tiles_drawn,refined_r0,refined_r1,refined_r2,refined_r3,refined_r4,refined_r5,refined_r6,instances,tiles_late,tiles_late_stream,tiles_unbounded,triangles,draw_calls,bytes_clipmap,bytes_refined,bytes_uploaded,budget_spills,pool_hits,pool_misses,prefetched,cells_pending,stream_hits,stream_misses,stream_loaded,stream_failed,stream_resident_bytes,stream_budget_bytes,cpu_terrain_data_us,cpu_select_us,cpu_upload_us,cpu_record_us,gpu_upload_ms,gpu_terrain_ms,tiles_hidden,cpu_normals_us,bytes_normals,gpu_normals_ms";
 
     /// Copies the source's running totals.
     pub fn set_stream(&mut self, s: &aerie_terrain::source::StreamStats) {
@@ -79,7 +85,7 @@ impl FrameStats {
     pub fn csv_row(&self) -> String {
         let r = &self.tiles_by_refinement;
         format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1},{:.1},{:.1},{:.1},{:.3},{:.3},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1},{:.1},{:.1},{:.1},{:.3},{:.3},{},{:.1},{},{:.4}",
             self.frame,
             self.finest_level,
             self.tiles_considered,
@@ -118,7 +124,10 @@ impl FrameStats {
             self.cpu_record_us,
             self.gpu_upload_ms,
             self.gpu_terrain_ms,
-            self.tiles_hidden
+            self.tiles_hidden,
+            self.cpu_normals_us,
+            self.bytes_normals,
+            self.gpu_normals_ms
         )
     }
 }
@@ -165,5 +174,17 @@ mod tests {
         assert_eq!(at("tiles_late_stream"), "3");
         assert_eq!(at("stream_budget_bytes"), "1073741824");
         assert_eq!(at("cpu_terrain_data_us"), "12.2");
+        let s = FrameStats {
+            cpu_normals_us: 3.25,
+            bytes_normals: 512,
+            gpu_normals_ms: 0.0625,
+            ..Default::default()
+        };
+        let row = s.csv_row();
+        let fields: Vec<&str> = row.split(',').collect();
+        let at = |name: &str| fields[header.iter().position(|h| *h == name).unwrap()];
+        assert_eq!(at("cpu_normals_us"), "3.2");
+        assert_eq!(at("bytes_normals"), "512");
+        assert_eq!(at("gpu_normals_ms"), "0.0625");
     }
 }

@@ -14,16 +14,22 @@ use crate::render::normal_map::NormalTexel;
 use crate::render::overlay_pass::Panel;
 use crate::render::plan::FramePlan;
 use crate::vk::access::{image_barrier, memory_barrier, Access};
-use crate::vk::frame_context::FrameRing;
+use crate::vk::frame_context::{FrameContext, FrameRing};
 use crate::vk::staging::StagingRing;
 use crate::vk::{Device, VkError};
 
 /// Where a sampled texture rests between uploads (heights in the vertex shader, normal maps in
-/// the fragment shader).
-const SAMPLED: [Access; 2] = [
+/// the fragment shader, heights in the GPU normal pass: `render/normal_pass.rs`).
+pub const SAMPLED: [Access; 3] = [
     Access::VertexShaderReadSampledImage,
     Access::FragmentShaderReadSampledImage,
+    Access::ComputeShaderReadSampledImage,
 ];
+
+/// `--normals gpu`: records the normal pass of a submission's level uploads after their heights'
+/// copies (`render/normal_pass.rs`).
+pub type GpuNormals<'r> =
+    dyn FnMut(&mut FrameContext, vk::CommandBuffer, &[ImageUpload]) -> Result<(), VkError> + 'r;
 const COPY_DST: [Access; 1] = [Access::TransferWrite];
 
 /// Copies one upload's gathered samples (the cursor's next) into the open staging region;
@@ -182,14 +188,15 @@ pub fn stream_buffer(
 }
 
 /// Streams level-texture uploads into `image`, one submission per inner list (as the plan split
-/// them), each job's normal texels after its heights into the normal texture when `normals`.
-/// Returns the submission count.
+/// them), each job's normal texels after its heights into the normal texture when `normals`
+/// (staged), or computed after the copies by `gpu_normals`. Returns the submission count.
 pub fn stream_image_uploads(
     device: &Device,
     ring: &mut FrameRing,
     samples: &mut SampleCursor,
     image: vk::Image,
     mut normals: Option<(vk::Image, &mut SampleCursor<NormalTexel>)>,
+    mut gpu_normals: Option<&mut GpuNormals>,
     submissions: &[Vec<ImageUpload>],
 ) -> Result<u32, VkError> {
     for jobs in submissions {
@@ -207,6 +214,9 @@ pub fn stream_image_uploads(
         record_image_copies(device, cmd, src, image, &copies);
         if let Some((normal_image, _)) = normals.as_ref() {
             record_image_copies(device, cmd, src, *normal_image, &normal_copies);
+        }
+        if let Some(pass) = gpu_normals.as_mut() {
+            pass(&mut frame, cmd, jobs)?;
         }
         let _in_flight = frame.submit(device)?;
     }

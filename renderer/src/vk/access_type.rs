@@ -23,6 +23,10 @@ pub enum Access {
     VertexShaderReadSampledImage,
     /// Sampled in the fragment shader.
     FragmentShaderReadSampledImage,
+    /// Sampled (texel fetches) in a compute shader (the GPU normal pass reads the heights).
+    ComputeShaderReadSampledImage,
+    /// Written as a storage buffer by a compute shader (the GPU normal pass's texels).
+    ComputeShaderWriteStorageBuffer,
     /// Read as a storage buffer in the vertex shader (tile instances).
     VertexShaderReadStorageBuffer,
     /// Read as a uniform buffer by the vertex and fragment shaders.
@@ -42,7 +46,7 @@ pub enum Access {
 
 impl Access {
     /// Every use, for tests and tables.
-    pub const ALL: [Access; 15] = [
+    pub const ALL: [Access; 17] = [
         Access::Nothing,
         Access::SwapchainAcquired,
         Access::TransferRead,
@@ -51,6 +55,8 @@ impl Access {
         Access::DepthAttachmentReadWrite,
         Access::VertexShaderReadSampledImage,
         Access::FragmentShaderReadSampledImage,
+        Access::ComputeShaderReadSampledImage,
+        Access::ComputeShaderWriteStorageBuffer,
         Access::VertexShaderReadStorageBuffer,
         Access::AnyShaderReadUniformBuffer,
         Access::TessellationShaderRead,
@@ -65,6 +71,7 @@ impl Access {
         matches!(
             self,
             Access::TransferWrite
+                | Access::ComputeShaderWriteStorageBuffer
                 | Access::ColourAttachmentWrite
                 | Access::DepthAttachmentReadWrite
         )

@@ -55,6 +55,14 @@ pub fn map_access(a: Access) -> AccessInfo {
             A::SHADER_READ,
             L::SHADER_READ_ONLY_OPTIMAL,
         ),
+        Access::ComputeShaderReadSampledImage => (
+            S::COMPUTE_SHADER,
+            A::SHADER_READ,
+            L::SHADER_READ_ONLY_OPTIMAL,
+        ),
+        Access::ComputeShaderWriteStorageBuffer => {
+            (S::COMPUTE_SHADER, A::SHADER_WRITE, L::UNDEFINED)
+        }
         Access::VertexShaderReadStorageBuffer => (S::VERTEX_SHADER, A::SHADER_READ, L::UNDEFINED),
         Access::AnyShaderReadUniformBuffer => (
             S::VERTEX_SHADER | S::FRAGMENT_SHADER,

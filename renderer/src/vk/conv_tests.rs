@@ -9,8 +9,10 @@ fn every_access_names_a_stage_and_only_writes_what_it_says() {
     for a in Access::ALL {
         let i = map_access(a);
         assert!(!i.stage.is_empty(), "{a:?} has no stage");
-        let writes =
-            A::TRANSFER_WRITE | A::COLOR_ATTACHMENT_WRITE | A::DEPTH_STENCIL_ATTACHMENT_WRITE;
+        let writes = A::TRANSFER_WRITE
+            | A::COLOR_ATTACHMENT_WRITE
+            | A::DEPTH_STENCIL_ATTACHMENT_WRITE
+            | A::SHADER_WRITE;
         assert_eq!(
             i.access.intersects(writes),
             a.is_write(),

@@ -62,9 +62,14 @@ fn candidate(
         .unwrap_or_else(|_| "?".into());
     // SAFETY: see above.
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    // Graphics and compute on one queue (the GPU normal pass is recorded between the uploads
+    // and the draw); Vulkan guarantees such a family wherever graphics is offered.
     let family = families
         .iter()
-        .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS))
+        .position(|f| {
+            f.queue_flags
+                .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
+        })
         .map(|i| i as u32);
     let swapchain_extension = desc.swapchain.then(|| {
         let exts =

@@ -13,6 +13,7 @@
 pub mod access;
 pub mod access_type;
 pub mod buffer;
+pub mod compute_pipeline;
 pub mod conv;
 pub mod descriptors;
 pub mod device;

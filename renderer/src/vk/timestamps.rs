@@ -10,8 +10,11 @@ use super::{Device, VkError, VkResultExt, FRAMES_IN_FLIGHT};
 pub enum Pass {
     Upload = 0,
     Terrain = 1,
+    /// `--normals gpu`: the normal pass's dispatches and its copy into the normal texture
+    /// (begin and end written back to back otherwise).
+    Normals = 2,
 }
-pub const PASS_COUNT: u32 = 2;
+pub const PASS_COUNT: u32 = 3;
 const QUERIES_PER_FRAME: u32 = PASS_COUNT * 2;
 
 /// Milliseconds per [`Pass`], indexed by `Pass as usize`.

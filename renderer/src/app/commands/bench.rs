@@ -138,6 +138,7 @@ fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> RendererDesc {
         debug_tiles: false,
         look: a.look.look(),
         normal_maps: a.normal_maps.on(),
+        normal_source: a.normals.source(),
         horizon_cull: a.horizon_cull.on(),
     });
     match (config.mode, config.knob) {
@@ -470,10 +471,8 @@ fn run_flight(
         for (i, lane) in lanes.iter_mut().enumerate() {
             let (wall_ms, stats) = results[i].expect("rendered");
             if let (Some(c), false) = (costs.as_mut(), warmup) {
-                match lane.variant {
-                    Some(v) => c.off[v].1.push(stats.gpu_terrain_ms),
-                    None if i == 0 => c.base_ms.push(stats.gpu_terrain_ms),
-                    None => {}
+                if lane.variant.is_some() || i == 0 {
+                    c.push(lane.variant, &stats);
                 }
             }
             if lane.variant.is_some() {

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::app::args::{LookArg, PassArgs, StoreArgs, Switch};
+use crate::app::args::{LookArg, NormalsArg, PassArgs, StoreArgs, Switch};
 
 #[derive(Debug, Clone, Args)]
 pub struct BenchArgs {
@@ -109,6 +109,11 @@ pub struct BenchArgs {
     /// Normal maps from the full-resolution heights on level tiles (on) or per-vertex normals.
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub normal_maps: Switch,
+    /// Where the normal maps' texels are computed: cpu (full-resolution footprint means,
+    /// staged) or gpu (a compute pass over each level's heights). With --feature-costs the
+    /// other one is measured too, on the same frames.
+    #[arg(long = "normals", value_enum, default_value_t = NormalsArg::Cpu)]
+    pub normals: NormalsArg,
     /// Also draw the first configuration once with each look feature off (land cover, sky
     /// and atmosphere; normal maps; draped rasters) on the same frames: features.csv and a
     /// table in summary.md give the terrain pass's GPU time of each.

@@ -2,9 +2,11 @@
 //! configuration is drawn again, on the same frames, once with each feature off — the full
 //! look's land cover, sky and atmosphere (the plain look instead), the normal maps, the draped
 //! rasters when given — and the terrain pass's GPU time of each is set against the
-//! configuration with everything on. Plain data in and out; the bench renders the lanes.
+//! configuration with everything on; with normal maps, once more with their texels computed on
+//! the other side (`--normals cpu|gpu`), and each lane's normal costs (CPU time and staged bytes,
+//! the GPU pass's time). Plain data in and out; the bench renders the lanes.
 
-use crate::render::frame::{Look, RendererDesc};
+use crate::render::frame::{FrameStats, Look, NormalSource, RendererDesc};
 use crate::tools::percentile::percentile;
 
 /// One feature turned off.
@@ -16,6 +18,8 @@ pub enum FeatureOff {
     NoNormalMaps,
     /// No draped imagery or land-cover raster.
     NoDrape,
+    /// The normal maps' texels computed on the other side (not a feature off: the other way).
+    NormalsOn(NormalSource),
 }
 
 impl FeatureOff {
@@ -25,6 +29,8 @@ impl FeatureOff {
             Self::LookPlain => "land cover, sky, atmosphere (plain look)",
             Self::NoNormalMaps => "normal maps",
             Self::NoDrape => "draped rasters",
+            Self::NormalsOn(NormalSource::Gpu) => "normals on the GPU (instead of the CPU)",
+            Self::NormalsOn(NormalSource::Cpu) => "normals on the CPU (instead of the GPU)",
         }
     }
 
@@ -34,6 +40,8 @@ impl FeatureOff {
             Self::LookPlain => "look_plain",
             Self::NoNormalMaps => "no_normal_maps",
             Self::NoDrape => "no_drape",
+            Self::NormalsOn(NormalSource::Gpu) => "normals_gpu",
+            Self::NormalsOn(NormalSource::Cpu) => "normals_cpu",
         }
     }
 
@@ -43,6 +51,7 @@ impl FeatureOff {
             Self::LookPlain => desc.look = Look::Plain,
             Self::NoNormalMaps => desc.normal_maps = false,
             Self::NoDrape => desc.drape = None,
+            Self::NormalsOn(source) => desc.normal_source = source,
         }
     }
 }
@@ -55,6 +64,10 @@ pub fn features_on(base: &RendererDesc) -> Vec<FeatureOff> {
     }
     if base.normal_maps {
         v.push(FeatureOff::NoNormalMaps);
+        v.push(FeatureOff::NormalsOn(match base.normal_source {
+            NormalSource::Cpu => NormalSource::Gpu,
+            NormalSource::Gpu => NormalSource::Cpu,
+        }));
     }
     if base.drape.is_some() {
         v.push(FeatureOff::NoDrape);
@@ -68,6 +81,40 @@ pub struct FeatureCosts {
     pub base_label: String,
     pub base_ms: Vec<f64>,
     pub off: Vec<(FeatureOff, Vec<f64>)>,
+    /// Per lane (0: the base, then `off`'s order) and measured frame: the normal maps' costs.
+    pub normals: Vec<Vec<NormalCost>>,
+}
+
+/// What one frame's normal texels cost.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct NormalCost {
+    /// CPU milliseconds computing them (`--normals cpu`).
+    pub cpu_ms: f64,
+    /// Bytes of them staged through the ring.
+    pub staged_bytes: u64,
+    /// GPU milliseconds of the normal pass (`--normals gpu`).
+    pub gpu_ms: f64,
+}
+
+impl NormalCost {
+    pub fn of(s: &FrameStats) -> NormalCost {
+        NormalCost {
+            cpu_ms: s.cpu_normals_us / 1e3,
+            staged_bytes: s.bytes_normals,
+            gpu_ms: s.gpu_normals_ms,
+        }
+    }
+}
+
+/// Over a lane's frames: CPU ms (median, p99), staged MiB (total, per frame), GPU pass ms
+/// (median, p99).
+fn normal_summary(n: &[NormalCost]) -> [f64; 6] {
+    let cpu: Vec<f64> = n.iter().map(|c| c.cpu_ms).collect();
+    let gpu: Vec<f64> = n.iter().map(|c| c.gpu_ms).collect();
+    let (c50, c99) = FeatureCosts::stats(&cpu);
+    let (g50, g99) = FeatureCosts::stats(&gpu);
+    let mib = n.iter().map(|c| c.staged_bytes).sum::<u64>() as f64 / (1u64 << 20) as f64;
+    [c50, c99, mib, mib / n.len().max(1) as f64, g50, g99]
 }
 
 impl FeatureCosts {
@@ -76,7 +123,29 @@ impl FeatureCosts {
             base_label,
             base_ms: Vec::new(),
             off: features.iter().map(|&f| (f, Vec::new())).collect(),
+            normals: vec![Vec::new(); features.len() + 1],
         }
+    }
+
+    /// Records a measured frame of the base (`lane` None) or of variant `lane`.
+    pub fn push(&mut self, lane: Option<usize>, s: &FrameStats) {
+        match lane {
+            Some(v) => self.off[v].1.push(s.gpu_terrain_ms),
+            None => self.base_ms.push(s.gpu_terrain_ms),
+        }
+        self.normals[lane.map_or(0, |v| v + 1)].push(NormalCost::of(s));
+    }
+
+    /// The lanes drawn with normal maps: name, GPU terrain ms median, then [`normal_summary`].
+    fn normal_rows(&self) -> Vec<(String, f64, [f64; 6])> {
+        let base = ("nothing (all on)".to_string(), &self.base_ms);
+        let lanes =
+            std::iter::once(base).chain(self.off.iter().map(|(f, ms)| (f.name().into(), ms)));
+        lanes
+            .zip(&self.normals)
+            .filter(|((name, _), _)| name != FeatureOff::NoNormalMaps.name())
+            .map(|((name, ms), n)| (name, Self::stats(ms).0, normal_summary(n)))
+            .collect()
     }
 
     /// (median, p99) of sorted copies.
@@ -103,19 +172,27 @@ impl FeatureCosts {
     pub fn csv(&self) -> String {
         let (base, base_p99) = Self::stats(&self.base_ms);
         let mut out = String::from(
-            "configuration,feature_off,frames,gpu_terrain_ms_median,gpu_terrain_ms_p99,feature_cost_ms\n",
+            "configuration,feature_off,frames,gpu_terrain_ms_median,gpu_terrain_ms_p99,feature_cost_ms,cpu_normals_ms_median,cpu_normals_ms_p99,normals_staged_mib,gpu_normals_ms_median,gpu_normals_ms_p99\n",
         );
+        let n = |lane: usize| {
+            let [c50, c99, mib, _, g50, g99] = normal_summary(&self.normals[lane]);
+            format!("{c50:.4},{c99:.4},{mib:.3},{g50:.4},{g99:.4}")
+        };
         out.push_str(&format!(
-            "{},none,{},{base:.4},{base_p99:.4},0\n",
+            "{},none,{},{base:.4},{base_p99:.4},0,{}\n",
             self.base_label,
-            self.base_ms.len()
+            self.base_ms.len(),
+            n(0)
         ));
-        for ((f, median, p99, cost), (_, ms)) in self.rows().into_iter().zip(&self.off) {
+        for (k, ((f, median, p99, cost), (_, ms))) in
+            self.rows().into_iter().zip(&self.off).enumerate()
+        {
             out.push_str(&format!(
-                "{},{},{},{median:.4},{p99:.4},{cost:.4}\n",
+                "{},{},{},{median:.4},{p99:.4},{cost:.4},{}\n",
                 self.base_label,
                 f.key(),
-                ms.len()
+                ms.len(),
+                n(k + 1)
             ));
         }
         out
@@ -136,6 +213,12 @@ impl FeatureCosts {
                 f.name()
             ));
         }
+        md.push_str("\nNormal maps, per frame: CPU time computing their texels and MiB staged (`--normals cpu`), the GPU normal pass (`--normals gpu`).\n\n| lane | GPU terrain ms | CPU normals ms (median) | p99 | staged MiB per frame | in all | GPU normal pass ms (median) | p99 |\n|---|---|---|---|---|---|---|---|\n");
+        for (name, terrain, [c50, c99, mib, per, g50, g99]) in self.normal_rows() {
+            md.push_str(&format!(
+                "| {name} | {terrain:.3} | {c50:.3} | {c99:.3} | {per:.3} | {mib:.1} | {g50:.3} | {g99:.3} |\n"
+            ));
+        }
         md
     }
 }
@@ -153,7 +236,18 @@ mod tests {
         };
         assert_eq!(
             features_on(&desc),
-            [FeatureOff::LookPlain, FeatureOff::NoNormalMaps]
+            [
+                FeatureOff::LookPlain,
+                FeatureOff::NoNormalMaps,
+                FeatureOff::NormalsOn(NormalSource::Gpu)
+            ]
+        );
+        let mut gpu = desc.clone();
+        FeatureOff::NormalsOn(NormalSource::Gpu).apply(&mut gpu);
+        assert_eq!(gpu.normal_source, NormalSource::Gpu);
+        assert_eq!(
+            features_on(&gpu).last(),
+            Some(&FeatureOff::NormalsOn(NormalSource::Cpu))
         );
         let mut plain = RendererDesc {
             look: Look::Plain,
@@ -171,9 +265,30 @@ mod tests {
             "bounded τ=1".into(),
             &[FeatureOff::LookPlain, FeatureOff::NoNormalMaps],
         );
-        c.base_ms = vec![10.0, 12.0, 11.0];
-        c.off[0].1 = vec![8.0, 8.5, 7.5];
-        c.off[1].1 = vec![11.5, 11.0, 10.5];
+        for (k, (a, b, n)) in [(10.0, 8.0, 11.5), (12.0, 8.5, 11.0), (11.0, 7.5, 10.5)]
+            .into_iter()
+            .enumerate()
+        {
+            let cpu = FrameStats {
+                gpu_terrain_ms: a,
+                cpu_normals_us: 1000.0 * (k + 1) as f64,
+                bytes_normals: 1 << 20,
+                ..FrameStats::default()
+            };
+            c.push(None, &cpu);
+            let plain = FrameStats {
+                gpu_terrain_ms: b,
+                ..cpu
+            };
+            c.push(Some(0), &plain);
+            c.push(
+                Some(1),
+                &FrameStats {
+                    gpu_terrain_ms: n,
+                    ..FrameStats::default()
+                },
+            );
+        }
         let rows = c.rows();
         assert_eq!(rows[0].0, FeatureOff::LookPlain);
         assert!((rows[0].1 - 8.0).abs() < 1e-12 && (rows[0].3 - 3.0).abs() < 1e-12);
@@ -181,6 +296,11 @@ mod tests {
         let csv = c.csv();
         assert_eq!(csv.lines().count(), 4, "{csv}");
         assert!(csv.contains("bounded τ=1,look_plain,3,8.0000"), "{csv}");
+        // The base's normals: 1, 2, 3 ms on the CPU, 1 MiB staged a frame.
+        assert!(
+            csv.contains(",0,2.0000,3.0000,3.000,0.0000,0.0000\n"),
+            "{csv}"
+        );
         let md = c.markdown();
         assert!(
             md.contains("| normal maps |") && md.contains("+3.000 ms (+27 %)"),
