@@ -150,10 +150,12 @@ impl GpuTerrain {
         } else {
             (1, 1)
         };
-        let normal_desc = ImageDesc {
+        let mut normal_desc = ImageDesc {
             format: NORMAL_FORMAT,
             ..image_desc(nside, nlayers)
         };
+        // Read back by the tests of the normal maps (`TerrainRenderer::read_normal_layer`).
+        normal_desc.usage |= vk::ImageUsageFlags::TRANSFER_SRC;
         let normals = match Image2d::new(d, "normal maps", normal_desc) {
             Ok(n) => n,
             Err(e) => {
