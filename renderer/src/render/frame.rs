@@ -554,7 +554,6 @@ impl TerrainRenderer {
             hook.as_mut().map(|h| h as &mut GpuNormals),
             &plan.spilled_strips,
         )?;
-        drop(hook);
         let mut frame = self.ring.begin_frame(d)?;
         reserve_instances(&mut t.frame_buffers, d, &mut frame, plan.instances.len())?;
         let tess_stats = match self.tess.as_mut() {
