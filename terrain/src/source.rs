@@ -132,6 +132,22 @@ pub trait TerrainSource: Send + Sync {
     fn stats(&self) -> StreamStats {
         StreamStats::default()
     }
+
+    /// Texels per level sample per axis (k) of the draped imagery served with the samples
+    /// (a store's imagery layer, [`crate::drape::levels`]), or None without.
+    fn imagery_texels_per_sample(&self) -> Option<u32> {
+        None
+    }
+
+    /// The level imagery of `rect` (a level strip: its origin on its level's grid): RGBA8
+    /// texels `[s·k, (s + n)·k)` per axis of `rect.level`'s raster, `s = origin >> level`,
+    /// row-major, south row first, `rect.size[0]·k` per row; texels outside the raster
+    /// transparent. Succeeds exactly when [`TerrainSource::gather`] of `rect` would; never
+    /// blocks. Without imagery: all transparent.
+    fn gather_imagery(&self, _rect: &SampleRect, out: &mut [u8]) -> Result<(), NotResident> {
+        out.fill(0);
+        Ok(())
+    }
 }
 
 impl Dataset {

@@ -2,6 +2,8 @@
 //! above in linear light, weighted by alpha (so transparent texels do not darken the edges
 //! of the imagery), down to 1×1. Pure; the GPU samples the chain trilinearly.
 
+use super::read::{GeoRaster, RasterRef};
+
 /// sRGB byte → linear light.
 fn decode(c: u8) -> f32 {
     let c = f32::from(c) / 255.0;
@@ -64,6 +66,55 @@ pub fn mip_chain(w: usize, h: usize, level0: &[u8]) -> Vec<(usize, usize, Vec<u8
         out.push((nw, nh, next));
         prev = &owned;
         (pw, ph) = (nw, nh);
+    }
+    out
+}
+
+/// The raster's own mip chain, for draping it onto texels coarser than its pixels: level 0 is
+/// `raster` itself, each next one the [`mip_chain`] step of the one above (RGBA, in linear
+/// light, alpha-weighted), geo-referenced at the centres of the pixels it averages, down to
+/// the level whose pixels are no finer than `coarsest_m` metres or to 1×1.
+pub fn raster_pyramid(raster: &GeoRaster, pixel_m: f64, coarsest_m: f64) -> Vec<GeoRaster> {
+    let mut out = vec![raster.clone()];
+    let mut size_m = pixel_m;
+    while size_m * 2.0 <= coarsest_m {
+        let last = out.last().expect("level 0");
+        if last.width < 2 && last.height < 2 {
+            break;
+        }
+        let rgba: Vec<u8> = match last.bands {
+            4 => last.data.clone(),
+            b => last
+                .data
+                .chunks_exact(b)
+                .flat_map(|p| match b {
+                    1 => [p[0], p[0], p[0], 255],
+                    _ => [p[0], p[1], p[2], 255],
+                })
+                .collect(),
+        };
+        // One step of the chain: the first level below `rgba`.
+        let (w, h, data) = mip_chain(last.width, last.height, &rgba)
+            .into_iter()
+            .next()
+            .expect("a raster wider than one pixel has a next level");
+        let g = &last.georef;
+        let georef = RasterRef {
+            crs: g.crs.clone(),
+            x0: g.x0 + g.dx / 2.0,
+            y0: g.y0 - g.dy / 2.0,
+            dx: g.dx * 2.0,
+            dy: g.dy * 2.0,
+        };
+        out.push(GeoRaster {
+            path: last.path.clone(),
+            width: w,
+            height: h,
+            bands: 4,
+            data,
+            georef,
+        });
+        size_m *= 2.0;
     }
     out
 }

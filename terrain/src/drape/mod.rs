@@ -10,15 +10,17 @@
 
 pub mod encode;
 pub mod error;
+pub mod levels;
 pub mod mips;
 pub mod read;
 pub mod register;
 
 pub use encode::{encode_geotiff, EncodeRef};
 pub use error::DrapeError;
+pub use levels::{level_extent, LevelDraper, MAX_STORE_TEXELS_PER_SAMPLE};
 pub use read::{read_raster, GeoRaster, RasterCrs, RasterRef};
 pub use register::{
-    drape_codes, drape_rgba, grid_to_pixel, DrapeSize, DrapeStats, TerrainGrid, CODE_NONE,
+    drape_codes, drape_rgba, drape_rgba_window, grid_to_pixel, TexelWindow, DrapeSize, DrapeStats, TerrainGrid, CODE_NONE,
     MAX_TEXELS_PER_SAMPLE,
 };
 

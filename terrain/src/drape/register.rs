@@ -137,7 +137,7 @@ impl DrapeSize {
 }
 
 /// A raster pixel's ground size in metres (east, north).
-fn pixel_ground_m(r: &RasterRef, height: usize) -> (f64, f64) {
+pub(super) fn pixel_ground_m(r: &RasterRef, height: usize) -> (f64, f64) {
     match r.crs {
         RasterCrs::Geographic => {
             let centre = r.y0 - r.dy * (height as f64 - 1.0) / 2.0;
@@ -148,7 +148,7 @@ fn pixel_ground_m(r: &RasterRef, height: usize) -> (f64, f64) {
 }
 
 /// Grid coordinates → the raster's model coordinates, or `None` outside a projection.
-type Mapping<'a> = Box<dyn Fn(f64, f64) -> Option<(f64, f64)> + 'a>;
+pub type Mapping<'a> = Box<dyn Fn(f64, f64) -> Option<(f64, f64)> + 'a>;
 
 /// The map from grid coordinates (sample units) to raster pixel coordinates, or why the
 /// raster cannot be placed on this terrain (naming the unsupported CRS's code).
@@ -220,33 +220,70 @@ pub fn grid_to_pixel<'a>(
     }
 }
 
-/// Calls `f(tx, ty, px, py)` for every texel with the raster pixel its centre maps to.
+/// Texels `w × h` from texel `(x0, y0)` of a draped raster with `sx × sy` level-0 samples
+/// per texel: texel `t`'s centre is at grid coordinate `(t + 0.5) · s − 0.5` (see the module
+/// documentation of `drape`). A whole [`DrapeSize`] texture is one window; a store's imagery
+/// page is a window of its level's raster (`sx = 2^L / k`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TexelWindow {
+    pub sx: f64,
+    pub sy: f64,
+    pub x0: usize,
+    pub y0: usize,
+    pub w: usize,
+    pub h: usize,
+}
+
+impl TexelWindow {
+    /// The whole texture of `size` over `grid`.
+    pub fn whole(grid: &TerrainGrid, size: &DrapeSize) -> Self {
+        Self {
+            sx: grid.width as f64 / size.width as f64,
+            sy: grid.height as f64 / size.height as f64,
+            x0: 0,
+            y0: 0,
+            w: size.width,
+            h: size.height,
+        }
+    }
+
+    /// Grid coordinates (sample units) of window texel (tx, ty)'s centre.
+    pub fn centre(&self, tx: usize, ty: usize) -> (f64, f64) {
+        (
+            ((self.x0 + tx) as f64 + 0.5) * self.sx - 0.5,
+            ((self.y0 + ty) as f64 + 0.5) * self.sy - 0.5,
+        )
+    }
+
+    pub fn texels(&self) -> usize {
+        self.w * self.h
+    }
+}
+
+/// Calls `f(tx, ty, px, py)` for every texel of `win` (window coordinates) with the raster
+/// pixel its centre maps to.
 fn for_each_texel(
-    grid: &TerrainGrid,
-    size: &DrapeSize,
+    win: &TexelWindow,
     map: &Mapping<'_>,
     mut f: impl FnMut(usize, usize, f64, f64),
 ) {
+    if win.w == 0 || win.h == 0 {
+        return;
+    }
     let exact = |tx: usize, ty: usize| {
-        let (gx, gy) = size.texel_centre(grid, tx, ty);
+        let (gx, gy) = win.centre(tx, ty);
         map(gx, gy)
     };
-    let lx: Vec<usize> = (0..size.width)
-        .step_by(LATTICE)
-        .chain([size.width - 1])
-        .collect();
-    let ly: Vec<usize> = (0..size.height)
-        .step_by(LATTICE)
-        .chain([size.height - 1])
-        .collect();
+    let lx: Vec<usize> = (0..win.w).step_by(LATTICE).chain([win.w - 1]).collect();
+    let ly: Vec<usize> = (0..win.h).step_by(LATTICE).chain([win.h - 1]).collect();
     let mut row_lo: Vec<Option<(f64, f64)>> = lx.iter().map(|&x| exact(x, ly[0])).collect();
     for wy in ly.windows(2) {
         let (y0, y1) = (wy[0], wy[1]);
         let row_hi: Vec<Option<(f64, f64)>> = lx.iter().map(|&x| exact(x, y1)).collect();
-        let last_row = y1 == size.height - 1;
+        let last_row = y1 == win.h - 1;
         for (i, wx) in lx.windows(2).enumerate() {
             let (x0, x1) = (wx[0], wx[1]);
-            let last_col = x1 == size.width - 1;
+            let last_col = x1 == win.w - 1;
             let corners = (row_lo[i], row_lo[i + 1], row_hi[i], row_hi[i + 1]);
             let ys = y0..if last_row { y1 + 1 } else { y1 };
             let xs = x0..if last_col { x1 + 1 } else { x1 };
@@ -324,9 +361,25 @@ pub fn drape_rgba(
         size.texels() * 4,
         "RGBA target of the drape size"
     );
+    let win = TexelWindow::whole(grid, size);
+    let stats = drape_rgba_window(&win, &map, raster, out, size.width);
+    check_overlap(raster, &stats)?;
+    Ok(stats)
+}
+
+/// [`drape_rgba`] over one window of texels (`out`: `win.w × win.h` RGBA8, row 0 south, of
+/// which each row is `stride` texels), composited over what is there; the stats count the
+/// texels covered (no overlap is not an error here: a page may lie outside the imagery).
+pub fn drape_rgba_window(
+    win: &TexelWindow,
+    map: &Mapping<'_>,
+    raster: &GeoRaster,
+    out: &mut [u8],
+    stride: usize,
+) -> DrapeStats {
     let mut stats = DrapeStats::default();
     let (w, h) = (raster.width as i64, raster.height as i64);
-    for_each_texel(grid, size, &map, |tx, ty, px, py| {
+    for_each_texel(win, map, |tx, ty, px, py| {
         if !inside(raster, px, py) {
             return;
         }
@@ -360,7 +413,7 @@ pub fn drape_rgba(
             return;
         }
         stats.covered += 1;
-        let i = (ty * size.width + tx) * 4;
+        let i = (ty * stride + tx) * 4;
         let dst = &mut out[i..i + 4];
         let (a_s, a_d) = (acc[3], f64::from(dst[3]) / 255.0);
         let a_o = a_s + a_d * (1.0 - a_s);
@@ -370,8 +423,7 @@ pub fn drape_rgba(
         }
         dst[3] = (a_o * 255.0).round().clamp(0.0, 255.0) as u8;
     });
-    check_overlap(raster, &stats)?;
-    Ok(stats)
+    stats
 }
 
 /// Drapes a one-band raster of class codes onto `out` (one byte per texel, row 0 south):
@@ -402,7 +454,7 @@ pub fn drape_codes(
         covered: 0,
         codes: vec![0; 256],
     };
-    for_each_texel(grid, size, &map, |tx, ty, px, py| {
+    for_each_texel(&TexelWindow::whole(grid, size), &map, |tx, ty, px, py| {
         if !inside(raster, px, py) {
             return;
         }

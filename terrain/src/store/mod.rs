@@ -72,6 +72,8 @@ mod bake_section;
 mod consistency;
 mod error;
 mod format;
+mod imagery;
+mod imagery_write;
 mod index;
 mod load;
 mod pages;
@@ -85,6 +87,8 @@ pub use format::{
     Coding, Layout, LevelLayout, PageEntry, PageRect, StoreHeader, DEFAULT_PAGE_TILES,
     FIXED_HEADER, INDEX_ENTRY, STORE_EXTENSION, STORE_MAGIC, STORE_VERSION,
 };
+pub use imagery::{imagery_path, ImageryHeader, ImageryLayer, ImageryPage, IMAGERY_MAGIC};
+pub use imagery_write::{store_grid, write_imagery_in, ImagerySummary};
 pub use load::load_store;
 pub use pages::Page;
 pub use read::Store;
@@ -96,6 +100,8 @@ pub use write::{write_store, write_store_in, ImportParams, StoreSummary};
 mod consistency_tests;
 #[cfg(test)]
 mod damage_tests;
+#[cfg(test)]
+mod imagery_tests;
 #[cfg(test)]
 mod rows_import_tests;
 #[cfg(test)]

@@ -18,7 +18,7 @@ use std::thread::JoinHandle;
 
 use crate::bake::ErrorBake;
 use crate::query::hierarchy::{build_tile, fine_len};
-use crate::store::{Layout, Page, PageError, PageId, Store};
+use crate::store::{ImageryLayer, ImageryPage, Layout, Page, PageError, PageId, Store};
 
 use super::cache::{Inserted, PageCache};
 use super::queue::RequestQueue;
@@ -30,15 +30,22 @@ pub struct Loaded {
     /// ([`crate::query::hierarchy::build_tile`]), `fine_len(q)` bytes a tile in the page's
     /// tile order; empty for the coarser levels.
     pub fine: Vec<u8>,
+    /// The page's imagery when the store has an imagery layer and its page is intact.
+    pub imagery: Option<ImageryPage>,
 }
 
 impl Loaded {
     /// Bytes the cache counts for it.
     pub fn bytes(&self) -> u64 {
-        self.page.bytes() + self.fine.len() as u64
+        self.page.bytes() + self.fine.len() as u64 + self.imagery.as_ref().map_or(0, |i| i.bytes())
     }
 
-    /// [`Loaded::bytes`] of a page before it is read.
+    /// [`Loaded::bytes`] of a page before it is read, with its imagery when `imagery`.
+    pub fn bytes_with(layout: &Layout, imagery: Option<&ImageryLayer>, id: PageId) -> u64 {
+        Self::bytes_of(layout, id) + imagery.map_or(0, |l| l.page_bytes(id))
+    }
+
+    /// [`Loaded::bytes`] of a page before it is read, without imagery.
     pub fn bytes_of(layout: &Layout, id: PageId) -> u64 {
         let r = layout.rect(id.level, id.px, id.py);
         let fine = if id.level == 0 {
@@ -99,6 +106,9 @@ pub(super) struct State {
     pub bytes_read: u64,
     /// Loaded pages that did not fit beside the pinned ones (budget too small).
     pub too_large: u64,
+    /// Imagery pages refused (I/O, checksum, content), with the reason: their heights are
+    /// drawn without imagery.
+    pub imagery_failed: HashMap<PageId, String>,
     shutdown: bool,
 }
 
@@ -110,10 +120,16 @@ pub(super) struct Shared {
     done: Condvar,
     store: Store,
     bake: Arc<ErrorBake>,
+    imagery: Option<ImageryLayer>,
 }
 
 impl Shared {
-    pub fn new(store: Store, bake: Arc<ErrorBake>, budget: u64) -> Self {
+    pub fn new(
+        store: Store,
+        bake: Arc<ErrorBake>,
+        imagery: Option<ImageryLayer>,
+        budget: u64,
+    ) -> Self {
         Shared {
             state: Mutex::new(State {
                 cache: PageCache::new(budget),
@@ -125,17 +141,23 @@ impl Shared {
                 loaded: 0,
                 bytes_read: 0,
                 too_large: 0,
+                imagery_failed: HashMap::new(),
                 shutdown: false,
             }),
             work: Condvar::new(),
             done: Condvar::new(),
             store,
             bake,
+            imagery,
         }
     }
 
     pub fn store(&self) -> &Store {
         &self.store
+    }
+
+    pub fn imagery(&self) -> Option<&ImageryLayer> {
+        self.imagery.as_ref()
     }
 
     pub fn bake(&self) -> &Arc<ErrorBake> {
@@ -212,7 +234,22 @@ impl Shared {
         } else {
             Vec::new()
         };
-        Ok(Loaded { page, fine })
+        let imagery = match self.imagery.as_ref().map(|l| l.read_page(id)) {
+            None => None,
+            Some(Ok(p)) => Some(p),
+            Some(Err(e)) => {
+                // Logged once: the heights are drawn, without this page's imagery.
+                let msg = e.to_string();
+                eprintln!("aerie: {msg}; this page is drawn without imagery");
+                self.lock().imagery_failed.insert(id, msg);
+                None
+            }
+        };
+        Ok(Loaded {
+            page,
+            fine,
+            imagery,
+        })
     }
 
     fn finish(&self, id: PageId, result: Result<Loaded, PageError>) {

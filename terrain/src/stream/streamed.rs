@@ -20,7 +20,7 @@ use aerie_io::FileSystem;
 use crate::bake::ErrorBake;
 use crate::query::SurfaceGrid;
 use crate::source::{NotResident, SampleRect, SampleWant, SourceGrid, StreamStats, TerrainSource};
-use crate::store::{PageId, Store, StoreError};
+use crate::store::{imagery_path, store_grid, ImageryLayer, PageId, Store, StoreError};
 
 use super::loader::{spawn_workers, Loaded, Shared};
 use super::rect_pages::{rect_pages, RectPages};
@@ -115,7 +115,10 @@ impl StreamedStore {
             });
         }
         let layout = store.layout().clone();
-        let full = Loaded::bytes_of(
+        let imagery = open_imagery(&params.fs, path, &store)?;
+        let full = Loaded::bytes_with(
+            &layout,
+            imagery.as_ref(),
             &layout,
             PageId {
                 level: 0,
@@ -156,7 +159,7 @@ impl StreamedStore {
         for l in (0..h.levels).rev() {
             let bytes: u64 = level_pages(l)
                 .iter()
-                .map(|&id| Loaded::bytes_of(&layout, id))
+                .map(|&id| Loaded::bytes_with(&layout, imagery.as_ref(), id))
                 .sum();
             if pinned_bytes + bytes > params.cache_bytes / PIN_SHARE {
                 break;
@@ -166,7 +169,12 @@ impl StreamedStore {
         }
         let pinned = first..h.levels;
         let bake = Arc::new(bake);
-        let shared = Arc::new(Shared::new(store, bake.clone(), params.cache_bytes));
+        let shared = Arc::new(Shared::new(
+            store,
+            bake.clone(),
+            imagery,
+            params.cache_bytes,
+        ));
         let mut pinned_pages = 0;
         {
             let mut g = shared.lock();
@@ -302,7 +310,7 @@ impl StreamedStore {
         let pins = if with_pins { self.pinned_bytes } else { 0 };
         pins + ids
             .iter()
-            .map(|&id| Loaded::bytes_of(layout, id))
+            .map(|&id| Loaded::bytes_with(layout, self.shared.imagery(), id))
             .sum::<u64>()
     }
 
@@ -367,6 +375,22 @@ struct ColumnRun {
     out: usize,
     local: usize,
     len: usize,
+}
+
+/// The store's imagery layer when the file beside it exists ([`imagery_path`]); a layer that
+/// exists but cannot be used is refused (naming its field), never ignored.
+fn open_imagery(
+    fs: &Arc<dyn FileSystem>,
+    path: &Path,
+    store: &Store,
+) -> Result<Option<ImageryLayer>, StoreError> {
+    let at = imagery_path(path);
+    match fs.open(&at) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        _ => {}
+    }
+    let grid = store_grid(store)?;
+    ImageryLayer::open_in(fs.clone(), &at, store.header(), store.layout(), &grid).map(Some)
 }
 
 fn not_resident(id: PageId, failed: bool) -> NotResident {
@@ -496,6 +520,77 @@ impl TerrainSource for StreamedStore {
         if any {
             self.shared.wake_workers();
         }
+    }
+
+    fn imagery_texels_per_sample(&self) -> Option<u32> {
+        self.shared.imagery().map(|l| l.texels_per_sample())
+    }
+
+    fn gather_imagery(&self, rect: &SampleRect, out: &mut [u8]) -> Result<(), NotResident> {
+        out.fill(0);
+        let Some(layer) = self.shared.imagery() else {
+            return Ok(());
+        };
+        if rect.is_empty() {
+            return Ok(());
+        }
+        let k = layer.texels_per_sample() as i64;
+        let layout = self.shared.store().layout();
+        let level = rect.level.min(layout.levels.len() as u32 - 1);
+        let per = i64::from(layout.q * layout.page_tiles) * k;
+        let g = &self.grid;
+        let extent = |n: u32| (i64::from(n) * k + (1 << level) - 1) >> level;
+        let (ew, eh) = (extent(g.valid_width), extent(g.valid_height));
+        let x0 = (rect.origin[0] >> rect.level) * k;
+        let y0 = (rect.origin[1] >> rect.level) * k;
+        let (w, h) = (i64::from(rect.size[0]) * k, i64::from(rect.size[1]) * k);
+        // The pages holding the texels inside the raster.
+        let span = |a: i64, n: i64, e: i64| {
+            let (lo, hi) = (a.max(0), (a + n).min(e));
+            (lo < hi).then(|| ((lo / per) as u32, ((hi - 1) / per) as u32))
+        };
+        let (Some((px0, px1)), Some((py0, py1))) = (span(x0, w, ew), span(y0, h, eh)) else {
+            return Ok(());
+        };
+        let mut pages = Vec::new();
+        {
+            let mut st = self.shared.lock();
+            for py in py0..=py1 {
+                for px in px0..=px1 {
+                    let id = PageId { level, px, py };
+                    match st.cache.get(id) {
+                        Some(p) => pages.push(p.clone()),
+                        None => {
+                            let failed = st.failed.contains_key(&id);
+                            if !failed {
+                                st.queue.add(id, LAST);
+                            }
+                            drop(st);
+                            self.shared.wake_workers();
+                            return Err(not_resident(id, failed));
+                        }
+                    }
+                }
+            }
+        }
+        let stride = w as usize * 4;
+        for p in &pages {
+            let Some(img) = &p.imagery else { continue };
+            let [ox, oy] = [img.origin[0] as i64, img.origin[1] as i64];
+            let [sw, sh] = [img.size[0] as i64, img.size[1] as i64];
+            let (cx0, cx1) = (ox.max(x0), (ox + sw).min(x0 + w));
+            let (cy0, cy1) = (oy.max(y0), (oy + sh).min(y0 + h));
+            if cx0 >= cx1 {
+                continue;
+            }
+            for ty in cy0..cy1 {
+                let src = (((ty - oy) * sw + (cx0 - ox)) * 4) as usize;
+                let dst = (ty - y0) as usize * stride + ((cx0 - x0) * 4) as usize;
+                let n = ((cx1 - cx0) * 4) as usize;
+                out[dst..dst + n].copy_from_slice(&img.rgba[src..src + n]);
+            }
+        }
+        Ok(())
     }
 
     fn stats(&self) -> StreamStats {
