@@ -47,10 +47,11 @@ impl LevelDraper {
             });
         }
         let spacing = grid.spacing_x.min(grid.spacing_y);
-        let coarsest_m = spacing * f64::from(1u32 << levels.saturating_sub(1).min(30)) / f64::from(k);
+        let coarsest_m =
+            spacing * f64::from(1u32 << levels.saturating_sub(1).min(30)) / f64::from(k);
         let mut out = Vec::with_capacity(rasters.len());
         for r in rasters {
-            grid_to_pixel(grid, r).map_err(|reason| DrapeError {
+            let _placed = grid_to_pixel(grid, r).map_err(|reason| DrapeError {
                 path: r.path.clone(),
                 reason,
             })?;

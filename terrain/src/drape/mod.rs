@@ -20,8 +20,8 @@ pub use error::DrapeError;
 pub use levels::{level_extent, LevelDraper, MAX_STORE_TEXELS_PER_SAMPLE};
 pub use read::{read_raster, GeoRaster, RasterCrs, RasterRef};
 pub use register::{
-    drape_codes, drape_rgba, drape_rgba_window, grid_to_pixel, TexelWindow, DrapeSize, DrapeStats, TerrainGrid, CODE_NONE,
-    MAX_TEXELS_PER_SAMPLE,
+    drape_codes, drape_rgba, drape_rgba_window, grid_to_pixel, DrapeSize, DrapeStats, TerrainGrid,
+    TexelWindow, CODE_NONE, MAX_TEXELS_PER_SAMPLE,
 };
 
 #[cfg(test)]

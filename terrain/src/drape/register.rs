@@ -262,11 +262,7 @@ impl TexelWindow {
 
 /// Calls `f(tx, ty, px, py)` for every texel of `win` (window coordinates) with the raster
 /// pixel its centre maps to.
-fn for_each_texel(
-    win: &TexelWindow,
-    map: &Mapping<'_>,
-    mut f: impl FnMut(usize, usize, f64, f64),
-) {
+fn for_each_texel(win: &TexelWindow, map: &Mapping<'_>, mut f: impl FnMut(usize, usize, f64, f64)) {
     if win.w == 0 || win.h == 0 {
         return;
     }

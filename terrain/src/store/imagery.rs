@@ -104,7 +104,12 @@ impl ImageryHeader {
             (36, "height", self.height, store.height),
             (40, "valid width", self.valid_width, store.valid_width),
             (44, "valid height", self.valid_height, store.valid_height),
-            (48, "store checksum", self.store_checksum, store.source_checksum),
+            (
+                48,
+                "store checksum",
+                self.store_checksum,
+                store.source_checksum,
+            ),
             (52, "page count", self.page_count, store.page_count),
         ];
         for (offset, field, got, want) in fields {
@@ -278,7 +283,11 @@ impl ImageryLayer {
         let file = fs.open(path).map_err(io)?;
         let len = file.len().map_err(io)?;
         if len < (FIXED + TRAILER) as u64 {
-            return Err(fmt(0, "header", format!("{len} bytes: not an imagery layer (truncated)")));
+            return Err(fmt(
+                0,
+                "header",
+                format!("{len} bytes: not an imagery layer (truncated)"),
+            ));
         }
         let mut fixed = vec![0u8; FIXED];
         file.read_exact_at(&mut fixed, 0).map_err(io)?;
@@ -287,28 +296,48 @@ impl ImageryLayer {
         }
         let version = u32_at(&fixed, 8);
         if version != IMAGERY_VERSION {
-            return Err(fmt(8, "version", format!("version {version}; this aerie reads {IMAGERY_VERSION}")));
+            return Err(fmt(
+                8,
+                "version",
+                format!("version {version}; this aerie reads {IMAGERY_VERSION}"),
+            ));
         }
         if crc32fast::hash(&fixed[..60]) != u32_at(&fixed, 60) {
             return Err(fmt(60, "header CRC", "the fixed header is corrupt".into()));
         }
         let size = u32_at(&fixed, 12) as usize;
         if !(FIXED + 8..=MAX_HEADER).contains(&size) || size as u64 + TRAILER as u64 > len {
-            return Err(fmt(12, "header size", format!("{size} bytes in a {len}-byte file")));
+            return Err(fmt(
+                12,
+                "header size",
+                format!("{size} bytes in a {len}-byte file"),
+            ));
         }
         let mut hb = vec![0u8; size];
         file.read_exact_at(&mut hb, 0).map_err(io)?;
         if crc32fast::hash(&hb[..size - 4]) != u32_at(&hb, size - 4) {
-            return Err(fmt(size as u64 - 4, "header CRC", "the source list is corrupt".into()));
+            return Err(fmt(
+                size as u64 - 4,
+                "header CRC",
+                "the source list is corrupt".into(),
+            ));
         }
         let mut at = FIXED;
         let count = u32_at(&hb, at) as usize;
         at += 4;
         let mut sources = Vec::new();
         for _ in 0..count {
-            let n = if at + 4 <= size - 4 { u32_at(&hb, at) as usize } else { usize::MAX };
+            let n = if at + 4 <= size - 4 {
+                u32_at(&hb, at) as usize
+            } else {
+                usize::MAX
+            };
             if n > size - 4 - (at + 4) {
-                return Err(fmt(at as u64, "sources", "a source name runs past the header".into()));
+                return Err(fmt(
+                    at as u64,
+                    "sources",
+                    "a source name runs past the header".into(),
+                ));
             }
             sources.push(String::from_utf8_lossy(&hb[at + 4..at + 4 + n]).into_owned());
             at += 4 + n;
@@ -335,21 +364,36 @@ impl ImageryLayer {
             .check_against(store)
             .map_err(|(o, f, r)| fmt(o, f, r))?;
         let mut tb = [0u8; TRAILER];
-        file.read_exact_at(&mut tb, len - TRAILER as u64).map_err(io)?;
+        file.read_exact_at(&mut tb, len - TRAILER as u64)
+            .map_err(io)?;
         let t_at = len - TRAILER as u64;
         if &tb[..8] != TRAILER_MAGIC || crc32fast::hash(&tb[..28]) != u32_at(&tb, 28) {
-            return Err(fmt(t_at, "trailer", "no intact trailer at the end: truncated or corrupt".into()));
+            return Err(fmt(
+                t_at,
+                "trailer",
+                "no intact trailer at the end: truncated or corrupt".into(),
+            ));
         }
         let index_at = u64_at(&tb, 8);
         let pages = u32_at(&tb, 16) as usize;
         let index_len = (IMAGERY_ENTRY + 4) * pages;
-        if pages != store.page_count as usize || index_at.checked_add(index_len as u64) != Some(t_at) {
-            return Err(fmt(t_at + 8, "index offset", format!("{pages} pages at byte {index_at} do not end at the trailer (byte {t_at})")));
+        if pages != store.page_count as usize
+            || index_at.checked_add(index_len as u64) != Some(t_at)
+        {
+            return Err(fmt(
+                t_at + 8,
+                "index offset",
+                format!("{pages} pages at byte {index_at} do not end at the trailer (byte {t_at})"),
+            ));
         }
         let mut ib = vec![0u8; index_len];
         file.read_exact_at(&mut ib, index_at).map_err(io)?;
         if crc32fast::hash(&ib) != u32_at(&tb, 20) {
-            return Err(fmt(index_at, "index", "checksum mismatch: the index is corrupt".into()));
+            return Err(fmt(
+                index_at,
+                "index",
+                "checksum mismatch: the index is corrupt".into(),
+            ));
         }
         let mut index = Vec::with_capacity(pages);
         let mut crcs = Vec::with_capacity(pages);
@@ -371,21 +415,43 @@ impl ImageryLayer {
             let off = index_at + (i * IMAGERY_ENTRY) as u64;
             let (l, px, py) = layout.page_at(i).expect("page count checked");
             if (e.id.level, e.id.px, e.id.py) != (l, px, py) {
-                return Err(fmt(off, "page", format!("entry {i} is {}, the store's is level {l} page ({px}, {py})", e.id)));
+                return Err(fmt(
+                    off,
+                    "page",
+                    format!(
+                        "entry {i} is {}, the store's is level {l} page ({px}, {py})",
+                        e.id
+                    ),
+                ));
             }
             let (_, [nx, ny]) = page_texels(layout, grid, k, e.id);
             if (e.cols as usize, e.rows as usize) != (nx, ny) {
-                return Err(fmt(off + 12, "texels", format!("{}: {}×{} texels, the layout says {nx}×{ny}", e.id, e.cols, e.rows)));
+                return Err(fmt(
+                    off + 12,
+                    "texels",
+                    format!(
+                        "{}: {}×{} texels, the layout says {nx}×{ny}",
+                        e.id, e.cols, e.rows
+                    ),
+                ));
             }
             if e.offset != next {
-                return Err(fmt(off + 24, "offset", format!("{}: at byte {}, expected {next}", e.id, e.offset)));
+                return Err(fmt(
+                    off + 24,
+                    "offset",
+                    format!("{}: at byte {}, expected {next}", e.id, e.offset),
+                ));
             }
             next += u64::from(e.len);
             crcs.push(e.crc);
             index.push(e);
         }
         if next != index_at {
-            return Err(fmt(index_at, "index", format!("the pages end at byte {next}, the index starts at {index_at}")));
+            return Err(fmt(
+                index_at,
+                "index",
+                format!("the pages end at byte {next}, the index starts at {index_at}"),
+            ));
         }
         Ok(Self {
             path: path.to_path_buf(),

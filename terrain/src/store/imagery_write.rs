@@ -4,7 +4,6 @@
 //! under the final name until it is whole). Memory: the rasters, their mips and one batch.
 
 use std::io::Write;
-use std::path::Path;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::Arc;
 
@@ -178,5 +177,8 @@ fn drape_batch(
             pages[i] = Some(page);
         }
     }
-    Ok(pages.into_iter().map(|p| p.expect("every page draped")).collect())
+    Ok(pages
+        .into_iter()
+        .map(|p| p.expect("every page draped"))
+        .collect())
 }

@@ -119,7 +119,6 @@ impl StreamedStore {
         let full = Loaded::bytes_with(
             &layout,
             imagery.as_ref(),
-            &layout,
             PageId {
                 level: 0,
                 px: 0,

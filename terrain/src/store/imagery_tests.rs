@@ -1,0 +1,328 @@
+//! The imagery layer against its draper: every page of every level read back equal to the
+//! draped window it was written from, level 0 equal to the in-memory drape, coarse levels
+//! averaging fine imagery instead of aliasing it, the streamed store gathering a strip's
+//! texels across pages; damaged layers and layers of other stores refused naming the field.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use super::tests::{baked, dataset, import, srtm_like};
+use super::*;
+use crate::dataset::Dataset;
+use crate::drape::{
+    drape_rgba, DrapeSize, GeoRaster, LevelDraper, RasterCrs, RasterRef, TerrainGrid,
+};
+use crate::source::{SampleRect, TerrainSource};
+use crate::stream::{StreamParams, StreamedStore};
+
+/// A geographic RGB raster over the test grid (47°N 11°E, 1/1200° a sample): `ppd` pixels per
+/// sample, covering columns/rows [c0, c0 + n) of samples, colour `f(col, row)`.
+fn raster(
+    ppd: usize,
+    c0: f64,
+    r0: f64,
+    n: usize,
+    f: impl Fn(usize, usize) -> [u8; 3],
+) -> GeoRaster {
+    let d = 1.0 / 1200.0 / ppd as f64;
+    let (w, h) = (n * ppd, n * ppd);
+    let data = (0..h)
+        .flat_map(|r| (0..w).map(move |c| (c, r)))
+        .flat_map(|(c, r)| f(c, r))
+        .collect();
+    // Pixel centres: the first (north-west) at sample (c0, r0 + n) − half a pixel inwards.
+    GeoRaster {
+        path: "test.tif".into(),
+        width: w,
+        height: h,
+        bands: 3,
+        data,
+        georef: RasterRef {
+            crs: RasterCrs::Geographic,
+            x0: 11.0 + (c0 - 0.5) / 1200.0 + d / 2.0,
+            y0: 47.0 + (r0 + n as f64 - 0.5) / 1200.0 - d / 2.0,
+            dx: d,
+            dy: d,
+        },
+    }
+}
+
+fn smooth(c: usize, r: usize) -> [u8; 3] {
+    [
+        (c * 3 % 256) as u8,
+        (r * 5 % 256) as u8,
+        ((c + r) % 256) as u8,
+    ]
+}
+
+struct Fixture {
+    _dir: tempfile::TempDir,
+    store_path: PathBuf,
+    ds: Dataset,
+    draper: LevelDraper,
+    grid: TerrainGrid,
+}
+
+fn fixture(k: u32, rasters: &[GeoRaster]) -> Fixture {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = dataset(150, 130, srtm_like);
+    let b = baked(&ds, 17);
+    let (store_path, _) = import(dir.path(), &ds, &b, 2);
+    let store = Store::open(&store_path).unwrap();
+    let grid = store_grid(&store).unwrap();
+    let draper = LevelDraper::new(&grid, rasters, k, store.header().levels).unwrap();
+    let s = write_imagery_in(
+        aerie_io::real(),
+        &store,
+        &draper,
+        vec!["test.tif".into()],
+        3,
+        &|_, _| {},
+    )
+    .unwrap();
+    assert_eq!(s.pages, store.header().page_count);
+    assert!(s.covered_pages > 0 && s.covered_texels < s.texels, "{s:?}");
+    Fixture {
+        _dir: dir,
+        store_path,
+        ds,
+        draper,
+        grid,
+    }
+}
+
+fn open_layer(f: &Fixture) -> Result<ImageryLayer, StoreError> {
+    let store = Store::open(&f.store_path).unwrap();
+    ImageryLayer::open_in(
+        aerie_io::real(),
+        &imagery_path(&f.store_path),
+        store.header(),
+        store.layout(),
+        &f.grid,
+    )
+}
+
+#[test]
+fn every_page_reads_back_as_draped_and_level_0_is_the_in_memory_drape() {
+    let r = raster(3, 20.0, 10.0, 90, smooth);
+    let f = fixture(2, std::slice::from_ref(&r));
+    let layer = open_layer(&f).unwrap();
+    let store = Store::open(&f.store_path).unwrap();
+    let layout = store.layout();
+    // The whole level-0 raster, as the in-memory drape makes it at k = 2.
+    let size = DrapeSize {
+        width: f.ds.hf.width * 2,
+        height: f.ds.hf.height * 2,
+        texels_per_sample: 2,
+    };
+    let mut whole = vec![0u8; size.texels() * 4];
+    drape_rgba(&f.grid, &size, &r, &mut whole).unwrap();
+    let mut level0_seen = 0;
+    for i in 0..layout.page_count() as usize {
+        let (level, px, py) = layout.page_at(i).unwrap();
+        let id = PageId { level, px, py };
+        let page = layer.read_page(id).unwrap();
+        let (origin, sz) = page_texels_of(layout, &f.grid, 2, id);
+        assert_eq!((page.origin, page.size), (origin, sz), "{id}");
+        let (want, _) = f.draper.window(level, origin[0], origin[1], sz[0], sz[1]);
+        assert!(page.rgba == want, "{id}: texels differ from the draper's");
+        if level == 0 {
+            for y in 0..sz[1] {
+                for x in 0..sz[0] {
+                    let (gx, gy) = (origin[0] + x, origin[1] + y);
+                    let a = &page.rgba[(y * sz[0] + x) * 4..][..4];
+                    let b = &whole[(gy * size.width + gx) * 4..][..4];
+                    assert_eq!(a, b, "level 0 texel ({gx}, {gy})");
+                    level0_seen += 1;
+                }
+            }
+        }
+    }
+    assert_eq!(
+        level0_seen,
+        size.texels(),
+        "level 0's pages tile its raster"
+    );
+    assert_eq!(layer.texels_per_sample(), 2);
+    assert_eq!(layer.header().sources, vec!["test.tif".to_string()]);
+}
+
+fn page_texels_of(
+    layout: &Layout,
+    grid: &TerrainGrid,
+    k: u32,
+    id: PageId,
+) -> ([usize; 2], [usize; 2]) {
+    super::imagery::page_texels(layout, grid, k, id)
+}
+
+#[test]
+fn coarse_levels_average_fine_imagery_instead_of_aliasing_it() {
+    // A one-pixel checkerboard, 4 pixels per sample: any level ≥ 1 texel spans many pixels.
+    let r = raster(4, 0.0, 0.0, 150, |c, r| {
+        if (c + r) % 2 == 0 {
+            [255; 3]
+        } else {
+            [0; 3]
+        }
+    });
+    let f = fixture(1, &[r]);
+    let layer = open_layer(&f).unwrap();
+    let store = Store::open(&f.store_path).unwrap();
+    // Half the light in linear terms is sRGB 188; a point sample would give 0 or 255.
+    let page = layer
+        .read_page(PageId {
+            level: 3,
+            px: 0,
+            py: 0,
+        })
+        .unwrap();
+    let [w, h] = page.size;
+    let inner: Vec<u8> = (1..h - 1)
+        .flat_map(|y| (1..w - 1).map(move |x| (x, y)))
+        .map(|(x, y)| page.rgba[(y * w + x) * 4])
+        .collect();
+    assert!(!inner.is_empty() && store.header().levels > 3);
+    for v in inner {
+        assert!(
+            (170..=205).contains(&v),
+            "level 3 texel {v}: aliased, not averaged"
+        );
+    }
+}
+
+#[test]
+fn the_streamed_store_gathers_a_strip_of_texels_across_pages() {
+    let r = raster(2, 5.0, 5.0, 120, smooth);
+    let f = fixture(2, &[r]);
+    let (s, _) = StreamedStore::open(&f.store_path, StreamParams::default()).unwrap();
+    assert_eq!(s.imagery_texels_per_sample(), Some(2));
+    for (level, origin, size) in [
+        (0u32, [3i64, 7], [140u32, 20]),
+        (1, [10, 0], [30, 60]),
+        (2, [-8, 4], [40, 40]),
+    ] {
+        let rect = SampleRect {
+            level,
+            origin: origin.map(|o| o << level),
+            size,
+        };
+        s.wait_resident(&[rect.clone()], Duration::from_secs(20))
+            .unwrap();
+        let (w, h) = (size[0] as usize * 2, size[1] as usize * 2);
+        let mut got = vec![7u8; w * h * 4];
+        s.gather_imagery(&rect, &mut got).unwrap();
+        // The oracle: the draper's window, clipped to the level's raster (transparent beyond).
+        let (ew, eh) = f.draper.level_extent(level);
+        let x0 = origin[0] * 2;
+        let y0 = origin[1] * 2;
+        let mut want = vec![0u8; w * h * 4];
+        let (cx0, cy0) = (x0.max(0) as usize, y0.max(0) as usize);
+        let cx1 = ((x0 + w as i64) as usize).min(ew);
+        let cy1 = ((y0 + h as i64) as usize).min(eh);
+        let (win, _) = f.draper.window(level, cx0, cy0, cx1 - cx0, cy1 - cy0);
+        for y in cy0..cy1 {
+            for x in cx0..cx1 {
+                let src = ((y - cy0) * (cx1 - cx0) + (x - cx0)) * 4;
+                let dst = ((y as i64 - y0) as usize * w + (x as i64 - x0) as usize) * 4;
+                want[dst..dst + 4].copy_from_slice(&win[src..src + 4]);
+            }
+        }
+        assert!(got == want, "level {level} strip at {origin:?}");
+    }
+}
+
+fn layer_bytes(f: &Fixture) -> Vec<u8> {
+    std::fs::read(imagery_path(&f.store_path)).unwrap()
+}
+
+fn refused(f: &Fixture, bytes: &[u8]) -> String {
+    std::fs::write(imagery_path(&f.store_path), bytes).unwrap();
+    open_layer(f).unwrap_err().to_string()
+}
+
+#[test]
+fn damaged_layers_are_refused_naming_the_field() {
+    let f = fixture(1, &[raster(1, 0.0, 0.0, 100, smooth)]);
+    let good = layer_bytes(&f);
+    let mut b = good.clone();
+    b[3] ^= 1;
+    assert!(refused(&f, &b).contains("magic"));
+    let mut b = good.clone();
+    b[8] = 9;
+    assert!(refused(&f, &b).contains("version"));
+    let mut b = good.clone();
+    b[33] ^= 1;
+    let e = refused(&f, &b);
+    assert!(e.contains("header CRC") && e.contains("60"), "{e}");
+    let e = refused(&f, &good[..good.len() - 5]);
+    assert!(e.contains("trailer"), "{e}");
+    // A flipped index byte: the index checksum names it.
+    let t = good.len() - 32;
+    let index_at = u64::from_le_bytes(good[t + 8..t + 16].try_into().unwrap()) as usize;
+    let mut b = good.clone();
+    b[index_at + 1] ^= 0x40;
+    assert!(refused(&f, &b).contains("index"));
+    // Every single-byte flip is refused or named by its page, never a panic, never other data.
+    std::fs::write(imagery_path(&f.store_path), &good).unwrap();
+    let intact = open_layer(&f).unwrap();
+    let store = Store::open(&f.store_path).unwrap();
+    let pages: Vec<PageId> = (0..store.layout().page_count() as usize)
+        .map(|i| {
+            let (level, px, py) = store.layout().page_at(i).unwrap();
+            PageId { level, px, py }
+        })
+        .collect();
+    let want: Vec<ImageryPage> = pages
+        .iter()
+        .map(|&p| intact.read_page(p).unwrap())
+        .collect();
+    for at in (0..good.len()).step_by(good.len() / 97 + 1) {
+        let mut b = good.clone();
+        b[at] ^= 0x10;
+        std::fs::write(imagery_path(&f.store_path), &b).unwrap();
+        let Ok(layer) = open_layer(&f) else { continue };
+        let mut named = 0;
+        for (p, w) in pages.iter().zip(&want) {
+            match layer.read_page(*p) {
+                Ok(got) => assert_eq!(&got, w, "flip at byte {at} changed {p}"),
+                Err(e) => {
+                    assert!(e.to_string().contains(&p.to_string()), "{e}");
+                    named += 1;
+                }
+            }
+        }
+        assert_eq!(
+            named, 1,
+            "a flip at byte {at} inside the pages fails one page"
+        );
+    }
+}
+
+#[test]
+fn a_layer_of_another_store_is_refused_naming_the_field() {
+    let f = fixture(1, &[raster(1, 0.0, 0.0, 100, smooth)]);
+    let layer = layer_bytes(&f);
+    // Another store of the same size over other heights: the checksum differs.
+    let dir = tempfile::tempdir().unwrap();
+    let other = dataset(150, 130, |c, r| srtm_like(c, r) + 1.0);
+    let (p, _) = import(dir.path(), &other, &baked(&other, 17), 2);
+    std::fs::write(imagery_path(&p), &layer).unwrap();
+    let store = Store::open(&p).unwrap();
+    let e = ImageryLayer::open_in(
+        aerie_io::real(),
+        &imagery_path(&p),
+        store.header(),
+        store.layout(),
+        &f.grid,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("store checksum") && e.contains("byte 48"), "{e}");
+    // The streamed store refuses it too, instead of drawing another store's imagery.
+    let e = StreamedStore::open(&p, StreamParams::default())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("store checksum"), "{e}");
+}
