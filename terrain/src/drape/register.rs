@@ -262,51 +262,63 @@ impl TexelWindow {
 
 /// Calls `f(tx, ty, px, py)` for every texel of `win` (window coordinates) with the raster
 /// pixel its centre maps to.
+///
+/// The lattice is anchored at the level raster's absolute texel multiples of [`LATTICE`], not
+/// at the window's origin: a texel maps to the same pixel whichever window (a whole texture, a
+/// store page, a streamed strip) it is drawn in, so pages and gathers agree exactly. Lattice
+/// points past a window's edge (or the raster's) are evaluated like any other: the mapping is
+/// defined there, and when it is not the cell falls back to exact texels.
 fn for_each_texel(win: &TexelWindow, map: &Mapping<'_>, mut f: impl FnMut(usize, usize, f64, f64)) {
     if win.w == 0 || win.h == 0 {
         return;
     }
-    let exact = |tx: usize, ty: usize| {
-        let (gx, gy) = win.centre(tx, ty);
+    let exact = |x: usize, y: usize| {
+        // Absolute texel (x, y) of the level raster.
+        let gx = (x as f64 + 0.5) * win.sx - 0.5;
+        let gy = (y as f64 + 0.5) * win.sy - 0.5;
         map(gx, gy)
     };
-    let lx: Vec<usize> = (0..win.w).step_by(LATTICE).chain([win.w - 1]).collect();
-    let ly: Vec<usize> = (0..win.h).step_by(LATTICE).chain([win.h - 1]).collect();
-    let mut row_lo: Vec<Option<(f64, f64)>> = lx.iter().map(|&x| exact(x, ly[0])).collect();
-    for wy in ly.windows(2) {
-        let (y0, y1) = (wy[0], wy[1]);
-        let row_hi: Vec<Option<(f64, f64)>> = lx.iter().map(|&x| exact(x, y1)).collect();
-        let last_row = y1 == win.h - 1;
-        for (i, wx) in lx.windows(2).enumerate() {
-            let (x0, x1) = (wx[0], wx[1]);
-            let last_col = x1 == win.w - 1;
+    let (ax0, ay0) = (win.x0, win.y0);
+    let (ax1, ay1) = (win.x0 + win.w, win.y0 + win.h); // exclusive
+    let cells = |a0: usize, a1: usize| -> Vec<usize> {
+        ((a0 / LATTICE) * LATTICE..a1).step_by(LATTICE).collect()
+    };
+    let (cx, cy) = (cells(ax0, ax1), cells(ay0, ay1));
+    let corner_row = |y: usize| -> Vec<Option<(f64, f64)>> {
+        cx.iter()
+            .chain(std::iter::once(&(cx[cx.len() - 1] + LATTICE)))
+            .map(|&x| exact(x, y))
+            .collect()
+    };
+    let mut row_lo = corner_row(cy[0]);
+    for &y0 in &cy {
+        let y1 = y0 + LATTICE;
+        let row_hi = corner_row(y1);
+        let ys = y0.max(ay0)..y1.min(ay1);
+        for (i, &x0) in cx.iter().enumerate() {
+            let xs = x0.max(ax0)..(x0 + LATTICE).min(ax1);
             let corners = (row_lo[i], row_lo[i + 1], row_hi[i], row_hi[i + 1]);
-            let ys = y0..if last_row { y1 + 1 } else { y1 };
-            let xs = x0..if last_col { x1 + 1 } else { x1 };
             if let (Some(a), Some(b), Some(c), Some(d)) = corners {
-                for ty in ys {
-                    let v = if y1 > y0 {
-                        (ty - y0) as f64 / (y1 - y0) as f64
-                    } else {
-                        0.0
-                    };
+                for ty in ys.clone() {
+                    let v = (ty - y0) as f64 / LATTICE as f64;
                     for tx in xs.clone() {
-                        let u = if x1 > x0 {
-                            (tx - x0) as f64 / (x1 - x0) as f64
-                        } else {
-                            0.0
-                        };
+                        let u = (tx - x0) as f64 / LATTICE as f64;
                         let lerp = |p: f64, q: f64, r: f64, s: f64| {
                             (p * (1.0 - u) + q * u) * (1.0 - v) + (r * (1.0 - u) + s * u) * v
                         };
-                        f(tx, ty, lerp(a.0, b.0, c.0, d.0), lerp(a.1, b.1, c.1, d.1));
+                        f(
+                            tx - ax0,
+                            ty - ay0,
+                            lerp(a.0, b.0, c.0, d.0),
+                            lerp(a.1, b.1, c.1, d.1),
+                        );
                     }
                 }
             } else {
-                for ty in ys {
+                for ty in ys.clone() {
                     for tx in xs.clone() {
                         if let Some((px, py)) = exact(tx, ty) {
-                            f(tx, ty, px, py);
+                            f(tx - ax0, ty - ay0, px, py);
                         }
                     }
                 }
