@@ -139,6 +139,12 @@ pub trait TerrainSource: Send + Sync {
         None
     }
 
+    /// The store's imagery layer this source serves, if any (the renderer drapes a whole level
+    /// of it, [`crate::store::read_level`]).
+    fn imagery_layer(&self) -> Option<&crate::store::ImageryLayer> {
+        None
+    }
+
     /// The level imagery of `rect` (a level strip: its origin on its level's grid): RGBA8
     /// texels `[s·k, (s + n)·k)` per axis of `rect.level`'s raster, `s = origin >> level`,
     /// row-major, south row first, `rect.size[0]·k` per row; texels outside the raster
@@ -171,13 +177,19 @@ impl Dataset {
 pub struct InMemoryTerrain {
     dataset: std::sync::Arc<Dataset>,
     grid: SourceGrid,
+    /// The imagery layer of the store the dataset was read from (`--load-whole`).
+    imagery: Option<std::sync::Arc<crate::store::ImageryLayer>>,
 }
 
 impl InMemoryTerrain {
     /// Computes the dataset's checksum once (a pass over the samples).
     pub fn new(dataset: std::sync::Arc<Dataset>) -> Self {
         let grid = dataset.source_grid();
-        InMemoryTerrain { dataset, grid }
+        InMemoryTerrain {
+            dataset,
+            grid,
+            imagery: None,
+        }
     }
 
     /// With a checksum the caller already has (e.g. the bake's, checked against the data).
@@ -194,7 +206,17 @@ impl InMemoryTerrain {
             checksum,
             description: ds.source.clone(),
         };
-        InMemoryTerrain { dataset, grid }
+        InMemoryTerrain {
+            dataset,
+            grid,
+            imagery: None,
+        }
+    }
+
+    /// With the imagery layer of the store the dataset was read from.
+    pub fn with_imagery(mut self, layer: crate::store::ImageryLayer) -> Self {
+        self.imagery = Some(std::sync::Arc::new(layer));
+        self
     }
 
     pub fn dataset(&self) -> &std::sync::Arc<Dataset> {
@@ -205,6 +227,10 @@ impl InMemoryTerrain {
 impl TerrainSource for InMemoryTerrain {
     fn grid(&self) -> &SourceGrid {
         &self.grid
+    }
+
+    fn imagery_layer(&self) -> Option<&crate::store::ImageryLayer> {
+        self.imagery.as_deref()
     }
 
     fn is_resident(&self, _rect: &SampleRect) -> bool {

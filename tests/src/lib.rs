@@ -3,6 +3,7 @@
 
 pub mod bins;
 pub mod cigi_host;
+pub mod drape_fixtures;
 pub mod imports;
 
 pub use bins::{aerie_bin, aerie_send_bin, bin_dir};

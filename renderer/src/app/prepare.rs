@@ -74,7 +74,17 @@ pub fn prepare_source(
     let is_store = path.extension().is_some_and(|e| e == "aerie");
     if !is_store || store.load_whole {
         let (ds, bake) = prepare_terrain(path, desc.tile_size)?;
-        let source = InMemoryTerrain::with_checksum(ds.clone(), bake.source_checksum);
+        let mut source = InMemoryTerrain::with_checksum(ds.clone(), bake.source_checksum);
+        if is_store {
+            // A store read whole keeps its imagery layer (drawn as a streamed one is).
+            let s = aerie_terrain::store::Store::open(path).map_err(bad_input)?;
+            let fs = aerie_io::real();
+            if let Some(layer) =
+                aerie_terrain::store::open_imagery_beside(&fs, path, &s).map_err(bad_input)?
+            {
+                source = source.with_imagery(layer);
+            }
+        }
         return Ok(Terrain {
             source: Arc::new(source),
             bake,

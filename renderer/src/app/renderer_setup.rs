@@ -151,6 +151,7 @@ pub fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
         horizon_cull: g.horizon_cull.on(),
     });
     desc.drape = drape_input(&g.drape)?;
+    desc.drape_budget_bytes = drape_budget(&g.drape)?;
     desc.select.tess_density *= g.tess_density;
     Ok(Setup { view, desc })
 }
@@ -181,14 +182,9 @@ pub fn drape_input_with(
             );
         }
     }
+    let budget_bytes = drape_budget(a)?;
     if a.imagery.is_empty() && raster.is_none() {
         return Ok(None);
-    }
-    if !(a.drape_mb.is_finite() && a.drape_mb > 0.0 && a.drape_mb <= 65536.0) {
-        return Err(bad_input(format!(
-            "--drape-mb: {} must be a number of MiB in (0, 65536]",
-            a.drape_mb
-        )));
     }
     let read = |p: &std::path::Path| read_raster(p).map_err(|e| bad_input(e.to_string()));
     let imagery = a
@@ -216,8 +212,19 @@ pub fn drape_input_with(
         imagery,
         landcover,
         table: map.table(),
-        budget_bytes: (a.drape_mb * 1024.0 * 1024.0) as u64,
+        budget_bytes,
     })))
+}
+
+/// `--drape-mb` in bytes: what the draped textures may take (also a store's imagery layer).
+pub fn drape_budget(a: &DrapeArgs) -> Result<u64, Failure> {
+    if !(a.drape_mb.is_finite() && a.drape_mb > 0.0 && a.drape_mb <= 65536.0) {
+        return Err(bad_input(format!(
+            "--drape-mb: {} must be a number of MiB in (0, 65536]",
+            a.drape_mb
+        )));
+    }
+    Ok((a.drape_mb * 1024.0 * 1024.0) as u64)
 }
 
 /// What was draped, for a command's JSON summary (null without rasters): the files, the
@@ -225,9 +232,16 @@ pub fn drape_input_with(
 /// those whose code the table does not know (drawn with the derived classes, by code), and the
 /// textures' device bytes.
 pub fn drape_json(r: &crate::render::frame::TerrainRenderer) -> serde_json::Value {
-    let (Some(input), (Some(rasters), bytes)) = (r.desc().drape.as_ref(), r.draped()) else {
+    let (Some(rasters), bytes) = r.draped() else {
         return serde_json::Value::Null;
     };
+    let none = crate::render::drape_textures::DrapeInput {
+        imagery: Vec::new(),
+        landcover: None,
+        table: [aerie_terrain::drape::CODE_NONE; 256],
+        budget_bytes: r.desc().drape_budget_bytes,
+    };
+    let input = r.desc().drape.as_deref().unwrap_or(&none);
     let size = |s: &aerie_terrain::drape::DrapeSize| serde_json::json!({"texels": [s.width, s.height], "texels_per_sample": s.texels_per_sample});
     let unknown: serde_json::Map<String, serde_json::Value> = rasters
         .code_counts
@@ -252,6 +266,11 @@ pub fn drape_json(r: &crate::render::frame::TerrainRenderer) -> serde_json::Valu
         "gpu_bytes": bytes,
         "budget_bytes": input.budget_bytes,
         "capped": rasters.capped,
+        "imagery_layer": rasters.layer_level.as_ref().map(|l| serde_json::json!({
+            "layer": l.layer.display().to_string(),
+            "level": l.level,
+            "texels_per_sample": l.texels_per_sample,
+        })),
     })
 }
 

@@ -61,6 +61,9 @@ pub struct RendererDesc {
     pub prefetch_frames: f64,
     /// Imagery and a land-cover raster draped on the terrain (registered when it is loaded).
     pub drape: Option<crate::render::drape_textures::SharedDrapeInput>,
+    /// Device bytes the draped textures may take (`--drape-mb`): also what a store's imagery
+    /// layer may fill when no `--imagery` is given.
+    pub drape_budget_bytes: u64,
 }
 
 impl Default for RendererDesc {
@@ -91,6 +94,8 @@ impl Default for RendererDesc {
             skirt_min_m: 1.0,
             prefetch_frames: 20.0,
             drape: None,
+            drape_budget_bytes: (crate::render::drape_textures::DEFAULT_DRAPE_MIB * 1048576.0)
+                as u64,
         }
     }
 }

@@ -15,6 +15,7 @@ use aerie_terrain::drape::{
     drape_codes, drape_rgba, DrapeSize, DrapeStats, GeoRaster, TerrainGrid, CODE_NONE,
 };
 use aerie_terrain::source::SourceGrid;
+use aerie_terrain::store::{choose_level, read_level, ImageryLayer};
 
 use crate::vk::access::Access;
 use crate::vk::conv::map_barrier;
@@ -80,6 +81,65 @@ pub struct DrapedRasters {
     pub code_counts: Option<DrapeStats>,
     /// A texture was made smaller than its rasters' resolution asked, to fit the budget.
     pub capped: bool,
+    /// The imagery is a level of a store's imagery layer (not draped from rasters here).
+    pub layer_level: Option<LayerLevel>,
+}
+
+/// The level of a store's imagery layer the imagery texture holds: its texel `t` is centred
+/// at grid coordinate `(t + 0.5) · 2^L / k − 0.5` (`aerie_terrain::drape::levels`), so the
+/// texture spans `size · 2^L / k` samples, a little more than the grid at coarse levels.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LayerLevel {
+    pub layer: std::path::PathBuf,
+    pub level: u32,
+    pub texels_per_sample: u32,
+}
+
+/// Puts the finest level of `layer` that fits the imagery's share of `budget_bytes` (four
+/// fifths beside a land-cover texture, as [`DrapeInput::texel_budgets`]) and `max_side` into
+/// `out`'s imagery; says on stderr what it read.
+pub fn drape_layer_level(
+    out: &mut DrapedRasters,
+    layer: &ImageryLayer,
+    budget_bytes: u64,
+    max_side: usize,
+) -> Result<(), String> {
+    let share = if out.classes.is_some() { 0.8 } else { 1.0 };
+    let bytes = (budget_bytes as f64 * share) as u64;
+    let Some(level) = choose_level(layer, bytes, max_side) else {
+        eprintln!(
+            "warning: {}: not even its coarsest level fits --drape-mb {:.2}: drawn without imagery",
+            layer.path().display(),
+            budget_bytes as f64 / f64::from(1 << 20)
+        );
+        return Ok(());
+    };
+    let t = std::time::Instant::now();
+    let l = read_level(layer, level, &|_, _| {}).map_err(|e| e.to_string())?;
+    let k = l.texels_per_sample;
+    eprintln!(
+        "imagery: level {level} of {} ({}×{} texels, {} per texel side of sample{}), read in {:.2} s",
+        layer.path().display(),
+        l.width,
+        l.height,
+        if level == 0 { format!("1/{k}") } else { format!("{}", l.samples_per_texel()) },
+        if level > 0 { "; finer levels exceed --drape-mb" } else { "" },
+        t.elapsed().as_secs_f64()
+    );
+    out.capped |= level > 0;
+    let size = DrapeSize {
+        width: l.width,
+        height: l.height,
+        // k per sample at level 0; 0 ("coarser than the grid") when 2^L > k.
+        texels_per_sample: k >> level.min(31),
+    };
+    out.imagery = Some((size, l.rgba));
+    out.layer_level = Some(LayerLevel {
+        layer: l.layer,
+        level,
+        texels_per_sample: k,
+    });
+    Ok(())
 }
 
 impl DrapedRasters {

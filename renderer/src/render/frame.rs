@@ -18,7 +18,9 @@ use aerie_terrain::mesh::skirted_tile_indices;
 use aerie_terrain::select::{LodMode, SelectParams, Selection};
 use aerie_terrain::source::{InMemoryTerrain, StreamStats, TerrainSource};
 
-use crate::render::drape_textures::{register, DrapeTextures, DrapedRasters, MAX_DRAPE_SIDE};
+use crate::render::drape_textures::{
+    drape_layer_level, register, DrapeTextures, DrapedRasters, MAX_DRAPE_SIDE,
+};
 use crate::render::entity_instances::{EntityDraw, EntityFrameStats};
 use crate::render::entity_lod::{LodParams, LodView};
 use crate::render::entity_pass::EntityPass;
@@ -393,10 +395,32 @@ impl TerrainRenderer {
             self.wait_all()?;
             old.destroy(&self.device);
         }
-        if let Some(input) = self.desc.drape.clone() {
-            let limit = self.device.properties.limits.max_image_dimension2_d;
-            let rasters =
-                register(&input, &grid, limit.min(MAX_DRAPE_SIDE)).map_err(VkError::Input)?;
+        let max_side = self
+            .device
+            .properties
+            .limits
+            .max_image_dimension2_d
+            .min(MAX_DRAPE_SIDE);
+        let mut rasters = match self.desc.drape.clone() {
+            Some(input) => Some(register(&input, &grid, max_side).map_err(VkError::Input)?),
+            None => None,
+        };
+        if let Some(layer) = source.imagery_layer() {
+            match rasters.as_mut().filter(|r| r.imagery.is_some()) {
+                Some(_) => eprintln!(
+                    "note: --imagery is draped instead of the store's imagery layer {}",
+                    layer.path().display()
+                ),
+                None => {
+                    let r = rasters.get_or_insert_with(DrapedRasters::default);
+                    let budget = self.desc.drape_budget_bytes;
+                    drape_layer_level(r, layer, budget, max_side as usize)
+                        .map_err(VkError::Input)?;
+                }
+            }
+        }
+        // A terrain without rasters after one with them gets the placeholders back.
+        if rasters.is_some() || self.draped.is_some() {
             self.wait_all()?;
             if let Some(mut old) = self.drape.take() {
                 old.destroy(&self.device);
@@ -404,9 +428,9 @@ impl TerrainRenderer {
             self.drape = Some(DrapeTextures::new(
                 &self.device,
                 &mut self.ring,
-                Some(&rasters),
+                rasters.as_ref(),
             )?);
-            self.draped = Some(Arc::new(rasters));
+            self.draped = rasters.map(Arc::new);
         }
         if let Some(mut old) = self.tess.take() {
             self.wait_all()?;
@@ -578,6 +602,11 @@ impl TerrainRenderer {
         );
         if self.desc.normal_maps && !tess_mode {
             uniforms.grid_size[3] |= FLAG_NORMAL_MAP;
+        }
+        if let Some(l) = self.draped.as_ref().and_then(|d| d.layer_level.as_ref()) {
+            // shaders/drape.glsl: the imagery is level L of a store's layer at k per sample.
+            uniforms.clipmap[2] = l.level as i32 + 1;
+            uniforms.clipmap[3] = l.texels_per_sample as i32;
         }
         let overlay = self.overlay.as_ref();
         let staging = frame.staging();

@@ -11,7 +11,9 @@
 use super::error::DrapeError;
 use super::mips::raster_pyramid;
 use super::read::GeoRaster;
-use super::register::{drape_rgba_window, grid_to_pixel, pixel_ground_m, TerrainGrid, TexelWindow};
+use super::register::{
+    drape_rgba_window, grid_to_pixel, pixel_ground_m, DrapeSize, TerrainGrid, TexelWindow,
+};
 
 /// Texels per sample a store's imagery may have (powers of two up to this).
 pub const MAX_STORE_TEXELS_PER_SAMPLE: u32 = 4;
@@ -73,6 +75,14 @@ impl LevelDraper {
         self.k
     }
 
+    /// Texels of the coarsest level (`levels − 1`) that some raster covers: zero says the
+    /// rasters miss the terrain altogether. One window of at most a few thousand texels.
+    pub fn coarse_coverage(&self, levels: u32) -> usize {
+        let level = levels.saturating_sub(1);
+        let (w, h) = self.level_extent(level);
+        self.window(level, 0, 0, w, h).1
+    }
+
     /// Texels per row and rows of level `level`'s raster.
     pub fn level_extent(&self, level: u32) -> (usize, usize) {
         level_extent(&self.grid, self.k, level)
@@ -105,6 +115,17 @@ impl LevelDraper {
         }
         (out, covered)
     }
+}
+
+/// The texels per sample a store's imagery gets from its rasters' ground resolution: the
+/// in-memory drape's k ([`DrapeSize::choose`]: the finest raster, within 2 % of an integer)
+/// rounded up to a power of two, at most [`MAX_STORE_TEXELS_PER_SAMPLE`].
+pub fn store_texels_per_sample(grid: &TerrainGrid, rasters: &[GeoRaster]) -> u32 {
+    let refs: Vec<&GeoRaster> = rasters.iter().collect();
+    let k = DrapeSize::choose(grid, &refs, u32::MAX).texels_per_sample;
+    k.max(1)
+        .next_power_of_two()
+        .min(MAX_STORE_TEXELS_PER_SAMPLE)
 }
 
 /// Texels per row and rows of level `level`'s imagery raster over `grid` at `k` texels per

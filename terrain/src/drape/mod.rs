@@ -17,7 +17,7 @@ pub mod register;
 
 pub use encode::{encode_geotiff, EncodeRef};
 pub use error::DrapeError;
-pub use levels::{level_extent, LevelDraper, MAX_STORE_TEXELS_PER_SAMPLE};
+pub use levels::{level_extent, store_texels_per_sample, LevelDraper, MAX_STORE_TEXELS_PER_SAMPLE};
 pub use read::{read_raster, GeoRaster, RasterCrs, RasterRef};
 pub use register::{
     drape_codes, drape_rgba, drape_rgba_window, grid_to_pixel, DrapeSize, DrapeStats, TerrainGrid,

@@ -476,6 +476,16 @@ impl ImageryLayer {
         self.header.texels_per_sample
     }
 
+    /// The store's page layout the layer follows.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// The store's level-0 grid the layer is draped on.
+    pub fn grid(&self) -> &TerrainGrid {
+        &self.grid
+    }
+
     /// Bytes of every page's decoded texels.
     pub fn texel_bytes(&self) -> u64 {
         self.index

@@ -331,3 +331,72 @@ fn a_layer_of_another_store_is_refused_naming_the_field() {
         .to_string();
     assert!(e.contains("store checksum"), "{e}");
 }
+
+#[test]
+fn a_stores_texels_per_sample_follow_the_finest_raster_as_a_power_of_two() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = dataset(150, 130, srtm_like);
+    let b = baked(&ds, 17);
+    let (store_path, _) = import(dir.path(), &ds, &b, 2);
+    let store = Store::open(&store_path).unwrap();
+    let grid = store_grid(&store).unwrap();
+    // The grid's samples are 30 m × 20 m; a raster of p pixels per 1/1200° has pixels of
+    // 63.2/p m × 92.6/p m at 47°N: 0.475·p of them per sample E-W, the finer axis.
+    for (p, k) in [(1, 1), (4, 2), (8, 4), (16, 4)] {
+        let r = raster(p, 0.0, 0.0, 10, smooth);
+        assert_eq!(
+            crate::drape::store_texels_per_sample(&grid, &[r]),
+            k,
+            "{p} pixels per 1/1200°"
+        );
+    }
+    // A raster far off the terrain covers nothing at the coarsest level; one on it does.
+    let levels = store.header().levels;
+    let off = raster(2, 5000.0, 5000.0, 20, smooth);
+    let on = raster(2, 40.0, 40.0, 20, smooth);
+    let d = LevelDraper::new(&grid, &[off], 2, levels).unwrap();
+    assert_eq!(d.coarse_coverage(levels), 0);
+    let d = LevelDraper::new(&grid, &[on], 2, levels).unwrap();
+    assert!(d.coarse_coverage(levels) > 0);
+}
+
+#[test]
+fn a_whole_level_reads_back_as_its_draped_raster_and_the_budget_picks_the_level() {
+    let r = raster(2, 10.0, 10.0, 100, smooth);
+    let f = fixture(2, std::slice::from_ref(&r));
+    let layer = open_layer(&f).unwrap();
+    let levels = layer.layout().levels.len() as u32;
+    for level in [0, 1, levels - 1] {
+        let ticks = std::cell::Cell::new(0);
+        let got = read_level(&layer, level, &|_, _| ticks.set(ticks.get() + 1)).unwrap();
+        let (w, h) = f.draper.level_extent(level);
+        assert_eq!((got.width, got.height, got.level), (w, h, level));
+        let (want, _) = f.draper.window(level, 0, 0, w, h);
+        assert!(
+            got.rgba == want,
+            "level {level} differs from its draped raster"
+        );
+        let g = layer.layout().levels[level as usize];
+        assert_eq!(ticks.get(), g.pages_x * g.pages_y, "progress per page");
+        assert_eq!(got.samples_per_texel(), f64::from(1u32 << level) / 2.0);
+    }
+    // Level 0 is 300 × 260 texels: 416,000 bytes with its mips.
+    let bytes = |l: u32| {
+        let (w, h) = f.draper.level_extent(l);
+        (w * h) as u64 * 16 / 3
+    };
+    assert_eq!(choose_level(&layer, bytes(0), 300), Some(0));
+    assert_eq!(choose_level(&layer, bytes(0) - 1, 300), Some(1));
+    assert_eq!(choose_level(&layer, bytes(0), 299), Some(1));
+    assert_eq!(choose_level(&layer, 0, 300), None);
+    // A damaged page fails the level, named.
+    let mut b = layer_bytes(&f);
+    let at = b.len() / 3;
+    b[at] ^= 0x5a;
+    std::fs::write(imagery_path(&f.store_path), &b).unwrap();
+    let layer = open_layer(&f).unwrap();
+    let e = (0..levels)
+        .find_map(|l| read_level(&layer, l, &|_, _| {}).err())
+        .expect("one level holds the flipped byte");
+    assert!(e.to_string().contains("aerie-imagery"), "{e}");
+}

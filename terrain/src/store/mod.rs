@@ -73,6 +73,7 @@ mod consistency;
 mod error;
 mod format;
 mod imagery;
+mod imagery_level;
 mod imagery_write;
 mod index;
 mod load;
@@ -88,6 +89,7 @@ pub use format::{
     FIXED_HEADER, INDEX_ENTRY, STORE_EXTENSION, STORE_MAGIC, STORE_VERSION,
 };
 pub use imagery::{imagery_path, ImageryHeader, ImageryLayer, ImageryPage, IMAGERY_MAGIC};
+pub use imagery_level::{choose_level, open_imagery_beside, read_level, LevelImagery};
 pub use imagery_write::{store_grid, write_imagery_in, ImagerySummary};
 pub use load::load_store;
 pub use pages::Page;

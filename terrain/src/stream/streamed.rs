@@ -20,7 +20,7 @@ use aerie_io::FileSystem;
 use crate::bake::ErrorBake;
 use crate::query::SurfaceGrid;
 use crate::source::{NotResident, SampleRect, SampleWant, SourceGrid, StreamStats, TerrainSource};
-use crate::store::{imagery_path, store_grid, ImageryLayer, PageId, Store, StoreError};
+use crate::store::{open_imagery_beside, ImageryLayer, PageId, Store, StoreError};
 
 use super::loader::{spawn_workers, Loaded, Shared};
 use super::rect_pages::{rect_pages, RectPages};
@@ -115,7 +115,7 @@ impl StreamedStore {
             });
         }
         let layout = store.layout().clone();
-        let imagery = open_imagery(&params.fs, path, &store)?;
+        let imagery = open_imagery_beside(&params.fs, path, &store)?;
         let full = Loaded::bytes_with(
             &layout,
             imagery.as_ref(),
@@ -376,22 +376,6 @@ struct ColumnRun {
     len: usize,
 }
 
-/// The store's imagery layer when the file beside it exists ([`imagery_path`]); a layer that
-/// exists but cannot be used is refused (naming its field), never ignored.
-fn open_imagery(
-    fs: &Arc<dyn FileSystem>,
-    path: &Path,
-    store: &Store,
-) -> Result<Option<ImageryLayer>, StoreError> {
-    let at = imagery_path(path);
-    match fs.open(&at) {
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        _ => {}
-    }
-    let grid = store_grid(store)?;
-    ImageryLayer::open_in(fs.clone(), &at, store.header(), store.layout(), &grid).map(Some)
-}
-
 fn not_resident(id: PageId, failed: bool) -> NotResident {
     NotResident {
         level: id.level,
@@ -523,6 +507,10 @@ impl TerrainSource for StreamedStore {
 
     fn imagery_texels_per_sample(&self) -> Option<u32> {
         self.shared.imagery().map(|l| l.texels_per_sample())
+    }
+
+    fn imagery_layer(&self) -> Option<&ImageryLayer> {
+        self.shared.imagery()
     }
 
     fn gather_imagery(&self, rect: &SampleRect, out: &mut [u8]) -> Result<(), NotResident> {

@@ -10,12 +10,14 @@ use std::time::Instant;
 
 use clap::Args;
 
+use crate::app::commands::import_imagery;
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::out_path::prepare_out_file;
 use crate::app::progress::{count_bar, human_bytes, progress_bar};
 use crate::tools::output::write_text;
 use aerie_terrain::bake::{bake, BakeParams};
 use aerie_terrain::dataset::{load_dataset, load_dataset_tiles, Dataset};
+use aerie_terrain::drape::GeoRaster;
 use aerie_terrain::load::stitch::tile_files;
 use aerie_terrain::load::RawRows;
 use aerie_terrain::store::{
@@ -27,8 +29,9 @@ use aerie_terrain::store::{
 pub struct ImportArgs {
     /// DEM files (.hgt, .hgt.zip, .tif, .png, raw .f32/.u16 with sidecar, .npy, .npz) or
     /// folders of SRTM tiles. Several inputs must all be SRTM tiles (stitched into one grid);
-    /// any other format is imported on its own.
-    #[arg(required = true)]
+    /// any other format is imported on its own. None with --imagery: the imagery is added to
+    /// the existing store at --out.
+    #[arg(required_unless_present = "imagery")]
     pub inputs: Vec<PathBuf>,
     /// The store to write (`<name>.aerie`); its folder is created.
     #[arg(long)]
@@ -43,7 +46,16 @@ pub struct ImportArgs {
     /// time on SRTM; 19 saves 5 % more at 15× the time.
     #[arg(long, default_value_t = 3)]
     pub zstd_level: i32,
-    /// Replace an existing store at --out.
+    /// 8-bit RGB or RGBA GeoTIFFs (geographic or UTM) draped onto every level of the store,
+    /// later files on top: written beside it as `<name>.aerie-imagery` and streamed with the
+    /// heights by `run`, `fly` and `bench`.
+    #[arg(long, num_args = 1..)]
+    pub imagery: Vec<PathBuf>,
+    /// Imagery texels per terrain sample per axis (1, 2 or 4); by default the finest
+    /// raster's resolution, rounded up to a power of two.
+    #[arg(long)]
+    pub imagery_texels: Option<u32>,
+    /// Replace an existing store (or, adding imagery to a store, its imagery layer) at --out.
     #[arg(long)]
     pub overwrite: bool,
     /// Also write the summary as JSON to this file.
@@ -127,6 +139,11 @@ pub fn run(a: ImportArgs) -> Result<(), Failure> {
             a.out.display()
         )));
     }
+    import_imagery::check_texels(a.imagery_texels)?;
+    let rasters = import_imagery::read_imagery(&a.imagery)?;
+    if a.inputs.is_empty() {
+        return add_imagery(&a, &rasters);
+    }
     if a.out.exists() && !a.overwrite {
         return Err(bad_input(format!(
             "--out {}: exists; use --overwrite to replace it",
@@ -163,15 +180,58 @@ pub fn run(a: ImportArgs) -> Result<(), Failure> {
         Some(rows) => (true, import_streamed(&a, &rows, params, &ip)?),
         None => (false, import_whole(&a, &inputs, params, &ip)?),
     };
+    let imagery = if rasters.is_empty() {
+        import_imagery::remove_stale_layer(&a.out)?;
+        None
+    } else {
+        Some(import_imagery::write_layer(
+            &a.out,
+            &rasters,
+            a.imagery_texels,
+            a.zstd_level,
+        )?)
+    };
     let total_s = t.elapsed().as_secs_f64();
     println!(
         "{}",
         summary_line(&a.out, &s, load_s, bake_s, write_s, total_s)
     );
+    if let Some(i) = &imagery {
+        println!("{}", import_imagery::summary_line(i));
+    }
     if let Some(j) = &a.json {
         prepare_out_file("--json", j)?;
         let mut v = summary_json(&a.out, &s, load_s, bake_s, write_s, total_s);
         v["streamed"] = serde_json::json!(streamed);
+        v["imagery"] = imagery
+            .as_ref()
+            .map_or(serde_json::Value::Null, import_imagery::summary_json);
+        write_text(j, &format!("{v:#}\n")).map_err(runtime)?;
+    }
+    Ok(())
+}
+
+/// `aerie import --imagery … --out <existing store>`: the layer added to a store as it is.
+fn add_imagery(a: &ImportArgs, rasters: &[GeoRaster]) -> Result<(), Failure> {
+    if !a.out.is_file() {
+        return Err(bad_input(format!(
+            "--out {}: no store there to add imagery to; give DEM inputs to make one",
+            a.out.display()
+        )));
+    }
+    let layer = aerie_terrain::store::imagery_path(&a.out);
+    if layer.exists() && !a.overwrite {
+        return Err(bad_input(format!(
+            "{}: the store has an imagery layer; use --overwrite to replace it",
+            layer.display()
+        )));
+    }
+    let i = import_imagery::write_layer(&a.out, rasters, a.imagery_texels, a.zstd_level)?;
+    println!("{}", import_imagery::summary_line(&i));
+    if let Some(j) = &a.json {
+        prepare_out_file("--json", j)?;
+        let mut v = serde_json::json!({ "store": a.out.display().to_string() });
+        v["imagery"] = import_imagery::summary_json(&i);
         write_text(j, &format!("{v:#}\n")).map_err(runtime)?;
     }
     Ok(())

@@ -8,6 +8,7 @@ pub mod fly;
 pub mod fly_no_draw;
 pub mod gen_dem;
 pub mod import;
+pub mod import_imagery;
 pub mod info;
 pub mod input_args;
 pub mod listen;

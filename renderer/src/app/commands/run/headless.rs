@@ -99,6 +99,7 @@ pub fn run(a: &RunArgs) -> Result<serde_json::Value, Failure> {
     let sizes = channel_sizes(&plan.channels, size, (cfg.width, cfg.height));
     let mut desc = renderer_desc(a, &plan, sizes[0], None);
     desc.drape = super::plan::drape(a, &plan)?;
+    desc.drape_budget_bytes = crate::app::renderer_setup::drape_budget(&a.drape)?;
     let terrain = prepare_source(&a.dem, &desc, &a.store)?;
     let period_s = a
         .seconds

@@ -29,6 +29,7 @@ pub fn run_on(event_loop: &mut EventLoop<()>, a: &RunArgs) -> Result<serde_json:
         .unwrap_or((cfg.width, cfg.height));
     let mut desc = renderer_desc(a, &plan, (width, height), Some(extensions));
     desc.drape = super::plan::drape(a, &plan)?;
+    desc.drape_budget_bytes = crate::app::renderer_setup::drape_budget(&a.drape)?;
     let terrain = prepare_source(&a.dem, &desc, &a.store)?;
     let period_s = a
         .seconds
