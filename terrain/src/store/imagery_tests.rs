@@ -204,8 +204,7 @@ fn the_streamed_store_gathers_a_strip_of_texels_across_pages() {
             origin: origin.map(|o| o << level),
             size,
         };
-        s.wait_resident(&[rect], Duration::from_secs(20))
-            .unwrap();
+        s.wait_resident(&[rect], Duration::from_secs(20)).unwrap();
         let (w, h) = (size[0] as usize * 2, size[1] as usize * 2);
         let mut got = vec![7u8; w * h * 4];
         s.gather_imagery(&rect, &mut got).unwrap();
