@@ -117,13 +117,19 @@ pub fn drape_layer_level(
     let t = std::time::Instant::now();
     let l = read_level(layer, level, &|_, _| {}).map_err(|e| e.to_string())?;
     let k = l.texels_per_sample;
+    let density = if level == 0 {
+        format!("{k} texels per sample")
+    } else {
+        format!(
+            "{} samples per texel; finer levels exceed --drape-mb",
+            l.samples_per_texel()
+        )
+    };
     eprintln!(
-        "imagery: level {level} of {} ({}×{} texels, {} per texel side of sample{}), read in {:.2} s",
+        "imagery: level {level} of {} ({}×{} texels, {density}), read in {:.2} s",
         layer.path().display(),
         l.width,
         l.height,
-        if level == 0 { format!("1/{k}") } else { format!("{}", l.samples_per_texel()) },
-        if level > 0 { "; finer levels exceed --drape-mb" } else { "" },
         t.elapsed().as_secs_f64()
     );
     out.capped |= level > 0;
