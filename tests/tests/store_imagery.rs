@@ -228,7 +228,8 @@ fn a_coarse_level_chosen_by_the_budget_is_drawn_where_the_oracle_says() {
     let layer = open_imagery_beside(&aerie_io::real(), &path, &store)
         .unwrap()
         .unwrap();
-    let raster = read_level(&layer, 3, &|_, _| {}).unwrap();
+    let (raster, failed) = read_level(&layer, 3, &|_, _| {});
+    assert!(failed.is_empty(), "{failed:?}");
     assert_eq!((raster.width, raster.height), (33, 33));
     let cam = camera();
     let (mut checked, mut worst) = (0, 0.0f64);
@@ -408,6 +409,61 @@ fn import_writes_the_layer_render_draws_it_and_errors_name_the_cause() {
             }
         }
     }
+
+    // info describes the layer and --verify reads every page of it.
+    let info = aerie(&["info", &s(&store), "--json", "--verify"]);
+    assert!(
+        info.status.success(),
+        "{}",
+        String::from_utf8_lossy(&info.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+    let im = &v["imagery"];
+    assert_eq!(im["texels_per_sample"], 1, "{v}");
+    assert_eq!(im["pages"], v["pages"], "{v}");
+    assert_eq!(im["verify"]["pages_ok"], v["pages"], "{v}");
+    assert_eq!(im["verify"]["checksum_errors"], 0, "{v}");
+    let (text, _) = ok(&["info", &s(&store)]);
+    assert!(
+        text.contains("imagery layer") && text.contains(&s(&board)),
+        "{text}"
+    );
+
+    // A damaged page of level 0 is named by info --verify (exit 2); render names it and draws
+    // the rest.
+    let layer = imagery_path(&store);
+    let good = std::fs::read(&layer).unwrap();
+    let mut bad = good.clone();
+    // The first stored page (pages are written in index order, level 0 first; empty ones take
+    // no bytes) begins right after the header.
+    let opened = Store::open(&store).unwrap();
+    let l = open_imagery_beside(&aerie_io::real(), &store, &opened)
+        .unwrap()
+        .unwrap();
+    let at = l.header().header_size as usize + 40;
+    bad[at] ^= 0x5a;
+    std::fs::write(&layer, &bad).unwrap();
+    refused(
+        &["info", &s(&store), "--verify"],
+        &["bad imagery pages", "aerie-imagery"],
+    );
+    let png = dir.path().join("damaged.png");
+    let (_, err) = ok(&[
+        "render",
+        "--dem",
+        &s(&store),
+        "--camera-geo",
+        "47.3,11.4,6000,0,-90,0",
+        "--size",
+        "48x32",
+        "--out",
+        &s(&png),
+    ]);
+    assert!(
+        err.contains("aerie-imagery") && err.contains("drawn without imagery"),
+        "{err}"
+    );
+    std::fs::write(&layer, &good).unwrap();
 
     // Adding to a store that has a layer needs --overwrite; bad k and no overlap are named.
     refused(

@@ -97,7 +97,8 @@ pub struct LayerLevel {
 
 /// Puts the finest level of `layer` that fits the imagery's share of `budget_bytes` (four
 /// fifths beside a land-cover texture, as [`DrapeInput::texel_budgets`]) and `max_side` into
-/// `out`'s imagery; says on stderr what it read.
+/// `out`'s imagery; says on stderr what it read, and names the damaged pages it leaves
+/// transparent.
 pub fn drape_layer_level(
     out: &mut DrapedRasters,
     layer: &ImageryLayer,
@@ -115,7 +116,16 @@ pub fn drape_layer_level(
         return Ok(());
     };
     let t = std::time::Instant::now();
-    let l = read_level(layer, level, &|_, _| {}).map_err(|e| e.to_string())?;
+    let (l, failed) = read_level(layer, level, &|_, _| {});
+    for e in failed.iter().take(3) {
+        eprintln!("warning: {e}; drawn without imagery there");
+    }
+    if failed.len() > 3 {
+        eprintln!(
+            "warning: {} more damaged imagery pages of level {level}",
+            failed.len() - 3
+        );
+    }
     let k = l.texels_per_sample;
     let density = if level == 0 {
         format!("{k} texels per sample")

@@ -486,6 +486,16 @@ impl ImageryLayer {
         &self.grid
     }
 
+    /// Pages in the layer (the store's page count).
+    pub fn page_count(&self) -> usize {
+        self.index.len()
+    }
+
+    /// Bytes of every page as stored (compressed).
+    pub fn stored_bytes(&self) -> u64 {
+        self.index.iter().map(|e| u64::from(e.len)).sum()
+    }
+
     /// Bytes of every page's decoded texels.
     pub fn texel_bytes(&self) -> u64 {
         self.index

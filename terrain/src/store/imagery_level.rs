@@ -64,21 +64,31 @@ pub fn choose_level(layer: &ImageryLayer, max_bytes: u64, max_side: usize) -> Op
 }
 
 /// Reads every page of `level` (verified as [`ImageryLayer::read_page`] does) into one raster;
-/// `progress(done, pages)`. The first damaged page fails it, named.
+/// `progress(done, pages)`. A damaged page is left transparent (drawn without imagery, as the
+/// streamed loader draws it) and returned, named, with the raster.
 pub fn read_level(
     layer: &ImageryLayer,
     level: u32,
     progress: &dyn Fn(u64, u64),
-) -> Result<LevelImagery, PageError> {
+) -> (LevelImagery, Vec<PageError>) {
     let k = layer.texels_per_sample();
     let (w, h) = level_extent(layer.grid(), k, level);
     let mut rgba = vec![0u8; w * h * 4];
     let g = layer.layout().levels[level as usize];
     let pages = u64::from(g.pages_x) * u64::from(g.pages_y);
     let mut done = 0;
+    let mut failed = Vec::new();
     for py in 0..g.pages_y {
         for px in 0..g.pages_x {
-            let p = layer.read_page(PageId { level, px, py })?;
+            done += 1;
+            progress(done, pages);
+            let p = match layer.read_page(PageId { level, px, py }) {
+                Ok(p) => p,
+                Err(e) => {
+                    failed.push(e);
+                    continue;
+                }
+            };
             let [ox, oy] = p.origin;
             let [pw, ph] = p.size;
             for y in 0..ph {
@@ -86,16 +96,15 @@ pub fn read_level(
                 let at = ((oy + y) * w + ox) * 4;
                 rgba[at..at + pw * 4].copy_from_slice(src);
             }
-            done += 1;
-            progress(done, pages);
         }
     }
-    Ok(LevelImagery {
+    let l = LevelImagery {
         layer: layer.path().to_path_buf(),
         level,
         texels_per_sample: k,
         width: w,
         height: h,
         rgba,
-    })
+    };
+    (l, failed)
 }

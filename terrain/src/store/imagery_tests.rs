@@ -367,7 +367,8 @@ fn a_whole_level_reads_back_as_its_draped_raster_and_the_budget_picks_the_level(
     let levels = layer.layout().levels.len() as u32;
     for level in [0, 1, levels - 1] {
         let ticks = std::cell::Cell::new(0);
-        let got = read_level(&layer, level, &|_, _| ticks.set(ticks.get() + 1)).unwrap();
+        let (got, failed) = read_level(&layer, level, &|_, _| ticks.set(ticks.get() + 1));
+        assert!(failed.is_empty(), "{failed:?}");
         let (w, h) = f.draper.level_extent(level);
         assert_eq!((got.width, got.height, got.level), (w, h, level));
         let (want, _) = f.draper.window(level, 0, 0, w, h);
@@ -388,14 +389,46 @@ fn a_whole_level_reads_back_as_its_draped_raster_and_the_budget_picks_the_level(
     assert_eq!(choose_level(&layer, bytes(0) - 1, 300), Some(1));
     assert_eq!(choose_level(&layer, bytes(0), 299), Some(1));
     assert_eq!(choose_level(&layer, 0, 300), None);
-    // A damaged page fails the level, named.
+    // A damaged page is named and left transparent; the rest of its level reads as draped.
     let mut b = layer_bytes(&f);
-    let at = b.len() / 3;
+    let at = layer.header().header_size as usize + 10;
     b[at] ^= 0x5a;
     std::fs::write(imagery_path(&f.store_path), &b).unwrap();
     let layer = open_layer(&f).unwrap();
-    let e = (0..levels)
-        .find_map(|l| read_level(&layer, l, &|_, _| {}).err())
-        .expect("one level holds the flipped byte");
-    assert!(e.to_string().contains("aerie-imagery"), "{e}");
+    let (got, failed) = read_level(&layer, 0, &|_, _| {});
+    assert_eq!(failed.len(), 1, "{failed:?}");
+    let e = failed[0].to_string();
+    assert!(e.contains("aerie-imagery") && e.contains("level 0"), "{e}");
+    let (w, h) = f.draper.level_extent(0);
+    let (want, _) = f.draper.window(0, 0, 0, w, h);
+    let differing = got
+        .rgba
+        .chunks(4)
+        .zip(want.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(got.rgba.chunks(4).filter(|p| p[3] == 0).count() >= differing);
+    assert!(
+        differing > 0,
+        "the damaged page's texels are not the draper's"
+    );
+    let first = layout_first_page_texels(&layer);
+    assert!(
+        differing <= first,
+        "{differing} texels differ, the page holds {first}"
+    );
+}
+
+/// Texels of the first non-empty page of level 0 (the one right after the header).
+fn layout_first_page_texels(layer: &ImageryLayer) -> usize {
+    let g = layer.layout().levels[0];
+    (0..g.pages_y)
+        .flat_map(|py| (0..g.pages_x).map(move |px| (px, py)))
+        .map(|(px, py)| {
+            let (_, [w, h]) =
+                page_texels_of(layer.layout(), layer.grid(), 2, PageId { level: 0, px, py });
+            w * h
+        })
+        .find(|&n| n > 0)
+        .unwrap()
 }

@@ -4,7 +4,9 @@
 //! JSON.
 //! `--verify` also reads the bake section and every page (CRC-32, decompression, content, the
 //! page's tables against the bake section) and reports the bad ones by reason and the read
-//! throughput; a bad page or bake section makes the exit code 2.
+//! throughput; a bad page or bake section makes the exit code 2. A store's imagery layer
+//! (`<name>.aerie-imagery`) is described too, and verified page by page with `--verify`; a
+//! layer that cannot be opened (damaged, another store's) is reported and exits 2.
 
 use std::path::PathBuf;
 
@@ -12,7 +14,9 @@ use clap::Args;
 
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::progress::human_bytes;
-use aerie_terrain::store::{Coding, PageError, PageId, Store, StoreError};
+use aerie_terrain::store::{
+    open_imagery_beside, Coding, ImageryLayer, PageError, PageId, Store, StoreError,
+};
 use aerie_terrain::GeoReference;
 
 #[derive(Debug, Args)]
@@ -86,21 +90,60 @@ pub fn verify(store: &Store) -> Verify {
                 v.pages += 1;
                 v.samples += p.samples.len() as u64;
             }
-            Err(err) => {
-                let n = match err {
-                    PageError::Checksum { .. } => &mut v.checksum_errors,
-                    PageError::Content { .. } => &mut v.content_errors,
-                    PageError::Read { .. } | PageError::NoSuchPage { .. } => &mut v.read_errors,
-                };
-                if *n == 0 {
-                    v.first_errors.push(err.to_string());
-                }
-                *n += 1;
-            }
+            Err(err) => count_error(&mut v, err),
         }
     }
     v.seconds = t.elapsed().as_secs_f64();
     v
+}
+
+/// Reads every page of the imagery layer once (CRC-32, decompression, size), counting what
+/// fails by reason; `samples` counts texels.
+pub fn verify_imagery(layer: &ImageryLayer) -> Verify {
+    let t = std::time::Instant::now();
+    let mut v = Verify {
+        stored_bytes: layer.stored_bytes(),
+        ..Verify::default()
+    };
+    for i in 0..layer.page_count() {
+        let Some((level, px, py)) = layer.layout().page_at(i) else {
+            continue;
+        };
+        match layer.read_page(PageId { level, px, py }) {
+            Ok(p) => {
+                v.pages += 1;
+                v.samples += (p.size[0] * p.size[1]) as u64;
+            }
+            Err(err) => count_error(&mut v, err),
+        }
+    }
+    v.seconds = t.elapsed().as_secs_f64();
+    v
+}
+
+fn count_error(v: &mut Verify, err: PageError) {
+    let n = match err {
+        PageError::Checksum { .. } => &mut v.checksum_errors,
+        PageError::Content { .. } => &mut v.content_errors,
+        PageError::Read { .. } | PageError::NoSuchPage { .. } => &mut v.read_errors,
+    };
+    if *n == 0 {
+        v.first_errors.push(err.to_string());
+    }
+    *n += 1;
+}
+
+fn imagery_json(layer: &ImageryLayer, checked: Option<&Verify>) -> serde_json::Value {
+    let h = layer.header();
+    serde_json::json!({
+        "layer": layer.path().display().to_string(),
+        "texels_per_sample": h.texels_per_sample,
+        "pages": layer.page_count(),
+        "stored_bytes": layer.stored_bytes(),
+        "texel_bytes": layer.texel_bytes(),
+        "sources": h.sources,
+        "verify": checked.map(verify_json),
+    })
 }
 
 fn verify_json(v: &Verify) -> serde_json::Value {
@@ -116,17 +159,25 @@ fn verify_json(v: &Verify) -> serde_json::Value {
     })
 }
 
-fn verdict(v: Option<&Verify>) -> Result<(), Failure> {
-    match v {
-        Some(v) if v.bad() > 0 => Err(bad_input(format!(
-            "{} bad pages ({} unreadable, {} checksum, {} content); first: {}",
+fn verdict(v: Option<&Verify>, imagery: Option<&Verify>) -> Result<(), Failure> {
+    let say = |what: &str, v: &Verify| {
+        format!(
+            "{} bad {what} ({} unreadable, {} checksum, {} content); first: {}",
             v.bad(),
             v.read_errors,
             v.checksum_errors,
             v.content_errors,
             v.first_errors.join("; ")
-        ))),
-        _ => Ok(()),
+        )
+    };
+    let bad: Vec<String> = [(v, "pages"), (imagery, "imagery pages")]
+        .into_iter()
+        .filter_map(|(v, what)| v.filter(|v| v.bad() > 0).map(|v| say(what, v)))
+        .collect();
+    if bad.is_empty() {
+        Ok(())
+    } else {
+        Err(bad_input(bad.join("; ")))
     }
 }
 
@@ -211,6 +262,17 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
     let page_bytes: u64 = store.pages().iter().map(|e| u64::from(e.len)).sum();
     let ratio = h.raw_sample_bytes as f64 / page_bytes.max(1) as f64;
     let checked = a.verify.then(|| verify(&store));
+    // The imagery layer beside the store: described, verified with the pages; one that cannot
+    // be opened is reported after the summary (exit 2).
+    let (layer, layer_err) = match open_imagery_beside(&aerie_io::real(), &a.store, &store) {
+        Ok(l) => (l, None),
+        Err(e) => (None, Some(e)),
+    };
+    let layer_checked = layer.as_ref().filter(|_| a.verify).map(verify_imagery);
+    let finish = |bake_err: Option<StoreError>| match bake_err.or(layer_err) {
+        Some(e) => Err(to_failure(e)),
+        None => verdict(checked.as_ref(), layer_checked.as_ref()),
+    };
     if a.json {
         let v = serde_json::json!({
             "store": a.store.display().to_string(),
@@ -246,12 +308,10 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
                 "max_eps_m": l.max_eps,
             })).collect::<Vec<_>>(),
             "verify": checked.as_ref().map(verify_json),
+            "imagery": layer.as_ref().map(|l| imagery_json(l, layer_checked.as_ref())),
         });
         println!("{v:#}");
-        return match bake_err {
-            Some(e) => Err(to_failure(e)),
-            None => verdict(checked.as_ref()),
-        };
+        return finish(bake_err);
     }
     println!(
         "{}: aerie tile store, format version {}",
@@ -312,8 +372,27 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
             v.content_errors
         );
     }
-    match bake_err {
-        Some(e) => Err(to_failure(e)),
-        None => verdict(checked.as_ref()),
+    if let Some(l) = &layer {
+        println!(
+            "  imagery layer {}: {} texels per sample, {} pages, {} stored ({} of texels); from {}",
+            l.path().display(),
+            l.texels_per_sample(),
+            l.page_count(),
+            human_bytes(l.stored_bytes()),
+            human_bytes(l.texel_bytes()),
+            l.header().sources.join(", ")
+        );
     }
+    if let Some(v) = &layer_checked {
+        println!(
+            "  verified {} of {} imagery pages in {:.3} s; {} unreadable, {} checksum, {} content errors",
+            v.pages,
+            layer.as_ref().map_or(0, ImageryLayer::page_count),
+            v.seconds,
+            v.read_errors,
+            v.checksum_errors,
+            v.content_errors
+        );
+    }
+    finish(bake_err)
 }
