@@ -38,6 +38,7 @@ use aerie_io::{FileSystem, InFile};
 
 use super::error::{PageError, PageId, StoreError};
 use super::format::{Layout, StoreHeader};
+use super::page_io::read_verified;
 use crate::drape::{level_extent, TerrainGrid};
 
 pub const IMAGERY_MAGIC: &[u8; 8] = b"AERIEIMG";
@@ -534,27 +535,7 @@ impl ImageryLayer {
                 rgba: vec![0; want],
             });
         }
-        let mut buf = vec![0u8; e.len as usize];
-        self.file
-            .read_exact_at(&mut buf, offset)
-            .map_err(|err| PageError::Read {
-                path: self.path.clone(),
-                page: id,
-                offset,
-                end,
-                reason: err.to_string(),
-            })?;
-        let got = crc32fast::hash(&buf);
-        if got != self.crcs[i] {
-            return Err(PageError::Checksum {
-                path: self.path.clone(),
-                page: id,
-                offset,
-                end,
-                got,
-                want: self.crcs[i],
-            });
-        }
+        let buf = read_verified(&*self.file, &self.path, id, offset, e.len, self.crcs[i])?;
         let content = |reason: String| PageError::Content {
             path: self.path.clone(),
             page: id,

@@ -61,13 +61,19 @@ struct Fixture {
     grid: TerrainGrid,
 }
 
-fn fixture(k: u32, rasters: &[GeoRaster]) -> Fixture {
-    let dir = tempfile::tempdir().unwrap();
+/// The test store (150 × 130 samples of 30 m × 20 m, pages of 2 tiles) in `dir`.
+fn test_store(dir: &std::path::Path) -> (PathBuf, Store, TerrainGrid) {
     let ds = dataset(150, 130, srtm_like);
     let b = baked(&ds, 17);
-    let (store_path, _) = import(dir.path(), &ds, &b, 2);
+    let (store_path, _) = import(dir, &ds, &b, 2);
     let store = Store::open(&store_path).unwrap();
     let grid = store_grid(&store).unwrap();
+    (store_path, store, grid)
+}
+
+fn fixture(k: u32, rasters: &[GeoRaster]) -> Fixture {
+    let dir = tempfile::tempdir().unwrap();
+    let (store_path, store, grid) = test_store(dir.path());
     let draper = LevelDraper::new(&grid, rasters, k, store.header().levels).unwrap();
     let s = write_imagery_in(
         aerie_io::real(),
@@ -334,11 +340,7 @@ fn a_layer_of_another_store_is_refused_naming_the_field() {
 #[test]
 fn a_stores_texels_per_sample_follow_the_finest_raster_as_a_power_of_two() {
     let dir = tempfile::tempdir().unwrap();
-    let ds = dataset(150, 130, srtm_like);
-    let b = baked(&ds, 17);
-    let (store_path, _) = import(dir.path(), &ds, &b, 2);
-    let store = Store::open(&store_path).unwrap();
-    let grid = store_grid(&store).unwrap();
+    let (_, store, grid) = test_store(dir.path());
     // The grid's samples are 30 m × 20 m; a raster of p pixels per 1/1200° has pixels of
     // 63.2/p m × 92.6/p m at 47°N: 0.475·p of them per sample E-W, the finer axis.
     for (p, k) in [(1, 1), (4, 2), (8, 4), (16, 4)] {

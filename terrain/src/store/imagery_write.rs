@@ -4,7 +4,7 @@
 //! under the final name until it is whole). Memory: the rasters, their mips and one batch.
 
 use std::io::Write;
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use aerie_io::{AtomicFile, FileSystem};
@@ -14,6 +14,7 @@ use super::imagery::{
     encode_entry, encode_header, encode_trailer, imagery_path, page_texels, ImageryEntry,
     ImageryHeader,
 };
+use super::page_io::par_pages;
 use super::read::Store;
 use crate::drape::{LevelDraper, TerrainGrid};
 
@@ -132,53 +133,14 @@ fn drape_batch(
     level: i32,
     tick: &(dyn Fn() + Sync),
 ) -> Result<Vec<DrapedPage>, String> {
-    let n = batch.len();
-    let threads = std::thread::available_parallelism()
-        .map(|t| t.get())
-        .unwrap_or(1)
-        .clamp(1, n.max(1));
-    let next = AtomicUsize::new(batch.start);
     let k = draper.texels_per_sample();
-    let parts: Vec<Result<Vec<(usize, DrapedPage)>, String>> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads)
-            .map(|_| {
-                s.spawn(|| {
-                    let mut out = Vec::new();
-                    let mut z = zstd::bulk::Compressor::new(level).map_err(|e| e.to_string())?;
-                    loop {
-                        let i = next.fetch_add(1, Ordering::Relaxed);
-                        if i >= batch.end {
-                            return Ok(out);
-                        }
-                        let (l, px, py) = layout.page_at(i).expect("in layout");
-                        let id = PageId { level: l, px, py };
-                        let ([x0, y0], [w, h]) = page_texels(layout, grid, k, id);
-                        let (bytes, covered) = if w * h == 0 {
-                            (Vec::new(), 0)
-                        } else {
-                            let (rgba, covered) = draper.window(l, x0, y0, w, h);
-                            let c = z.compress(&rgba).map_err(|e| format!("{id}: zstd: {e}"))?;
-                            (c, covered)
-                        };
-                        out.push((i - batch.start, ([w, h], covered, bytes)));
-                        tick();
-                    }
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().expect("imagery page thread"))
-            .collect()
-    });
-    let mut pages: Vec<Option<DrapedPage>> = (0..n).map(|_| None).collect();
-    for p in parts {
-        for (i, page) in p? {
-            pages[i] = Some(page);
+    par_pages(layout, batch, level, tick, &|id, z| {
+        let ([x0, y0], [w, h]) = page_texels(layout, grid, k, id);
+        if w * h == 0 {
+            return Ok(([w, h], 0, Vec::new()));
         }
-    }
-    Ok(pages
-        .into_iter()
-        .map(|p| p.expect("every page draped"))
-        .collect())
+        let (rgba, covered) = draper.window(id.level, x0, y0, w, h);
+        let c = z.compress(&rgba).map_err(|e| format!("{id}: zstd: {e}"))?;
+        Ok(([w, h], covered, c))
+    })
 }

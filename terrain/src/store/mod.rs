@@ -77,6 +77,7 @@ mod imagery_level;
 mod imagery_write;
 mod index;
 mod load;
+mod page_io;
 mod pages;
 mod read;
 mod rows_import;

@@ -17,6 +17,7 @@ use super::format::{
     FIXED_HEADER, INDEX_ENTRY,
 };
 use super::index::{decode_index, decode_trailer, Trailer, TRAILER};
+use super::page_io::read_verified;
 use super::pages::{decode_payload, Page};
 use crate::bake::ErrorBake;
 
@@ -204,27 +205,7 @@ impl Store {
     pub fn read_page(&self, id: PageId) -> Result<Page, PageError> {
         let e = *self.entry(id)?;
         let (offset, end) = (e.offset, e.offset + u64::from(e.len));
-        let mut buf = vec![0u8; e.len as usize];
-        self.file
-            .read_exact_at(&mut buf, offset)
-            .map_err(|err| PageError::Read {
-                path: self.path.clone(),
-                page: id,
-                offset,
-                end,
-                reason: err.to_string(),
-            })?;
-        let got = crc32fast::hash(&buf);
-        if got != e.crc {
-            return Err(PageError::Checksum {
-                path: self.path.clone(),
-                page: id,
-                offset,
-                end,
-                got,
-                want: e.crc,
-            });
-        }
+        let buf = read_verified(&*self.file, &self.path, id, offset, e.len, e.crc)?;
         let content = |reason: String| PageError::Content {
             path: self.path.clone(),
             page: id,

@@ -9,7 +9,7 @@
 
 use std::io::Write;
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use aerie_io::{AtomicFile, FileSystem};
@@ -23,6 +23,7 @@ use super::format::{
     encode_header, header_len, Coding, Layout, PageEntry, StoreHeader, INDEX_ENTRY, STORE_VERSION,
 };
 use super::index::{encode_entry, encode_trailer, Trailer, TRAILER};
+use super::page_io::par_pages;
 use super::pages::{cut_samples, cut_tables, encode_payload};
 
 /// What an import is asked for beyond the data.
@@ -297,50 +298,13 @@ fn compress_batch(
     level: i32,
     tick: &(dyn Fn() + Sync),
 ) -> Result<Vec<(Coding, Vec<u8>)>, StoreError> {
-    let n = batch.len();
-    let threads = std::thread::available_parallelism()
-        .map(|t| t.get())
-        .unwrap_or(1)
-        .clamp(1, n.max(1));
-    let next = AtomicUsize::new(batch.start);
-    type Part = Vec<(usize, Coding, Vec<u8>)>;
-    let parts: Vec<Result<Part, String>> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads)
-            .map(|_| {
-                s.spawn(|| -> Result<Part, String> {
-                    let mut out = Vec::new();
-                    let mut z = zstd::bulk::Compressor::new(level).map_err(|e| e.to_string())?;
-                    loop {
-                        let i = next.fetch_add(1, Ordering::Relaxed);
-                        if i >= batch.end {
-                            return Ok(out);
-                        }
-                        let (level, px, py) = layout.page_at(i).expect("in layout");
-                        let id = PageId { level, px, py };
-                        let samples = pages.samples(layout, id);
-                        let tables = cut_tables(bake, layout, id);
-                        let rect = layout.rect(level, px, py);
-                        let (coding, raw) = encode_payload(id, rect, &samples, &tables);
-                        let c = z.compress(&raw).map_err(|e| format!("{id}: zstd: {e}"))?;
-                        out.push((i - batch.start, coding, c));
-                        tick();
-                    }
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().expect("page compression thread"))
-            .collect()
-    });
-    let mut pages: Vec<Option<(Coding, Vec<u8>)>> = (0..n).map(|_| None).collect();
-    for p in parts {
-        for (i, coding, bytes) in p.map_err(|reason| StoreError::Params { reason })? {
-            pages[i] = Some((coding, bytes));
-        }
-    }
-    Ok(pages
-        .into_iter()
-        .map(|p| p.expect("every page compressed"))
-        .collect())
+    par_pages(layout, batch, level, tick, &|id, z| {
+        let samples = pages.samples(layout, id);
+        let tables = cut_tables(bake, layout, id);
+        let rect = layout.rect(id.level, id.px, id.py);
+        let (coding, raw) = encode_payload(id, rect, &samples, &tables);
+        let c = z.compress(&raw).map_err(|e| format!("{id}: zstd: {e}"))?;
+        Ok((coding, c))
+    })
+    .map_err(|reason| StoreError::Params { reason })
 }
