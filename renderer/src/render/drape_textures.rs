@@ -7,7 +7,6 @@
 use std::sync::Arc;
 
 use ash::vk;
-use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
 use aerie_terrain::drape::mips::{mip_chain, mip_count};
@@ -17,9 +16,10 @@ use aerie_terrain::drape::{
 use aerie_terrain::source::SourceGrid;
 use aerie_terrain::store::{choose_level, read_level, ImageryLayer};
 
+use crate::vk::access::image_range_barrier;
 use crate::vk::access::Access;
-use crate::vk::conv::map_barrier;
 use crate::vk::frame_context::FrameRing;
+use crate::vk::image::{Image2d, ImageDesc};
 use crate::vk::{Buffer, Device, VkError, VkResultExt};
 
 /// The largest draped texture side asked of any device (the device's own limit may be lower).
@@ -219,162 +219,42 @@ pub fn register(
     Ok(out)
 }
 
-/// One sampled 2-D image with its mip chain, memory and view.
-struct MipImage {
-    raw: vk::Image,
-    view: vk::ImageView,
-    allocation: Option<Allocation>,
-    extent: (u32, u32),
+/// One sampled 2-D texture of `format` with `mips` levels, the copy's destination.
+fn texture(
+    d: &Device,
+    name: &str,
+    (width, height): (u32, u32),
+    format: vk::Format,
     mips: u32,
-    bytes: u64,
+) -> Result<Image2d, VkError> {
+    let desc = ImageDesc {
+        width,
+        height,
+        format,
+        usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+        aspect: vk::ImageAspectFlags::COLOR,
+        layers: 0,
+        mips,
+    };
+    Image2d::new(d, name, desc)
 }
 
-impl MipImage {
-    fn new(
-        d: &Device,
-        name: &str,
-        extent: (u32, u32),
-        format: vk::Format,
-        mips: u32,
-    ) -> Result<Self, VkError> {
-        let info = vk::ImageCreateInfo::default()
-            .image_type(vk::ImageType::TYPE_2D)
-            .format(format)
-            .extent(vk::Extent3D {
-                width: extent.0,
-                height: extent.1,
-                depth: 1,
-            })
-            .mip_levels(mips)
-            .array_layers(1)
-            .samples(vk::SampleCountFlags::TYPE_1)
-            .tiling(vk::ImageTiling::OPTIMAL)
-            .usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE)
-            .initial_layout(vk::ImageLayout::UNDEFINED);
-        // SAFETY: the device is live and the create-info is complete (2-D, ≥ 1 mip and layer).
-        let raw = unsafe { d.raw.create_image(&info, None) }.call("vkCreateImage")?;
-        // SAFETY: `raw` was just created on this device.
-        let requirements = unsafe { d.raw.get_image_memory_requirements(raw) };
-        let allocation = match d.allocator().allocate(&AllocationCreateDesc {
-            name,
-            requirements,
-            location: MemoryLocation::GpuOnly,
-            linear: false,
-            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-        }) {
-            Ok(a) => a,
-            Err(source) => {
-                // SAFETY: `raw` is unbound and unused by any command.
-                unsafe { d.raw.destroy_image(raw, None) };
-                return Err(VkError::Allocation {
-                    what: name.into(),
-                    source,
-                });
-            }
-        };
-        let mut image = Self {
-            raw,
-            view: vk::ImageView::null(),
-            allocation: None,
-            extent,
-            mips,
-            bytes: requirements.size,
-        };
-        // SAFETY: the allocation was made for this image's requirements and is bound once.
-        let bound = unsafe {
-            d.raw
-                .bind_image_memory(raw, allocation.memory(), allocation.offset())
-        };
-        image.allocation = Some(allocation);
-        if let Err(result) = bound {
-            image.destroy(d);
-            return Err(VkError::Call {
-                call: "vkBindImageMemory",
-                result,
-            });
-        }
-        let view_info = vk::ImageViewCreateInfo::default()
-            .image(raw)
-            .view_type(vk::ImageViewType::TYPE_2D)
-            .format(format)
-            .subresource_range(image.range());
-        // SAFETY: `raw` is live and bound; the view matches its format and mips.
-        match unsafe { d.raw.create_image_view(&view_info, None) } {
-            Ok(v) => image.view = v,
-            Err(result) => {
-                image.destroy(d);
-                return Err(VkError::Call {
-                    call: "vkCreateImageView",
-                    result,
-                });
-            }
-        }
-        Ok(image)
-    }
-
-    fn range(&self) -> vk::ImageSubresourceRange {
-        vk::ImageSubresourceRange {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            base_mip_level: 0,
-            level_count: self.mips,
-            base_array_layer: 0,
-            layer_count: 1,
-        }
-    }
-
-    /// Records a barrier over every mip from the `prev` uses to the `next` (named by use).
-    fn barrier(
-        &self,
-        d: &Device,
-        cmd: vk::CommandBuffer,
-        prev: &[Access],
-        next: &[Access],
-        discard: bool,
-    ) {
-        let b = map_barrier(prev, next, discard);
-        let barrier = vk::ImageMemoryBarrier::default()
-            .old_layout(b.old_layout)
-            .new_layout(b.new_layout)
-            .src_access_mask(b.src_access)
-            .dst_access_mask(b.dst_access)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .image(self.raw)
-            .subresource_range(self.range());
-        // SAFETY: `cmd` is recording on this device and the image is live; the barrier outlives the call.
-        unsafe {
-            d.raw.cmd_pipeline_barrier(
-                cmd,
-                b.src_stage,
-                b.dst_stage,
-                vk::DependencyFlags::empty(),
-                &[],
-                &[],
-                &[barrier],
-            )
-        };
-    }
-
-    fn destroy(&mut self, d: &Device) {
-        if self.view != vk::ImageView::null() {
-            // SAFETY: created on this device by `new`, no command using it is pending (owners destroy after wait_idle), nulled below.
-            unsafe { d.raw.destroy_image_view(self.view, None) };
-            self.view = vk::ImageView::null();
-        }
-        if let Some(a) = self.allocation.take() {
-            // SAFETY: as for the view; the memory is freed after the image bound to it.
-            unsafe { d.raw.destroy_image(self.raw, None) };
-            let _ = d.allocator().free(a);
-            self.raw = vk::Image::null();
-        }
-    }
+/// Records a barrier over every mip of `image` from the `prev` uses to the `next`.
+fn barrier(
+    d: &Device,
+    cmd: vk::CommandBuffer,
+    image: &Image2d,
+    prev: &[Access],
+    next: &[Access],
+    discard: bool,
+) {
+    image_range_barrier(d, cmd, image.raw, image.range(), prev, next, discard);
 }
 
 /// The draped textures and their samplers.
 pub struct DrapeTextures {
-    imagery: MipImage,
-    classes: MipImage,
+    imagery: Image2d,
+    classes: Image2d,
     /// Trilinear, clamped: the imagery.
     pub linear: vk::Sampler,
     /// Nearest: the classes (an integer format is never filtered).
@@ -393,15 +273,8 @@ impl DrapeTextures {
         rasters: Option<&DrapedRasters>,
     ) -> Result<Self, VkError> {
         let mut this = Self {
-            imagery: MipImage::new(d, "imagery", (1, 1), vk::Format::R8G8B8A8_SRGB, 1)?,
-            classes: MipImage {
-                raw: vk::Image::null(),
-                view: vk::ImageView::null(),
-                allocation: None,
-                extent: (1, 1),
-                mips: 1,
-                bytes: 0,
-            },
+            imagery: texture(d, "imagery", (1, 1), vk::Format::R8G8B8A8_SRGB, 1)?,
+            classes: texture(d, "land-cover classes", (1, 1), vk::Format::R8_UINT, 1)?,
             linear: vk::Sampler::null(),
             nearest: vk::Sampler::null(),
             imagery_size: None,
@@ -458,7 +331,7 @@ impl DrapeTextures {
             check(s, "imagery")?;
             self.imagery.destroy(d);
             let mips = mip_count(s.width, s.height);
-            self.imagery = MipImage::new(
+            self.imagery = texture(
                 d,
                 "imagery",
                 (s.width as u32, s.height as u32),
@@ -474,7 +347,8 @@ impl DrapeTextures {
             class_level = (s.width, s.height, texels.clone());
             self.classes_size = Some(*s);
         }
-        self.classes = MipImage::new(
+        self.classes.destroy(d);
+        self.classes = texture(
             d,
             "land-cover classes",
             (class_level.0 as u32, class_level.1 as u32),
@@ -547,7 +421,14 @@ impl DrapeTextures {
         let mut frame = ring.begin_frame(d)?;
         let cmd = frame.begin_recording(d)?;
         for image in [&self.imagery, &self.classes] {
-            image.barrier(d, cmd, &[Access::Nothing], &[Access::TransferWrite], true);
+            barrier(
+                d,
+                cmd,
+                image,
+                &[Access::Nothing],
+                &[Access::TransferWrite],
+                true,
+            );
         }
         for (image, copy) in &copies {
             // SAFETY: `cmd` is recording; the staging buffer holds these bytes at the offsets, and each region lies inside its live image (TRANSFER_DST layout after the barrier).
@@ -562,9 +443,10 @@ impl DrapeTextures {
             };
         }
         for image in [&self.imagery, &self.classes] {
-            image.barrier(
+            barrier(
                 d,
                 cmd,
+                image,
                 &[Access::TransferWrite],
                 &[Access::FragmentShaderReadSampledImage],
                 false,
@@ -589,7 +471,8 @@ impl DrapeTextures {
 
     /// Imagery extent and mip count.
     pub fn imagery_extent(&self) -> ((u32, u32), u32) {
-        (self.imagery.extent, self.imagery.mips)
+        let desc = &self.imagery.desc;
+        ((desc.width, desc.height), desc.mips.max(1))
     }
 
     /// Call after the device is idle. Idempotent.

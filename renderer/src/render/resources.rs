@@ -137,6 +137,7 @@ impl GpuTerrain {
             usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
             aspect: vk::ImageAspectFlags::COLOR,
             layers,
+            mips: 1,
         };
         let levels = Image2d::new(d, "level textures", image_desc(side, level_count))?;
         if normals == Some(NormalSource::Cpu) {

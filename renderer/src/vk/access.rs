@@ -25,6 +25,20 @@ pub fn image_barrier(
     next: &[Access],
     discard: bool,
 ) {
+    let range = subresource_range(aspect);
+    image_range_barrier(device, cmd, image, range, prev, next, discard);
+}
+
+/// [`image_barrier`] over `range` of the image (its mips, its layers), the same contract.
+pub fn image_range_barrier(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    range: vk::ImageSubresourceRange,
+    prev: &[Access],
+    next: &[Access],
+    discard: bool,
+) {
     let b = map_barrier(prev, next, discard);
     let barrier = vk::ImageMemoryBarrier::default()
         .old_layout(b.old_layout)
@@ -34,7 +48,7 @@ pub fn image_barrier(
         .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .image(image)
-        .subresource_range(subresource_range(aspect));
+        .subresource_range(range);
     // `cmd` is recording on it and `image` is one of its images (this function's contract above).
     // The barrier struct and the slice outlive the call, and the layouts come from the named uses.
     // SAFETY: `device.raw` is a live device (a `Device` is usable until its `destroy`).

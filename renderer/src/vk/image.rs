@@ -19,12 +19,16 @@ pub struct ImageDesc {
     pub aspect: vk::ImageAspectFlags,
     /// Array layers; when > 0 the view is a 2-D array view (0 = a plain 2-D image).
     pub layers: u32,
+    /// Mip levels (0 counts as 1); the view covers them all.
+    pub mips: u32,
 }
 
 pub struct Image2d {
     pub raw: vk::Image,
     pub view: vk::ImageView,
     pub desc: ImageDesc,
+    /// Device bytes of the image (its memory requirements: every mip and layer).
+    pub bytes: u64,
     allocation: Option<Allocation>,
 }
 
@@ -38,14 +42,14 @@ impl Image2d {
                 height: desc.height,
                 depth: 1,
             })
-            .mip_levels(1)
+            .mip_levels(desc.mips.max(1))
             .array_layers(desc.layers.max(1))
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(desc.usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
-        // `info` is a fully initialised create-info that outlives the call (one mip, at least one
+        // `info` is a fully initialised create-info that outlives the call (at least one mip and
         // layer, a 2-D extent).
         // SAFETY: the device is live.
         let raw = unsafe { device.raw.create_image(&info, None) }.call("vkCreateImage")?;
@@ -73,6 +77,7 @@ impl Image2d {
             raw,
             view: vk::ImageView::null(),
             desc,
+            bytes: requirements.size,
             allocation: None,
         };
         // The allocation was made for its memory requirements, so memory and offset satisfy size
@@ -99,12 +104,9 @@ impl Image2d {
                 vk::ImageViewType::TYPE_2D
             })
             .format(desc.format)
-            .subresource_range(vk::ImageSubresourceRange {
-                layer_count: desc.layers.max(1),
-                ..subresource_range(desc.aspect)
-            });
+            .subresource_range(image.range());
         // The view's format and range match its creation (same format, its aspect, its layer
-        // count).
+        // and mip counts).
         // SAFETY: `raw` is live and bound to memory.
         match unsafe { device.raw.create_image_view(&view_info, None) } {
             Ok(v) => image.view = v,
@@ -117,6 +119,15 @@ impl Image2d {
             }
         }
         Ok(image)
+    }
+
+    /// Every mip and layer of the image.
+    pub fn range(&self) -> vk::ImageSubresourceRange {
+        vk::ImageSubresourceRange {
+            level_count: self.desc.mips.max(1),
+            layer_count: self.desc.layers.max(1),
+            ..subresource_range(self.desc.aspect)
+        }
     }
 
     /// View first, then image, then memory. Idempotent: handles are nulled as they go. The

@@ -47,6 +47,7 @@ impl OffscreenTarget {
                     | vk::ImageUsageFlags::TRANSFER_DST,
                 aspect: map_format_aspect(COLOUR_FORMAT),
                 layers: 0,
+                mips: 1,
             },
         )?;
         let depth = Image2d::new(
@@ -60,6 +61,7 @@ impl OffscreenTarget {
                     | vk::ImageUsageFlags::TRANSFER_SRC,
                 aspect: map_format_aspect(DEPTH_FORMAT),
                 layers: 0,
+                mips: 1,
             },
         );
         let mut depth = match depth {
