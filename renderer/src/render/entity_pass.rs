@@ -246,48 +246,12 @@ impl EntityPass {
         ] {
             memory_barrier(d, cmd, &[u], &[u]);
         }
-        let (w, h) = (target.width, target.height);
-        let colour = [vk::RenderingAttachmentInfo::default()
-            .image_view(target.colour.view)
-            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::LOAD)
-            .store_op(vk::AttachmentStoreOp::STORE)];
-        let depth = vk::RenderingAttachmentInfo::default()
-            .image_view(target.depth.view)
-            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::LOAD)
-            .store_op(vk::AttachmentStoreOp::STORE);
-        let area = vk::Rect2D {
-            offset: vk::Offset2D { x: 0, y: 0 },
-            extent: vk::Extent2D {
-                width: w,
-                height: h,
-            },
-        };
-        let rendering = vk::RenderingInfo::default()
-            .render_area(area)
-            .layer_count(1)
-            .color_attachments(&colour)
-            .depth_attachment(&depth);
-        // The target's views are live and in the attachment layouts named (the terrain pass
-        // left them there); the pipeline, the vertex, index, instance and indirect buffers are
-        // live, and the indirect buffer holds `draw_count` commands written before submission.
-        // SAFETY: `cmd` is recording outside any rendering.
+        target.begin_rendering(d, cmd, None);
+        // The pipeline, the vertex, index, instance and indirect buffers are live, and the
+        // indirect buffer holds `draw_count` commands written before submission.
+        // SAFETY: `cmd` is recording inside the rendering begun on the target (the terrain
+        // pass left its views in the attachment layouts).
         unsafe {
-            d.raw.cmd_begin_rendering(cmd, &rendering);
-            d.raw.cmd_set_viewport(
-                cmd,
-                0,
-                &[vk::Viewport {
-                    x: 0.0,
-                    y: 0.0,
-                    width: w as f32,
-                    height: h as f32,
-                    min_depth: 0.0,
-                    max_depth: 1.0,
-                }],
-            );
-            d.raw.cmd_set_scissor(cmd, 0, &[area]);
             d.raw
                 .cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline.raw);
             d.raw.cmd_push_constants(
@@ -312,8 +276,8 @@ impl EntityPass {
                 slot.draw_count,
                 std::mem::size_of::<DrawIndexedIndirect>() as u32,
             );
-            d.raw.cmd_end_rendering(cmd);
         }
+        target.end_rendering(d, cmd);
     }
 
     /// Destroys every buffer and the pipeline (after the device is idle). Idempotent.

@@ -135,59 +135,12 @@ pub fn record_terrain_pass(
     // Draws recorded after the tiles, before the sky (the tessellation baseline's patches).
     extra: &dyn Fn(vk::CommandBuffer),
 ) {
-    let (w, h) = (target.width, target.height);
-    let colour_attachment = [vk::RenderingAttachmentInfo::default()
-        .image_view(target.colour.view)
-        .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-        .load_op(vk::AttachmentLoadOp::CLEAR)
-        .store_op(vk::AttachmentStoreOp::STORE)
-        .clear_value(vk::ClearValue {
-            color: vk::ClearColorValue {
-                float32: [SKY_LINEAR[0], SKY_LINEAR[1], SKY_LINEAR[2], 1.0],
-            },
-        })];
-    let depth_attachment = vk::RenderingAttachmentInfo::default()
-        .image_view(target.depth.view)
-        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-        .load_op(vk::AttachmentLoadOp::CLEAR)
-        .store_op(vk::AttachmentStoreOp::STORE)
-        .clear_value(vk::ClearValue {
-            depth_stencil: vk::ClearDepthStencilValue {
-                depth: DEPTH_CLEAR,
-                stencil: 0,
-            },
-        });
-    let area = vk::Rect2D {
-        offset: vk::Offset2D { x: 0, y: 0 },
-        extent: vk::Extent2D {
-            width: w,
-            height: h,
-        },
-    };
-    let rendering = vk::RenderingInfo::default()
-        .render_area(area)
-        .layer_count(1)
-        .color_attachments(&colour_attachment)
-        .depth_attachment(&depth_attachment);
-    // The target's views are live and in the attachment layouts named (its `record_begin` put them
-    // there); the pipeline, `set` (written for this frame), the index buffer and `indirect`
+    let sky_colour = [SKY_LINEAR[0], SKY_LINEAR[1], SKY_LINEAR[2], 1.0];
+    target.begin_rendering(d, cmd, Some((sky_colour, DEPTH_CLEAR)));
+    // The pipeline, `set` (written for this frame), the index buffer and `indirect`
     // (draw_count commands of the stride given, staged this frame) are live.
-    // SAFETY: `cmd` is recording outside any rendering.
+    // SAFETY: `cmd` is recording inside the rendering begun on the target.
     unsafe {
-        d.raw.cmd_begin_rendering(cmd, &rendering);
-        d.raw.cmd_set_viewport(
-            cmd,
-            0,
-            &[vk::Viewport {
-                x: 0.0,
-                y: 0.0,
-                width: w as f32,
-                height: h as f32,
-                min_depth: 0.0,
-                max_depth: 1.0,
-            }],
-        );
-        d.raw.cmd_set_scissor(cmd, 0, &[area]);
         if draw_count > 0 {
             d.raw
                 .cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
@@ -215,6 +168,5 @@ pub fn record_terrain_pass(
     if sky {
         record_sky(d, cmd, pipeline, set);
     }
-    // SAFETY: `cmd` is inside the rendering begun above.
-    unsafe { d.raw.cmd_end_rendering(cmd) };
+    target.end_rendering(d, cmd);
 }

@@ -138,6 +138,77 @@ impl OffscreenTarget {
         );
     }
 
+    /// Begins dynamic rendering over the whole target, colour and depth, with the viewport and
+    /// scissor covering it: `clear` gives the colour (linear RGBA) and depth to start from,
+    /// None keeps what an earlier pass drew. The target must be in its attachment layouts
+    /// ([`Self::record_begin`]); end with [`Self::end_rendering`].
+    pub fn begin_rendering(
+        &self,
+        device: &Device,
+        cmd: vk::CommandBuffer,
+        clear: Option<([f32; 4], f32)>,
+    ) {
+        let (load, colour_clear, depth_clear) = match clear {
+            Some((c, z)) => (vk::AttachmentLoadOp::CLEAR, c, z),
+            None => (vk::AttachmentLoadOp::LOAD, [0.0; 4], 0.0),
+        };
+        let colour = [vk::RenderingAttachmentInfo::default()
+            .image_view(self.colour.view)
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(load)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue {
+                color: vk::ClearColorValue {
+                    float32: colour_clear,
+                },
+            })];
+        let depth = vk::RenderingAttachmentInfo::default()
+            .image_view(self.depth.view)
+            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .load_op(load)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: depth_clear,
+                    stencil: 0,
+                },
+            });
+        let area = vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent: vk::Extent2D {
+                width: self.width,
+                height: self.height,
+            },
+        };
+        let rendering = vk::RenderingInfo::default()
+            .render_area(area)
+            .layer_count(1)
+            .color_attachments(&colour)
+            .depth_attachment(&depth);
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: self.width as f32,
+            height: self.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        // The views are live and in the attachment layouts named (this function's contract);
+        // the structs outlive the calls.
+        // SAFETY: `cmd` is recording on `device` outside any rendering.
+        unsafe {
+            device.raw.cmd_begin_rendering(cmd, &rendering);
+            device.raw.cmd_set_viewport(cmd, 0, &[viewport]);
+            device.raw.cmd_set_scissor(cmd, 0, &[area]);
+        }
+    }
+
+    /// Ends the rendering [`Self::begin_rendering`] began.
+    pub fn end_rendering(&self, device: &Device, cmd: vk::CommandBuffer) {
+        // SAFETY: `cmd` is recording inside the rendering begun on this target.
+        unsafe { device.raw.cmd_end_rendering(cmd) };
+    }
+
     /// Copies colour and depth into the readback buffers, visible to the host after the fence.
     pub fn record_readback(&self, device: &Device, cmd: vk::CommandBuffer) {
         image_barrier(
