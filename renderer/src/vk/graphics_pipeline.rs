@@ -88,8 +88,43 @@ fn create(
     let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
         .vertex_binding_descriptions(desc.bindings)
         .vertex_attribute_descriptions(desc.attributes);
-    let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
-        .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let shape = Primitives::Triangles;
+    create_with_stages(
+        device,
+        desc.layout,
+        desc.depth,
+        &stages,
+        &vertex_input,
+        shape,
+    )
+}
+
+/// What the input assembler hands the first stage.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Primitives {
+    Triangles,
+    /// Patches of this many control points, for tessellation stages.
+    Patches(u32),
+}
+
+/// The recipe's fixed states (two-sided fill, one sample, dynamic viewport and scissor,
+/// rendering into the offscreen target's formats) around the caller's `stages` and vertex
+/// input: what every pipeline of the renderer is made with, the tessellated one included.
+pub fn create_with_stages(
+    device: &Device,
+    layout: vk::PipelineLayout,
+    depth: DepthUse,
+    stages: &[vk::PipelineShaderStageCreateInfo],
+    vertex_input: &vk::PipelineVertexInputStateCreateInfo,
+    primitives: Primitives,
+) -> Result<vk::Pipeline, VkError> {
+    let (topology, control_points) = match primitives {
+        Primitives::Triangles => (vk::PrimitiveTopology::TRIANGLE_LIST, 0),
+        Primitives::Patches(n) => (vk::PrimitiveTopology::PATCH_LIST, n),
+    };
+    let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(topology);
+    let tessellation =
+        vk::PipelineTessellationStateCreateInfo::default().patch_control_points(control_points);
     let viewport = vk::PipelineViewportStateCreateInfo::default()
         .viewport_count(1)
         .scissor_count(1);
@@ -101,7 +136,7 @@ fn create(
         .line_width(1.0);
     let multisample = vk::PipelineMultisampleStateCreateInfo::default()
         .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-    let depth = map_depth_use(desc.depth);
+    let depth = map_depth_use(depth);
     let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
         .color_write_mask(vk::ColorComponentFlags::RGBA)];
     let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
@@ -111,9 +146,9 @@ fn create(
     let mut rendering = vk::PipelineRenderingCreateInfo::default()
         .color_attachment_formats(&colour_formats)
         .depth_attachment_format(DEPTH_FORMAT);
-    let info = vk::GraphicsPipelineCreateInfo::default()
-        .stages(&stages)
-        .vertex_input_state(&vertex_input)
+    let mut info = vk::GraphicsPipelineCreateInfo::default()
+        .stages(stages)
+        .vertex_input_state(vertex_input)
         .input_assembly_state(&input_assembly)
         .viewport_state(&viewport)
         .rasterization_state(&raster)
@@ -121,10 +156,14 @@ fn create(
         .depth_stencil_state(&depth)
         .color_blend_state(&blend)
         .dynamic_state(&dynamic)
-        .layout(desc.layout)
+        .layout(layout)
         .push_next(&mut rendering);
+    if control_points > 0 {
+        info = info.tessellation_state(&tessellation);
+    }
     // The modules and the layout are live on this device; every state struct, array and the
-    // chained rendering info outlive the call; the formats match the offscreen target's.
+    // chained rendering info outlive the call; the formats match the offscreen target's; a
+    // tessellated pipeline's device has tessellationShader enabled (its caller checks).
     // SAFETY: the device is live.
     unsafe {
         device

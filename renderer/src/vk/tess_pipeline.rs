@@ -8,10 +8,9 @@
 
 use ash::vk;
 
-use super::conv::{COLOUR_FORMAT, DEPTH_FORMAT};
 use super::device::Device;
 use super::error::{VkError, VkResultExt};
-use super::graphics_pipeline::{map_depth_use, DepthUse};
+use super::graphics_pipeline::{create_with_stages, DepthUse, Primitives};
 use super::pipeline::{BINDING_CLASSES, BINDING_IMAGERY, BINDING_NORMAL_MAPS};
 use super::shader::shader_module;
 
@@ -159,54 +158,14 @@ fn create(
         stage(vk::ShaderStageFlags::FRAGMENT, modules[3]),
     ];
     let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
-    let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
-        .topology(vk::PrimitiveTopology::PATCH_LIST);
-    let tessellation = vk::PipelineTessellationStateCreateInfo::default().patch_control_points(3);
-    let viewport = vk::PipelineViewportStateCreateInfo::default()
-        .viewport_count(1)
-        .scissor_count(1);
-    let raster = vk::PipelineRasterizationStateCreateInfo::default()
-        .polygon_mode(vk::PolygonMode::FILL)
-        .cull_mode(vk::CullModeFlags::NONE)
-        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-        .line_width(1.0);
-    let multisample = vk::PipelineMultisampleStateCreateInfo::default()
-        .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-    let depth = map_depth_use(DepthUse::NearestWrites);
-    let blend_attachments = [vk::PipelineColorBlendAttachmentState::default()
-        .color_write_mask(vk::ColorComponentFlags::RGBA)];
-    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-    let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-    let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-    let colour_formats = [COLOUR_FORMAT];
-    let mut rendering = vk::PipelineRenderingCreateInfo::default()
-        .color_attachment_formats(&colour_formats)
-        .depth_attachment_format(DEPTH_FORMAT);
-    let info = vk::GraphicsPipelineCreateInfo::default()
-        .stages(&stages)
-        .vertex_input_state(&vertex_input)
-        .input_assembly_state(&input_assembly)
-        .tessellation_state(&tessellation)
-        .viewport_state(&viewport)
-        .rasterization_state(&raster)
-        .multisample_state(&multisample)
-        .depth_stencil_state(&depth)
-        .color_blend_state(&blend)
-        .dynamic_state(&dynamic)
-        .layout(layout)
-        .push_next(&mut rendering);
-    // The modules and the layout are live on this device; every state struct, array and the
-    // chained rendering info outlive the call; the formats match the offscreen target's; the
-    // device has tessellationShader enabled (checked in `new`).
-    // SAFETY: the device is live.
-    unsafe {
-        device
-            .raw
-            .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
-    }
-    .map(|p| p[0])
-    .map_err(|(_, result)| VkError::Call {
-        call: "vkCreateGraphicsPipelines",
-        result,
-    })
+    // Triangles of three control points; `new` checked tessellationShader.
+    let patches = Primitives::Patches(3);
+    create_with_stages(
+        device,
+        layout,
+        DepthUse::NearestWrites,
+        &stages,
+        &vertex_input,
+        patches,
+    )
 }
