@@ -5,6 +5,7 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
+use super::access::{image_barrier, Access};
 use super::device::Device;
 use super::error::{VkError, VkResultExt};
 
@@ -119,6 +120,19 @@ impl Image2d {
             }
         }
         Ok(image)
+    }
+
+    /// Records a barrier over the image (mip 0, every layer) from the `prev` uses to the `next`
+    /// ([`image_barrier`]'s contract: `cmd` recording on `device`, the image live).
+    pub fn barrier(
+        &self,
+        device: &Device,
+        cmd: vk::CommandBuffer,
+        prev: &[Access],
+        next: &[Access],
+        discard: bool,
+    ) {
+        image_barrier(device, cmd, self.raw, self.desc.aspect, prev, next, discard);
     }
 
     /// Every mip and layer of the image.

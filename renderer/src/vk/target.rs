@@ -118,20 +118,16 @@ impl OffscreenTarget {
     /// last use of both was the previous frame's copy out of them ([`Self::record_readback`] or
     /// [`Self::record_blit_to`]); the clear must not overtake it.
     pub fn record_begin(&self, device: &Device, cmd: vk::CommandBuffer) {
-        image_barrier(
+        self.colour.barrier(
             device,
             cmd,
-            self.colour.raw,
-            self.colour.desc.aspect,
             &[Access::TransferRead],
             &[Access::ColourAttachmentWrite],
             true,
         );
-        image_barrier(
+        self.depth.barrier(
             device,
             cmd,
-            self.depth.raw,
-            self.depth.desc.aspect,
             &[Access::TransferRead],
             &[Access::DepthAttachmentReadWrite],
             true,
@@ -211,20 +207,16 @@ impl OffscreenTarget {
 
     /// Copies colour and depth into the readback buffers, visible to the host after the fence.
     pub fn record_readback(&self, device: &Device, cmd: vk::CommandBuffer) {
-        image_barrier(
+        self.colour.barrier(
             device,
             cmd,
-            self.colour.raw,
-            self.colour.desc.aspect,
             &[Access::ColourAttachmentWrite],
             &[Access::TransferRead],
             false,
         );
-        image_barrier(
+        self.depth.barrier(
             device,
             cmd,
-            self.depth.raw,
-            self.depth.desc.aspect,
             &[Access::DepthAttachmentReadWrite],
             &[Access::TransferRead],
             false,
@@ -275,11 +267,9 @@ impl OffscreenTarget {
         image: vk::Image,
         extent: vk::Extent2D,
     ) {
-        image_barrier(
+        self.colour.barrier(
             device,
             cmd,
-            self.colour.raw,
-            self.colour.desc.aspect,
             &[Access::ColourAttachmentWrite],
             &[Access::TransferRead],
             false,
