@@ -166,6 +166,49 @@ fn level_0_of_a_stores_layer_draws_what_the_raster_draped_in_memory_draws() {
     );
 }
 
+/// A terrain loaded after one with imagery draws without it: the renderer puts the placeholder
+/// textures back (a database switch from a store with a layer to a plain DEM).
+#[test]
+fn a_terrain_without_imagery_loaded_after_one_with_it_draws_none() {
+    let dir = tempfile::tempdir().unwrap();
+    let (path, ds, b) = store_with_imagery(dir.path());
+    let d = desc();
+    let (store, bake) = StreamedStore::open(&path, StreamParams::default()).expect("open");
+    let rects = d.start_up_rects(store.grid());
+    store
+        .wait_resident(&rects, Duration::from_secs(60))
+        .expect("coarsest level");
+    let mut r = TerrainRenderer::new(&d).expect("renderer");
+    r.load_source(Arc::new(store), bake, camera().position)
+        .expect("load");
+    let board_pixels = |rgba: &[u8]| {
+        rgba.chunks(4)
+            .filter(|p| {
+                COLOURS
+                    .iter()
+                    .any(|c| (0..3).all(|i| p[i].abs_diff(c[i]) <= 3))
+            })
+            .count()
+    };
+    r.render(&camera()).expect("render");
+    let with = board_pixels(&r.colour_rgba());
+    assert!(r.draped().0.is_some());
+    r.load_terrain(ds, b, camera().position).expect("load");
+    r.render(&camera()).expect("render");
+    let without = board_pixels(&r.colour_rgba());
+    let (draped, bytes) = r.draped();
+    let counters = r.validation_counters();
+    r.destroy();
+    assert_validation_clean(&counters);
+    eprintln!("board pixels: {with} with the layer, {without} after the plain terrain");
+    assert!(
+        with > (W * H / 2) as usize && without == 0,
+        "{with} then {without}"
+    );
+    assert!(draped.is_none(), "nothing draped on the plain terrain");
+    assert!(bytes < 64 * 1024, "placeholders only: {bytes} bytes");
+}
+
 fn srgb_to_linear(c: u8) -> f64 {
     let f = f64::from(c) / 255.0;
     if f <= 0.04045 {

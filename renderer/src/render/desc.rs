@@ -64,6 +64,9 @@ pub struct RendererDesc {
     /// Device bytes the draped textures may take (`--drape-mb`): also what a store's imagery
     /// layer may fill when no `--imagery` is given.
     pub drape_budget_bytes: u64,
+    /// Drape a store's imagery layer when the source has one (and no `--imagery` is given);
+    /// off only to measure what draping costs.
+    pub drape_store_imagery: bool,
 }
 
 impl Default for RendererDesc {
@@ -96,6 +99,7 @@ impl Default for RendererDesc {
             drape: None,
             drape_budget_bytes: (crate::render::drape_textures::DEFAULT_DRAPE_MIB * 1048576.0)
                 as u64,
+            drape_store_imagery: true,
         }
     }
 }

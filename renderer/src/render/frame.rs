@@ -405,7 +405,10 @@ impl TerrainRenderer {
             Some(input) => Some(register(&input, &grid, max_side).map_err(VkError::Input)?),
             None => None,
         };
-        if let Some(layer) = source.imagery_layer() {
+        let layer = source
+            .imagery_layer()
+            .filter(|_| self.desc.drape_store_imagery);
+        if let Some(layer) = layer {
             match rasters.as_mut().filter(|r| r.imagery.is_some()) {
                 Some(_) => eprintln!(
                     "note: --imagery is draped instead of the store's imagery layer {}",

@@ -374,7 +374,8 @@ fn run_flight(
     let mut costs = None;
     if a.feature_costs {
         let base = lanes[0].config;
-        let features = features::features_on(lanes[0].renderer.desc());
+        let r = &lanes[0].renderer;
+        let features = features::features_on(r.desc(), r.draped().0.is_some());
         for (v, f) in features.iter().enumerate() {
             let mut desc = lane_desc(a, p, base);
             desc.drape = drape.clone();

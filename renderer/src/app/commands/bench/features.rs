@@ -1,7 +1,7 @@
 //! What each look feature costs (`aerie bench --feature-costs`): the first measured
 //! configuration is drawn again, on the same frames, once with each feature off — the full
 //! look's land cover, sky and atmosphere (the plain look instead), the normal maps, the draped
-//! rasters when given — and the terrain pass's GPU time of each is set against the
+//! rasters when given or a store's imagery layer when drawn — and the terrain pass's GPU time of each is set against the
 //! configuration with everything on; with normal maps, once more with their texels computed on
 //! the other side (`--normals cpu|gpu`), and each lane's normal costs (CPU time and staged bytes,
 //! the GPU pass's time). Plain data in and out; the bench renders the lanes.
@@ -16,7 +16,7 @@ pub enum FeatureOff {
     LookPlain,
     /// Per-vertex normals instead of the full-resolution normal maps.
     NoNormalMaps,
-    /// No draped imagery or land-cover raster.
+    /// No draped imagery or land-cover raster (nor a store's imagery layer).
     NoDrape,
     /// The normal maps' texels computed on the other side (not a feature off: the other way).
     NormalsOn(NormalSource),
@@ -50,14 +50,18 @@ impl FeatureOff {
         match self {
             Self::LookPlain => desc.look = Look::Plain,
             Self::NoNormalMaps => desc.normal_maps = false,
-            Self::NoDrape => desc.drape = None,
+            Self::NoDrape => {
+                desc.drape = None;
+                desc.drape_store_imagery = false;
+            }
             Self::NormalsOn(source) => desc.normal_source = source,
         }
     }
 }
 
-/// The features the base renderer has on, each to be turned off once.
-pub fn features_on(base: &RendererDesc) -> Vec<FeatureOff> {
+/// The features the base renderer has on, each to be turned off once; `draped`: it draped
+/// something (rasters given, or a store's imagery layer).
+pub fn features_on(base: &RendererDesc, draped: bool) -> Vec<FeatureOff> {
     let mut v = Vec::new();
     if base.look != Look::Plain {
         v.push(FeatureOff::LookPlain);
@@ -69,7 +73,7 @@ pub fn features_on(base: &RendererDesc) -> Vec<FeatureOff> {
             NormalSource::Gpu => NormalSource::Cpu,
         }));
     }
-    if base.drape.is_some() {
+    if draped {
         v.push(FeatureOff::NoDrape);
     }
     v
@@ -235,7 +239,7 @@ mod tests {
             ..RendererDesc::default()
         };
         assert_eq!(
-            features_on(&desc),
+            features_on(&desc, false),
             [
                 FeatureOff::LookPlain,
                 FeatureOff::NoNormalMaps,
@@ -246,7 +250,7 @@ mod tests {
         FeatureOff::NormalsOn(NormalSource::Gpu).apply(&mut gpu);
         assert_eq!(gpu.normal_source, NormalSource::Gpu);
         assert_eq!(
-            features_on(&gpu).last(),
+            features_on(&gpu, false).last(),
             Some(&FeatureOff::NormalsOn(NormalSource::Cpu))
         );
         let mut plain = RendererDesc {
@@ -254,12 +258,13 @@ mod tests {
             normal_maps: false,
             ..RendererDesc::default()
         };
-        assert!(features_on(&plain).is_empty());
+        assert!(features_on(&plain, false).is_empty());
+        assert_eq!(features_on(&plain, true), [FeatureOff::NoDrape]);
         FeatureOff::NoNormalMaps.apply(&mut desc);
         FeatureOff::LookPlain.apply(&mut desc);
         assert!(!desc.normal_maps && desc.look == Look::Plain);
         FeatureOff::NoDrape.apply(&mut plain);
-        assert!(plain.drape.is_none());
+        assert!(plain.drape.is_none() && !plain.drape_store_imagery);
 
         let mut c = FeatureCosts::new(
             "bounded τ=1".into(),
