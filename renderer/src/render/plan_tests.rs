@@ -520,6 +520,16 @@ fn prefetch_follows_the_motion_only_and_spares_recent_draws() {
         "prefetch uploads only tiles not drawn this frame"
     );
     assert_eq!(ahead.count() as u32, moving.stats.prefetched);
+    // The view ahead is selected once every PREFETCH_RESELECT_FRAMES moving frames; the
+    // frames between keep prefetching from it.
+    assert_eq!(st.prefetch_selections, 1);
+    let mut prefetched = 0;
+    for f in 3..3 + 2 * PREFETCH_RESELECT_FRAMES {
+        let p = refining_frame(&mut st, f, &cam(560.0 - 40.0 * (f - 2) as f64), 20.0, BIG);
+        prefetched += p.stats.prefetched;
+    }
+    assert_eq!(st.prefetch_selections, 3, "frames 2, 6 and 10 select ahead");
+    assert!(prefetched > 0, "the frames between still prefetch");
 
     // Pools exactly as large as one frame needs: after that frame every slot was drawn in the
     // last two frames, so a prefetch finds no victim.
