@@ -526,6 +526,18 @@ fn import_writes_the_layer_render_draws_it_and_errors_name_the_cause() {
         ],
         &["--imagery-texels 3"],
     );
+    refused(
+        &[
+            "import",
+            &s(&dem),
+            "--out",
+            &s(&store),
+            "--overwrite",
+            "--imagery-texels",
+            "2",
+        ],
+        &["--imagery"],
+    );
     let far = demo_board(dir.path(), 30.0);
     refused(
         &[

@@ -53,7 +53,7 @@ pub struct ImportArgs {
     pub imagery: Vec<PathBuf>,
     /// Imagery texels per terrain sample per axis (1, 2 or 4); by default the finest
     /// raster's resolution, rounded up to a power of two.
-    #[arg(long)]
+    #[arg(long, requires = "imagery")]
     pub imagery_texels: Option<u32>,
     /// Replace an existing store (or, adding imagery to a store, its imagery layer) at --out.
     #[arg(long)]
