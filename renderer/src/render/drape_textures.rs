@@ -18,6 +18,7 @@ use aerie_terrain::store::{choose_level, read_level, ImageryLayer};
 
 use crate::vk::access::image_range_barrier;
 use crate::vk::access::Access;
+use crate::vk::conv::map_texel_copy;
 use crate::vk::frame_context::FrameRing;
 use crate::vk::image::{Image2d, ImageDesc};
 use crate::vk::{Buffer, Device, VkError, VkResultExt};
@@ -395,26 +396,8 @@ impl DrapeTextures {
             .map(|(m, l)| (self.imagery.raw, m as u32, l));
         for (image, mip, (w, h, bytes)) in levels.chain([(self.classes.raw, 0, classes)]) {
             map[offset..offset + bytes.len()].copy_from_slice(bytes);
-            copies.push((
-                image,
-                vk::BufferImageCopy {
-                    buffer_offset: offset as u64,
-                    buffer_row_length: 0,
-                    buffer_image_height: 0,
-                    image_subresource: vk::ImageSubresourceLayers {
-                        aspect_mask: vk::ImageAspectFlags::COLOR,
-                        mip_level: mip,
-                        base_array_layer: 0,
-                        layer_count: 1,
-                    },
-                    image_offset: vk::Offset3D::default(),
-                    image_extent: vk::Extent3D {
-                        width: *w as u32,
-                        height: *h as u32,
-                        depth: 1,
-                    },
-                },
-            ));
+            let size = [*w as u32, *h as u32];
+            copies.push((image, map_texel_copy(offset as u64, mip, 0, [0, 0], size)));
             // Copies start at multiples of 4 bytes (the texel size of RGBA8; R8 needs 1).
             offset += bytes.len().div_ceil(4) * 4;
         }

@@ -23,6 +23,7 @@ use crate::render::normal_map::{gpu_normal_jobs, level_spacing, NormalJob};
 use crate::render::upload::record_image_copies;
 use crate::vk::access::{image_barrier, memory_barrier, Access};
 use crate::vk::compute_pipeline::ComputePipeline;
+use crate::vk::conv::map_texel_copy;
 use crate::vk::frame_context::{FrameContext, FrameRing};
 use crate::vk::{Buffer, Device, VkError};
 
@@ -117,26 +118,7 @@ impl NormalBatch {
     /// The copies of every job's texels from the buffer into the normal texture.
     fn copies(&self) -> Vec<vk::BufferImageCopy> {
         (self.jobs.iter().zip(&self.offsets))
-            .map(|(j, &offset)| {
-                vk::BufferImageCopy::default()
-                    .buffer_offset(offset as u64 * 4)
-                    .image_subresource(vk::ImageSubresourceLayers {
-                        aspect_mask: vk::ImageAspectFlags::COLOR,
-                        mip_level: 0,
-                        base_array_layer: j.level,
-                        layer_count: 1,
-                    })
-                    .image_offset(vk::Offset3D {
-                        x: j.texel[0] as i32,
-                        y: j.texel[1] as i32,
-                        z: 0,
-                    })
-                    .image_extent(vk::Extent3D {
-                        width: j.size[0],
-                        height: j.size[1],
-                        depth: 1,
-                    })
-            })
+            .map(|(j, &offset)| map_texel_copy(offset as u64 * 4, 0, j.level, j.texel, j.size))
             .collect()
     }
 }

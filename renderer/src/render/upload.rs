@@ -14,6 +14,7 @@ use crate::render::normal_map::NormalTexel;
 use crate::render::overlay_pass::Panel;
 use crate::render::plan::FramePlan;
 use crate::vk::access::{image_barrier, memory_barrier, Access};
+use crate::vk::conv::map_texel_copy;
 use crate::vk::frame_context::{FrameContext, FrameRing};
 use crate::vk::staging::StagingRing;
 use crate::vk::{Device, VkError};
@@ -75,24 +76,7 @@ pub fn stage_normals(
 
 /// The copy of `job`, staged at `offset`, into its texel rectangle and layer.
 pub fn buffer_image_copy(offset: u64, job: &ImageUpload) -> vk::BufferImageCopy {
-    vk::BufferImageCopy::default()
-        .buffer_offset(offset)
-        .image_subresource(vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: job.layer,
-            layer_count: 1,
-        })
-        .image_offset(vk::Offset3D {
-            x: job.texel[0] as i32,
-            y: job.texel[1] as i32,
-            z: 0,
-        })
-        .image_extent(vk::Extent3D {
-            width: job.size[0],
-            height: job.size[1],
-            depth: 1,
-        })
+    map_texel_copy(offset, 0, job.layer, job.texel, job.size)
 }
 
 /// Copies staged regions into a sampled texture: SHADER_READ_ONLY → TRANSFER_DST (contents kept,

@@ -177,6 +177,35 @@ pub fn subresource_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRa
     }
 }
 
+/// A copy of `size` colour texels staged at buffer byte `offset` (rows tightly packed) into
+/// mip `mip`, array layer `layer` of an image at texel `texel`.
+pub fn map_texel_copy(
+    offset: u64,
+    mip: u32,
+    layer: u32,
+    texel: [u32; 2],
+    size: [u32; 2],
+) -> vk::BufferImageCopy {
+    vk::BufferImageCopy::default()
+        .buffer_offset(offset)
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: mip,
+            base_array_layer: layer,
+            layer_count: 1,
+        })
+        .image_offset(vk::Offset3D {
+            x: texel[0] as i32,
+            y: texel[1] as i32,
+            z: 0,
+        })
+        .image_extent(vk::Extent3D {
+            width: size[0],
+            height: size[1],
+            depth: 1,
+        })
+}
+
 /// The aspect a view of (or barrier on) an image of `format` covers.
 pub fn map_format_aspect(format: vk::Format) -> vk::ImageAspectFlags {
     use vk::Format as F;

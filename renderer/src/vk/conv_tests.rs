@@ -429,3 +429,30 @@ fn composite_alpha_prefers_opaque() {
     );
     assert_eq!(choose_composite_alpha(C::empty()), C::OPAQUE);
 }
+
+#[test]
+fn a_texel_copy_names_its_mip_layer_rectangle_and_offset() {
+    let c = map_texel_copy(4096, 2, 5, [17, 3], [64, 8]);
+    assert_eq!(c.buffer_offset, 4096);
+    assert_eq!(
+        (c.buffer_row_length, c.buffer_image_height),
+        (0, 0),
+        "rows packed"
+    );
+    let s = c.image_subresource;
+    assert_eq!(
+        (
+            s.aspect_mask,
+            s.mip_level,
+            s.base_array_layer,
+            s.layer_count
+        ),
+        (vk::ImageAspectFlags::COLOR, 2, 5, 1)
+    );
+    assert_eq!(
+        (c.image_offset.x, c.image_offset.y, c.image_offset.z),
+        (17, 3, 0)
+    );
+    let e = c.image_extent;
+    assert_eq!((e.width, e.height, e.depth), (64, 8, 1));
+}
