@@ -5,6 +5,7 @@ pub mod bins;
 pub mod cigi_host;
 pub mod drape_fixtures;
 pub mod imports;
+pub mod ridges;
 
 pub use bins::{aerie_bin, aerie_send_bin, bin_dir};
 

@@ -13,33 +13,12 @@ use aerie::render::normal_map::{decode_normal, normal_texels, NormalFootprint};
 use aerie::render::plan::PlanState;
 use aerie::terrain::source::{InMemoryTerrain, TerrainSource};
 use aerie::terrain::source::{NotResident, SampleRect, SampleWant, SourceGrid};
-use aerie::terrain::Heightfield;
+use aerie_tests::ridges::*;
 use aerie_tests::*;
 use glam::DVec3;
 
 const W: u32 = 256;
 const H: u32 = 144;
-const SPACING: f64 = 30.0;
-const N: usize = 1024;
-
-/// Ridge country: long ridges carrying gullies 18–23 samples across, which level 0 resolves,
-/// the coarse levels' point samples alias and their footprint means keep.
-fn height(c: usize, r: usize) -> f32 {
-    let (x, y) = (c as f64, r as f64);
-    (800.0
-        + 400.0 * (x / 80.0).sin() * (y / 110.0).cos()
-        + 60.0 * (x / 2.9).sin() * (y / 3.7).sin()) as f32
-}
-
-fn ridges() -> Heightfield {
-    let mut hf = synthetic(N, N, SPACING, 0.0, &[]);
-    for r in 0..N {
-        for c in 0..N {
-            hf.heights[r * N + c] = height(c, r);
-        }
-    }
-    hf
-}
 
 fn camera(pos: [f64; 3], hpr_deg: [f64; 3], fov_deg: f64) -> Camera {
     Camera::new(
