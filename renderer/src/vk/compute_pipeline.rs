@@ -5,7 +5,8 @@
 use ash::vk;
 
 use super::device::Device;
-use super::error::{VkError, VkResultExt};
+use super::error::VkError;
+use super::set_layout::{create_set_and_layout, set_binding};
 use super::shader::shader_module;
 
 pub struct ComputePipeline {
@@ -45,30 +46,10 @@ impl ComputePipeline {
         let stage = vk::ShaderStageFlags::COMPUTE;
         let bindings: Vec<_> = bindings
             .iter()
-            .map(|&(binding, ty)| {
-                vk::DescriptorSetLayoutBinding::default()
-                    .binding(binding)
-                    .descriptor_type(ty)
-                    .descriptor_count(1)
-                    .stage_flags(stage)
-            })
+            .map(|&(binding, ty)| set_binding(binding, ty, 1, stage))
             .collect();
-        let set_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
-        // SAFETY: the device is live; `set_info` and `bindings` outlive the call.
-        self.set_layout = unsafe { device.raw.create_descriptor_set_layout(&set_info, None) }
-            .call("vkCreateDescriptorSetLayout")?;
-        let ranges = [vk::PushConstantRange {
-            stage_flags: stage,
-            offset: 0,
-            size: push_bytes,
-        }];
-        let set_layouts = [self.set_layout];
-        let layout_info = vk::PipelineLayoutCreateInfo::default()
-            .set_layouts(&set_layouts)
-            .push_constant_ranges(&ranges);
-        // SAFETY: the device and the set layout are live; the arrays outlive the call.
-        self.layout = unsafe { device.raw.create_pipeline_layout(&layout_info, None) }
-            .call("vkCreatePipelineLayout")?;
+        let push = Some((stage, push_bytes));
+        (self.set_layout, self.layout) = create_set_and_layout(device, &bindings, push)?;
         let module = shader_module(device, spv)?;
         let stage_info = vk::PipelineShaderStageCreateInfo::default()
             .stage(stage)

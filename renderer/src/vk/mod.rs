@@ -25,6 +25,7 @@ pub mod graphics_pipeline;
 pub mod image;
 pub mod instance;
 pub mod pipeline;
+pub mod set_layout;
 pub mod shader;
 pub mod sky_pipeline;
 pub mod staging;

@@ -8,6 +8,7 @@ use ash::vk;
 use super::device::Device;
 use super::error::{VkError, VkResultExt};
 use super::graphics_pipeline::{create_graphics_pipeline, DepthUse, GraphicsPipelineDesc};
+use super::set_layout::{create_set_and_layout, set_binding};
 
 const TERRAIN_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/terrain.vert.spv"));
 const TERRAIN_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/terrain.frag.spv"));
@@ -80,52 +81,28 @@ impl TerrainPipeline {
             unsafe { device.raw.create_sampler(&normal_info, None) }.call("vkCreateSampler")?;
 
         let vs_fs = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        use vk::DescriptorType as T;
+        use vk::ShaderStageFlags as S;
         let bindings = [
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(BINDING_FRAME)
-                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
-                .descriptor_count(1)
-                .stage_flags(vs_fs),
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(BINDING_INSTANCES)
-                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::VERTEX),
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(BINDING_CLIPMAP)
-                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::VERTEX),
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(BINDING_POOLS)
-                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .descriptor_count(POOL_BINDINGS)
-                .stage_flags(vk::ShaderStageFlags::VERTEX),
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(BINDING_NORMAL_MAPS)
-                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::FRAGMENT),
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(BINDING_IMAGERY)
-                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::FRAGMENT),
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(BINDING_CLASSES)
-                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .descriptor_count(1)
-                .stage_flags(vk::ShaderStageFlags::FRAGMENT),
+            set_binding(BINDING_FRAME, T::UNIFORM_BUFFER, 1, vs_fs),
+            set_binding(BINDING_INSTANCES, T::STORAGE_BUFFER, 1, S::VERTEX),
+            set_binding(BINDING_CLIPMAP, T::COMBINED_IMAGE_SAMPLER, 1, S::VERTEX),
+            set_binding(
+                BINDING_POOLS,
+                T::COMBINED_IMAGE_SAMPLER,
+                POOL_BINDINGS,
+                S::VERTEX,
+            ),
+            set_binding(
+                BINDING_NORMAL_MAPS,
+                T::COMBINED_IMAGE_SAMPLER,
+                1,
+                S::FRAGMENT,
+            ),
+            set_binding(BINDING_IMAGERY, T::COMBINED_IMAGE_SAMPLER, 1, S::FRAGMENT),
+            set_binding(BINDING_CLASSES, T::COMBINED_IMAGE_SAMPLER, 1, S::FRAGMENT),
         ];
-        let set_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
-        // SAFETY: the device is live; `bindings` outlives the call and has distinct numbers.
-        self.set_layout = unsafe { device.raw.create_descriptor_set_layout(&set_info, None) }
-            .call("vkCreateDescriptorSetLayout")?;
-        let set_layouts = [self.set_layout];
-        let layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-        // SAFETY: the device is live; the set layout was just created on it.
-        self.layout = unsafe { device.raw.create_pipeline_layout(&layout_info, None) }
-            .call("vkCreatePipelineLayout")?;
+        (self.set_layout, self.layout) = create_set_and_layout(device, &bindings, None)?;
 
         self.raw = create_graphics_pipeline(
             device,

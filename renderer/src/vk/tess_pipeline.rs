@@ -9,9 +9,10 @@
 use ash::vk;
 
 use super::device::Device;
-use super::error::{VkError, VkResultExt};
+use super::error::VkError;
 use super::graphics_pipeline::{create_with_stages, DepthUse, Primitives};
 use super::pipeline::{BINDING_CLASSES, BINDING_IMAGERY, BINDING_NORMAL_MAPS};
+use super::set_layout::{create_set_and_layout, set_binding};
 use super::shader::shader_module;
 
 const TESS_VERT: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/terrain_tess.vert.spv"));
@@ -53,13 +54,7 @@ impl TessPipeline {
 
     fn create(&mut self, device: &Device) -> Result<(), VkError> {
         use vk::ShaderStageFlags as S;
-        let binding = |b: u32, ty: vk::DescriptorType, stages: S| {
-            vk::DescriptorSetLayoutBinding::default()
-                .binding(b)
-                .descriptor_type(ty)
-                .descriptor_count(1)
-                .stage_flags(stages)
-        };
+        let binding = |b: u32, ty: vk::DescriptorType, stages: S| set_binding(b, ty, 1, stages);
         let bindings = [
             binding(
                 TESS_BINDING_FRAME,
@@ -93,15 +88,7 @@ impl TessPipeline {
                 S::FRAGMENT,
             ),
         ];
-        let set_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
-        // SAFETY: the device is live; `bindings` outlives the call and has distinct numbers.
-        self.set_layout = unsafe { device.raw.create_descriptor_set_layout(&set_info, None) }
-            .call("vkCreateDescriptorSetLayout")?;
-        let set_layouts = [self.set_layout];
-        let layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-        // SAFETY: the device is live; the set layout was just created on it.
-        self.layout = unsafe { device.raw.create_pipeline_layout(&layout_info, None) }
-            .call("vkCreatePipelineLayout")?;
+        (self.set_layout, self.layout) = create_set_and_layout(device, &bindings, None)?;
         let mut modules = Vec::new();
         let made = [TESS_VERT, TESS_TESC, TESS_TESE, TERRAIN_FRAG]
             .iter()
