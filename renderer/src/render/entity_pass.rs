@@ -248,9 +248,9 @@ impl EntityPass {
         }
         target.begin_rendering(d, cmd, None);
         // The pipeline, the vertex, index, instance and indirect buffers are live, and the
-        // indirect buffer holds `draw_count` commands written before submission.
-        // SAFETY: `cmd` is recording inside the rendering begun on the target (the terrain
-        // pass left its views in the attachment layouts).
+        // indirect buffer holds `draw_count` commands written before submission; the terrain
+        // pass left the target's views in the attachment layouts.
+        // SAFETY: `cmd` is recording inside the rendering begun on the target.
         unsafe {
             d.raw
                 .cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline.raw);
