@@ -2,9 +2,10 @@
 // mipmapped: the sampler returns linear light) and land-cover classes (R8_UINT, 255 = none),
 // registered to the terrain's grid so that they cover its cells: the grid position `g`
 // (level-0 samples, v_grid) is at uv = (g + 0.5) / grid size, whatever the texture's size.
-// The imagery of a store's layer is its level L at k texels per sample (frame.clipmap.z =
-// L + 1, w = k): texel t centred at g = (t + 0.5)·2^L/k − 0.5, so uv = (g + 0.5)·k /
-// (2^L · texture size) — the texture spans a little more than the grid at coarse levels.
+// The imagery texture spans frame.clipmap.zw level-0 samples (`DrapedRasters::imagery_span`):
+// the grid for a raster draped here; for level L of a store's layer at k texels per sample
+// (texel t centred at g = (t + 0.5)·2^L/k − 0.5) its texels · 2^L/k, a little more than the
+// grid at coarse levels.
 // Without rasters both are 1×1 placeholders (transparent, no class).
 
 layout(set = 0, binding = 5) uniform sampler2D drape_imagery_tex;
@@ -14,13 +15,7 @@ const uint DRAPE_NO_CLASS = 255u;
 
 vec2 drape_uv(vec2 grid) { return (grid + 0.5) / vec2(frame.grid_size.xy); }
 
-vec2 drape_imagery_uv(vec2 grid) {
-    if (frame.clipmap.z > 0) {
-        float samples_per_texel = float(1 << (frame.clipmap.z - 1)) / float(frame.clipmap.w);
-        return (grid + 0.5) / (vec2(textureSize(drape_imagery_tex, 0)) * samples_per_texel);
-    }
-    return drape_uv(grid);
-}
+vec2 drape_imagery_uv(vec2 grid) { return (grid + 0.5) / vec2(frame.clipmap.zw); }
 
 // Linear RGB and coverage of the imagery at grid position `grid`.
 vec4 drape_imagery(vec2 grid) { return texture(drape_imagery_tex, drape_imagery_uv(grid)); }

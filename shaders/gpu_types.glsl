@@ -8,7 +8,7 @@ struct FrameUniforms {
     vec4 sky_colour;             // rgb: linear sky/haze colour; w: haze distance scale (m)
     vec4 grid_spacing;           // x: spacing E-W (m); y: spacing N-S (m); z: eye height (m); w: curvature 1/(2R) or 0
     ivec4 grid_size;             // x, y: valid samples E-W, N-S; z: quads per tile side (m-1); w: flags (1 debug tiles, 2 full look, 4 class view, 8 geographic)
-    ivec4 clipmap;               // x: level texture side (texels); y: level count; z: imagery = level z-1 of a store's layer (0: draped here); w: its texels per sample
+    ivec4 clipmap;               // x: level texture side (texels); y: level count; z, w: level-0 samples the imagery texture spans (E-W, N-S)
     // The look (render/atmosphere.rs, render/uniforms.rs): sky, sun, fog, noise anchor.
     vec4 eye_world;              // xy: eye E, N modulo the noise period (m); z: eye height above sea level (m; on the ellipsoid, above it in the data's datum); w: fog scale height (m)
     vec4 sun_colour;             // rgb: direct sunlight, linear (1 = overhead, clear air); w: cos of the sun disc radius

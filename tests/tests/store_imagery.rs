@@ -340,6 +340,10 @@ fn refused(args: &[&str], says: &[&str]) {
     }
 }
 
+fn strs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
+
 fn json(path: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     serde_json::from_str(&text).unwrap()
@@ -509,23 +513,23 @@ fn import_writes_the_layer_render_draws_it_and_errors_name_the_cause() {
     std::fs::write(&layer, &good).unwrap();
 
     // Adding to a store that has a layer needs --overwrite; bad k and no overlap are named.
+    let add = |tif: &Path, out: &Path, extra: &[&str]| -> Vec<String> {
+        let mut v = vec![
+            "import".into(),
+            "--imagery".into(),
+            s(tif),
+            "--out".into(),
+            s(out),
+        ];
+        v.extend(extra.iter().map(|e| e.to_string()));
+        v
+    };
     refused(
-        &["import", "--imagery", &s(&board), "--out", &s(&store)],
+        &strs(&add(&board, &store, &[])),
         &["aerie-imagery", "--overwrite"],
     );
-    refused(
-        &[
-            "import",
-            "--imagery",
-            &s(&board),
-            "--out",
-            &s(&store),
-            "--overwrite",
-            "--imagery-texels",
-            "3",
-        ],
-        &["--imagery-texels 3"],
-    );
+    let k3 = add(&board, &store, &["--overwrite", "--imagery-texels", "3"]);
+    refused(&strs(&k3), &["--imagery-texels 3"]);
     refused(
         &[
             "import",
@@ -539,37 +543,12 @@ fn import_writes_the_layer_render_draws_it_and_errors_name_the_cause() {
         &["--imagery"],
     );
     let far = demo_board(dir.path(), 30.0);
-    refused(
-        &[
-            "import",
-            "--imagery",
-            &s(&far),
-            "--out",
-            &s(&store),
-            "--overwrite",
-        ],
-        &["no overlap", "board_30.tif"],
-    );
-    refused(
-        &[
-            "import",
-            "--imagery",
-            &s(&board),
-            "--out",
-            &s(&dir.path().join("none.aerie")),
-        ],
-        &["no store there"],
-    );
-    let (out, _) = ok(&[
-        "import",
-        "--imagery",
-        &s(&board),
-        "--out",
-        &s(&store),
-        "--overwrite",
-        "--imagery-texels",
-        "2",
-    ]);
+    let off = add(&far, &store, &["--overwrite"]);
+    refused(&strs(&off), &["no overlap", "board_30.tif"]);
+    let none = add(&board, &dir.path().join("none.aerie"), &[]);
+    refused(&strs(&none), &["no store there"]);
+    let k2 = add(&board, &store, &["--overwrite", "--imagery-texels", "2"]);
+    let (out, _) = ok(&strs(&k2));
     assert!(out.contains("2 texels/sample"), "{out}");
     // Replacing the store without --imagery removes the old store's layer, which it would refuse.
     let (_, err) = ok(&["import", &s(&dem), "--out", &s(&store), "--overwrite"]);

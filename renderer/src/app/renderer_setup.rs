@@ -235,13 +235,10 @@ pub fn drape_json(r: &crate::render::frame::TerrainRenderer) -> serde_json::Valu
     let (Some(rasters), bytes) = r.draped() else {
         return serde_json::Value::Null;
     };
-    let none = crate::render::drape_textures::DrapeInput {
-        imagery: Vec::new(),
-        landcover: None,
-        table: [aerie_terrain::drape::CODE_NONE; 256],
-        budget_bytes: r.desc().drape_budget_bytes,
-    };
-    let input = r.desc().drape.as_deref().unwrap_or(&none);
+    // Without --imagery/--landcover only a store's imagery layer was draped: no files, no
+    // code table (every code unknown, none counted: there is no land-cover raster).
+    let input = r.desc().drape.as_deref();
+    let table = input.map_or([aerie_terrain::drape::CODE_NONE; 256], |i| i.table);
     let size = |s: &aerie_terrain::drape::DrapeSize| serde_json::json!({"texels": [s.width, s.height], "texels_per_sample": s.texels_per_sample});
     let unknown: serde_json::Map<String, serde_json::Value> = rasters
         .code_counts
@@ -250,21 +247,21 @@ pub fn drape_json(r: &crate::render::frame::TerrainRenderer) -> serde_json::Valu
             s.codes
                 .iter()
                 .enumerate()
-                .filter(|&(c, &n)| n > 0 && input.table[c] == aerie_terrain::drape::CODE_NONE)
+                .filter(|&(c, &n)| n > 0 && table[c] == aerie_terrain::drape::CODE_NONE)
                 .map(|(c, &n)| (c.to_string(), n.into()))
                 .collect()
         })
         .unwrap_or_default();
     serde_json::json!({
-        "imagery": input.imagery.iter().map(|r| r.path.clone()).collect::<Vec<_>>(),
+        "imagery": input.map_or(Vec::new(), |i| i.imagery.iter().map(|r| r.path.clone()).collect()),
         "imagery_texture": rasters.imagery.as_ref().map(|(s, _)| size(s)),
-        "landcover": input.landcover.as_ref().map(|r| r.path.clone()),
+        "landcover": input.and_then(|i| i.landcover.as_ref()).map(|r| r.path.clone()),
         "landcover_texture": rasters.classes.as_ref().map(|(s, _)| size(s)),
         "landcover_covered_texels": rasters.code_counts.as_ref().map(|s| s.covered),
-        "unknown_code_texels": rasters.unknown_code_texels(&input.table),
+        "unknown_code_texels": rasters.unknown_code_texels(&table),
         "unknown_codes": unknown,
         "gpu_bytes": bytes,
-        "budget_bytes": input.budget_bytes,
+        "budget_bytes": input.map_or(r.desc().drape_budget_bytes, |i| i.budget_bytes),
         "capped": rasters.capped,
         "imagery_layer": rasters.layer_level.as_ref().map(|l| serde_json::json!({
             "layer": l.layer.display().to_string(),

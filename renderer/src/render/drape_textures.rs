@@ -160,6 +160,17 @@ pub fn drape_layer_level(
 }
 
 impl DrapedRasters {
+    /// The level-0 samples the imagery texture spans per axis when that is not the grid: level
+    /// L of a store's layer at k texels per sample spans its texels · 2^L / k (a whole number:
+    /// the level's texels are ⌈samples · k / 2^L⌉).
+    pub fn imagery_span(&self) -> Option<[u64; 2]> {
+        let l = self.layer_level.as_ref()?;
+        let (size, _) = self.imagery.as_ref()?;
+        let span =
+            |texels: usize| (texels as u64 * (1u64 << l.level)) / u64::from(l.texels_per_sample);
+        Some([span(size.width), span(size.height)])
+    }
+
     /// Land-cover texels whose code the table does not know (drawn with the derived classes).
     pub fn unknown_code_texels(&self, table: &[u8; 256]) -> u64 {
         self.code_counts.as_ref().map_or(0, |s| {
@@ -474,3 +485,51 @@ impl DrapeTextures {
 
 /// The input shared by every renderer a command makes.
 pub type SharedDrapeInput = Arc<DrapeInput>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Level L of a layer at k per sample over `w × h` samples, as `drape_layer_level` puts it.
+    fn layer(w: usize, h: usize, k: u32, level: u32) -> DrapedRasters {
+        let (tw, th) = (
+            (w * k as usize).div_ceil(1 << level),
+            (h * k as usize).div_ceil(1 << level),
+        );
+        DrapedRasters {
+            imagery: Some((
+                DrapeSize {
+                    width: tw,
+                    height: th,
+                    texels_per_sample: k >> level,
+                },
+                Vec::new(),
+            )),
+            layer_level: Some(LayerLevel {
+                layer: "x.aerie-imagery".into(),
+                level,
+                texels_per_sample: k,
+            }),
+            ..DrapedRasters::default()
+        }
+    }
+
+    #[test]
+    fn a_layer_level_spans_its_texels_in_samples_and_a_drape_spans_the_grid() {
+        // 129 × 100 samples: level 3 at k = 2 has 33 × 25 texels of 4 samples.
+        assert_eq!(layer(129, 100, 2, 3).imagery_span(), Some([132, 100]));
+        // Finer than a sample (k = 4, level 1): exactly the grid.
+        assert_eq!(layer(129, 100, 4, 1).imagery_span(), Some([129, 100]));
+        assert_eq!(layer(129, 100, 1, 0).imagery_span(), Some([129, 100]));
+        assert_eq!(layer(1201, 1201, 2, 7).imagery_span(), Some([1216, 1216]));
+        let drape = DrapedRasters {
+            layer_level: None,
+            ..layer(129, 100, 2, 0)
+        };
+        assert_eq!(
+            drape.imagery_span(),
+            None,
+            "an in-memory drape spans the grid"
+        );
+    }
+}

@@ -606,10 +606,9 @@ impl TerrainRenderer {
         if self.desc.normal_maps && !tess_mode {
             uniforms.grid_size[3] |= FLAG_NORMAL_MAP;
         }
-        if let Some(l) = self.draped.as_ref().and_then(|d| d.layer_level.as_ref()) {
-            // shaders/drape.glsl: the imagery is level L of a store's layer at k per sample.
-            uniforms.clipmap[2] = l.level as i32 + 1;
-            uniforms.clipmap[3] = l.texels_per_sample as i32;
+        if let Some(span) = self.draped.as_ref().and_then(|d| d.imagery_span()) {
+            // shaders/drape.glsl: the level-0 samples the imagery texture spans.
+            uniforms.clipmap[2..4].copy_from_slice(&span.map(|n| n as i32));
         }
         let overlay = self.overlay.as_ref();
         let staging = frame.staging();

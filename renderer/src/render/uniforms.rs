@@ -167,11 +167,12 @@ pub fn frame_uniforms(
             clipmap.tile_quads as i32,
             debug_tiles as i32 | look.flags() | geo_flag,
         ],
+        // The imagery spans the grid unless the frame says otherwise (a store's layer level).
         clipmap: [
             clipmap.texture_side() as i32,
             clipmap.level_count() as i32,
-            0,
-            0,
+            grid.valid_width as i32,
+            grid.valid_height as i32,
         ],
         eye_world: [
             p.x.rem_euclid(NOISE_PERIOD_M) as f32,
@@ -261,6 +262,11 @@ mod tests {
         assert!(Look::Full.draws_sky() && Look::Classes.draws_sky() && !Look::Plain.draws_sky());
         let f = u(Look::Full, false);
         assert_eq!(f.eye_world, [8092.0, 5.5, 2500.0, FOG_SCALE_HEIGHT_M]);
+        // The imagery spans the grid's real samples unless the frame says otherwise.
+        assert_eq!(
+            f.clipmap[2..],
+            [grid.valid_width as i32, grid.valid_height as i32]
+        );
         // The atmosphere of this light, field by field.
         let a = light.atmosphere();
         assert!((light.visibility_m() - 8_000.0).abs() < 1e-3);
