@@ -20,6 +20,9 @@ struct FrameUniforms {
     vec4 perez_d;                // D
     vec4 perez_e;                // E
     vec4 sky_zenith;             // xyz: zenith (Y, x, y) / F(0, sun zenith angle); w: fog extinction at sea level (1/m)
+    // The streamed imagery windows (render/imagery_stream.rs, shaders/drape.glsl).
+    ivec4 imagery_stream;        // x: streamed levels (0 none); y: texels per level sample k; z: window side (texels)
+    ivec4 imagery_regions[12];   // per level (IMAGERY_STREAM_LEVELS): xy its window's first texel (absolute), z 1 when complete
 };
 
 // std430, one per drawn tile instance.

@@ -179,7 +179,18 @@ pub struct InMemoryTerrain {
     grid: SourceGrid,
     /// The imagery layer of the store the dataset was read from (`--load-whole`).
     imagery: Option<std::sync::Arc<crate::store::ImageryLayer>>,
+    /// Its pages read so far for [`TerrainSource::gather_imagery`], most recent last (at most
+    /// [`WHOLE_IMAGERY_PAGES`]); None: the page is damaged (named once, drawn transparent).
+    imagery_pages: std::sync::Mutex<Vec<WholeImageryPage>>,
 }
+
+/// Imagery pages an [`InMemoryTerrain`] keeps decoded: a few windows' worth of cells.
+pub const WHOLE_IMAGERY_PAGES: usize = 64;
+
+type WholeImageryPage = (
+    crate::store::PageId,
+    Option<std::sync::Arc<crate::store::ImageryPage>>,
+);
 
 impl InMemoryTerrain {
     /// Computes the dataset's checksum once (a pass over the samples).
@@ -189,6 +200,7 @@ impl InMemoryTerrain {
             dataset,
             grid,
             imagery: None,
+            imagery_pages: Default::default(),
         }
     }
 
@@ -210,6 +222,7 @@ impl InMemoryTerrain {
             dataset,
             grid,
             imagery: None,
+            imagery_pages: Default::default(),
         }
     }
 
@@ -243,6 +256,54 @@ impl TerrainSource for InMemoryTerrain {
     }
 
     fn request(&self, _wants: &[SampleWant]) {}
+
+    fn imagery_texels_per_sample(&self) -> Option<u32> {
+        self.imagery.as_ref().map(|l| l.texels_per_sample())
+    }
+
+    /// Reads the pages on the spot (the store was asked to be held whole; a page is a few
+    /// tens of KB), keeping the last [`WHOLE_IMAGERY_PAGES`]; always succeeds.
+    fn gather_imagery(&self, rect: &SampleRect, out: &mut [u8]) -> Result<(), NotResident> {
+        out.fill(0);
+        let Some(layer) = self.imagery.as_deref() else {
+            return Ok(());
+        };
+        let valid = [self.grid.valid_width, self.grid.valid_height];
+        let r = crate::store::imagery_rect(
+            layer.layout(),
+            layer.texels_per_sample(),
+            valid,
+            (rect.level, rect.origin, rect.size),
+        );
+        let mut kept = self.imagery_pages.lock().unwrap_or_else(|e| e.into_inner());
+        for &id in &r.pages {
+            let page = match kept.iter().position(|(p, _)| *p == id) {
+                Some(i) => {
+                    let e = kept.remove(i);
+                    kept.push(e.clone());
+                    e.1
+                }
+                None => {
+                    let page = match layer.read_page(id) {
+                        Ok(p) => Some(std::sync::Arc::new(p)),
+                        Err(e) => {
+                            eprintln!("warning: {e}; drawn without imagery there");
+                            None
+                        }
+                    };
+                    if kept.len() == WHOLE_IMAGERY_PAGES {
+                        kept.remove(0);
+                    }
+                    kept.push((id, page.clone()));
+                    page
+                }
+            };
+            if let Some(p) = page {
+                crate::store::copy_page_texels(&r, &p, out);
+            }
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]

@@ -268,6 +268,15 @@ pub fn drape_json(r: &crate::render::frame::TerrainRenderer) -> serde_json::Valu
             "level": l.level,
             "texels_per_sample": l.texels_per_sample,
         })),
+        "imagery_stream": r.imagery_stream().and_then(|s| Some((s, s.windows()?))).map(|(s, w)| serde_json::json!({
+            "levels": w.levels(),
+            "window_texels": w.side,
+            "gpu_bytes": s.bytes(),
+            "cells_copied": s.totals.cells,
+            "cells_cleared": s.totals.cleared,
+            "cells_pending": s.pending(),
+            "cells_not_resident": s.totals.not_resident,
+        })),
     })
 }
 

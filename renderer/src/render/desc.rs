@@ -67,6 +67,21 @@ pub struct RendererDesc {
     /// Drape a store's imagery layer when the source has one (and no `--imagery` is given);
     /// off only to measure what draping costs.
     pub drape_store_imagery: bool,
+    /// Stream the layer's levels finer than the one that fits the budget whole in windows
+    /// around the eye (render/imagery_stream.rs); off: that level alone, everywhere.
+    pub drape_stream_imagery: bool,
+}
+
+impl RendererDesc {
+    /// Its drape fields, as `drape_textures::drape_rasters` takes them.
+    pub fn drape_ask(&self) -> crate::render::drape_textures::DrapeAsk<'_> {
+        crate::render::drape_textures::DrapeAsk {
+            input: self.drape.as_deref(),
+            budget_bytes: self.drape_budget_bytes,
+            store_imagery: self.drape_store_imagery,
+            stream: self.drape_stream_imagery,
+        }
+    }
 }
 
 impl Default for RendererDesc {
@@ -100,6 +115,7 @@ impl Default for RendererDesc {
             drape_budget_bytes: (crate::render::drape_textures::DEFAULT_DRAPE_MIB * 1048576.0)
                 as u64,
             drape_store_imagery: true,
+            drape_stream_imagery: true,
         }
     }
 }

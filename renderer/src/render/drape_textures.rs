@@ -11,11 +11,13 @@ use gpu_allocator::MemoryLocation;
 
 use aerie_terrain::drape::mips::{mip_chain, mip_count};
 use aerie_terrain::drape::{
-    drape_codes, drape_rgba, DrapeSize, DrapeStats, GeoRaster, TerrainGrid, CODE_NONE,
+    drape_codes, drape_rgba, level_extent, DrapeSize, DrapeStats, GeoRaster, TerrainGrid, CODE_NONE,
 };
 use aerie_terrain::source::SourceGrid;
 use aerie_terrain::store::{choose_level, read_level, ImageryLayer};
 
+use crate::render::imagery_clipmap::{plan_imagery_stream, ImageryClipmapDesc, ImageryStreamPlan};
+use crate::render::imagery_stream::ImageryStream;
 use crate::vk::access::image_range_barrier;
 use crate::vk::access::Access;
 use crate::vk::conv::map_texel_copy;
@@ -84,6 +86,9 @@ pub struct DrapedRasters {
     pub capped: bool,
     /// The imagery is a level of a store's imagery layer (not draped from rasters here).
     pub layer_level: Option<LayerLevel>,
+    /// The layer's levels finer than that one, streamed in windows around the eye
+    /// (render/imagery_stream.rs); None: nothing streamed.
+    pub stream_windows: Option<ImageryClipmapDesc>,
 }
 
 /// The level of a store's imagery layer the imagery texture holds: its texel `t` is centred
@@ -96,19 +101,36 @@ pub struct LayerLevel {
     pub texels_per_sample: u32,
 }
 
-/// Puts the finest level of `layer` that fits the imagery's share of `budget_bytes` (four
-/// fifths beside a land-cover texture, as [`DrapeInput::texel_budgets`]) and `max_side` into
-/// `out`'s imagery; says on stderr what it read, and names the damaged pages it leaves
-/// transparent.
+/// Plans `layer` into the imagery's share of `budget_bytes` (four fifths beside a land-cover
+/// texture, as [`DrapeInput::texel_budgets`]) and `max_side` (`plan_imagery_stream`): level 0
+/// whole when it fits; else a coarse level whole and the finer ones streamed in windows
+/// around the eye (with `stream`). Reads the whole level into `out`'s imagery, says on stderr
+/// what it read and streams, and names the damaged pages it leaves transparent.
 pub fn drape_layer_level(
     out: &mut DrapedRasters,
     layer: &ImageryLayer,
     budget_bytes: u64,
     max_side: usize,
+    stream: bool,
 ) -> Result<(), String> {
     let share = if out.classes.is_some() { 0.8 } else { 1.0 };
     let bytes = (budget_bytes as f64 * share) as u64;
-    let Some(level) = choose_level(layer, bytes, max_side) else {
+    let k = layer.texels_per_sample();
+    let extents: Vec<(usize, usize)> = (0..layer.layout().levels.len() as u32)
+        .map(|l| level_extent(layer.grid(), k, l))
+        .collect();
+    let plan = match stream {
+        true => plan_imagery_stream(&extents, k, bytes, max_side),
+        false => choose_level(layer, bytes, max_side).map(|base| ImageryStreamPlan {
+            base,
+            windows: None,
+        }),
+    };
+    let Some(ImageryStreamPlan {
+        base: level,
+        windows,
+    }) = plan
+    else {
         eprintln!(
             "warning: {}: not even its coarsest level fits --drape-mb {:.2}: drawn without imagery",
             layer.path().display(),
@@ -127,14 +149,18 @@ pub fn drape_layer_level(
             failed.len() - 3
         );
     }
-    let k = l.texels_per_sample;
-    let density = if level == 0 {
-        format!("{k} texels per sample")
-    } else {
-        format!(
+    let density = match (&windows, level) {
+        (_, 0) => format!("{k} texels per sample"),
+        (Some(w), _) => format!(
+            "{} samples per texel; levels 0–{} streamed in windows of {}² texels",
+            l.samples_per_texel(),
+            level - 1,
+            w.side
+        ),
+        (None, _) => format!(
             "{} samples per texel; finer levels exceed --drape-mb",
             l.samples_per_texel()
-        )
+        ),
     };
     eprintln!(
         "imagery: level {level} of {} ({}×{} texels, {density}), read in {:.2} s",
@@ -143,7 +169,8 @@ pub fn drape_layer_level(
         l.height,
         t.elapsed().as_secs_f64()
     );
-    out.capped |= level > 0;
+    out.capped |= level > 0 && windows.is_none();
+    out.stream_windows = windows;
     let size = DrapeSize {
         width: l.width,
         height: l.height,
@@ -182,6 +209,47 @@ impl DrapedRasters {
                 .sum()
         })
     }
+}
+
+/// What the renderer was asked to drape (`RendererDesc`'s drape fields).
+#[derive(Clone, Copy)]
+pub struct DrapeAsk<'a> {
+    /// `--imagery` and `--landcover`.
+    pub input: Option<&'a DrapeInput>,
+    /// `--drape-mb`, for a store's imagery layer.
+    pub budget_bytes: u64,
+    /// Draw a store's imagery layer at all; stream its finer levels.
+    pub store_imagery: bool,
+    pub stream: bool,
+}
+
+/// What a terrain of `grid` gets draped: `ask`'s `--imagery` and `--landcover` registered,
+/// else the store's imagery `layer` planned into the budget ([`drape_layer_level`]); None
+/// without either.
+pub fn drape_rasters(
+    ask: DrapeAsk,
+    grid: &SourceGrid,
+    layer: Option<&ImageryLayer>,
+    max_side: u32,
+) -> Result<Option<DrapedRasters>, String> {
+    let mut rasters = match ask.input {
+        Some(input) => Some(register(input, grid, max_side)?),
+        None => None,
+    };
+    if let Some(layer) = layer.filter(|_| ask.store_imagery) {
+        match rasters.as_mut().filter(|r| r.imagery.is_some()) {
+            Some(_) => eprintln!(
+                "note: --imagery is draped instead of the store's imagery layer {}",
+                layer.path().display()
+            ),
+            None => {
+                let r = rasters.get_or_insert_with(DrapedRasters::default);
+                let (budget, stream) = (ask.budget_bytes, ask.stream);
+                drape_layer_level(r, layer, budget, max_side as usize, stream)?;
+            }
+        }
+    }
+    Ok(rasters)
 }
 
 /// Registers `input` onto `grid`'s real extent under a texture side of `max_side`; errors name
@@ -274,6 +342,8 @@ pub struct DrapeTextures {
     /// The draped sizes (None: placeholder).
     pub imagery_size: Option<DrapeSize>,
     pub classes_size: Option<DrapeSize>,
+    /// The streamed imagery windows (a placeholder when nothing is streamed).
+    pub stream: ImageryStream,
 }
 
 impl DrapeTextures {
@@ -284,13 +354,33 @@ impl DrapeTextures {
         ring: &mut FrameRing,
         rasters: Option<&DrapedRasters>,
     ) -> Result<Self, VkError> {
+        let windows = rasters.and_then(|r| r.stream_windows.as_ref());
+        let mut stream = ImageryStream::new(d, ring, windows)?;
+        let placeholders = texture(d, "imagery", (1, 1), vk::Format::R8G8B8A8_SRGB, 1).and_then(
+            |i| match texture(d, "classes", (1, 1), vk::Format::R8_UINT, 1) {
+                Ok(c) => Ok((i, c)),
+                Err(e) => {
+                    let mut i = i;
+                    i.destroy(d);
+                    Err(e)
+                }
+            },
+        );
+        let (imagery, classes) = match placeholders {
+            Ok(p) => p,
+            Err(e) => {
+                stream.destroy(d);
+                return Err(e);
+            }
+        };
         let mut this = Self {
-            imagery: texture(d, "imagery", (1, 1), vk::Format::R8G8B8A8_SRGB, 1)?,
-            classes: texture(d, "land-cover classes", (1, 1), vk::Format::R8_UINT, 1)?,
+            imagery,
+            classes,
             linear: vk::Sampler::null(),
             nearest: vk::Sampler::null(),
             imagery_size: None,
             classes_size: None,
+            stream,
         };
         if let Err(e) = this.create(d, ring, rasters) {
             this.destroy(d);
@@ -458,9 +548,9 @@ impl DrapeTextures {
         self.classes.view
     }
 
-    /// Device bytes of both textures (the imagery's whole mip chain).
+    /// Device bytes of the textures (the imagery's whole mip chain, the streamed windows).
     pub fn bytes(&self) -> u64 {
-        self.imagery.bytes + self.classes.bytes
+        self.imagery.bytes + self.classes.bytes + self.stream.bytes()
     }
 
     /// Imagery extent and mip count.
@@ -471,6 +561,7 @@ impl DrapeTextures {
 
     /// Call after the device is idle. Idempotent.
     pub fn destroy(&mut self, d: &Device) {
+        self.stream.destroy(d);
         self.classes.destroy(d);
         self.imagery.destroy(d);
         // SAFETY: null or created by `create` on this device; no pending command uses them; nulled below.

@@ -18,19 +18,18 @@ use aerie_terrain::mesh::skirted_tile_indices;
 use aerie_terrain::select::{LodMode, SelectParams, Selection};
 use aerie_terrain::source::{InMemoryTerrain, StreamStats, TerrainSource};
 
-use crate::render::drape_textures::{
-    drape_layer_level, register, DrapeTextures, DrapedRasters, MAX_DRAPE_SIDE,
-};
+use crate::render::drape_textures::{drape_rasters, DrapeTextures, DrapedRasters, MAX_DRAPE_SIDE};
 use crate::render::entity_instances::{EntityDraw, EntityFrameStats};
 use crate::render::entity_lod::{LodParams, LodView};
 use crate::render::entity_pass::EntityPass;
 use crate::render::frame_record::RecordParts;
 use crate::render::gathered::SampleCursor;
 use crate::render::gpu::EntityPush;
+use crate::render::imagery_stream::ImageryStream;
 use crate::render::jobs::{split_level_uploads, ImageUpload, PlanError, StagingBudget};
 use crate::render::models::{Model, ModelLibrary};
 use crate::render::normal_map::NormalTexel;
-use crate::render::normal_pass::{read_texture_layer, NormalBatch, NormalPass, NormalTargets};
+use crate::render::normal_pass::{read_texture_layer, NormalBatch, NormalPass};
 use crate::render::overlay_pass::Panel;
 use crate::render::plan::{plan_frame, select_frame, FrameInputs};
 use crate::render::resources::{reserve_instances, GpuTerrain};
@@ -309,6 +308,23 @@ impl TerrainRenderer {
             .map_or(0, |t| t.plan.feed.pending_cells())
     }
 
+    /// The streamed imagery windows (None before a load).
+    pub fn imagery_stream(&self) -> Option<&ImageryStream> {
+        self.drape.as_ref().map(|t| &t.stream)
+    }
+
+    /// Copies every streamed imagery cell around `eye` (world metres) that the source holds
+    /// now, in as many submissions as that takes, without drawing (a still image's warm-up);
+    /// returns the cells copied.
+    pub fn fill_imagery(&mut self, eye: DVec3) -> Result<u32, VkError> {
+        let (Some(t), Some(drape)) = (self.terrain.as_ref(), self.drape.as_mut()) else {
+            return Ok(0);
+        };
+        let source = t.plan.feed.gatherer.source().as_ref();
+        let viewer = t.plan.viewer(eye);
+        (drape.stream).fill(&self.device, &mut self.ring, source, viewer)
+    }
+
     /// Pool counters (hits, misses, evictions, late) per refinement r = 1..=6.
     pub fn pool_counters(&self) -> Vec<aerie_terrain::pool::PoolCounters> {
         self.terrain
@@ -401,27 +417,13 @@ impl TerrainRenderer {
             .limits
             .max_image_dimension2_d
             .min(MAX_DRAPE_SIDE);
-        let mut rasters = match self.desc.drape.clone() {
-            Some(input) => Some(register(&input, &grid, max_side).map_err(VkError::Input)?),
-            None => None,
-        };
-        let layer = source
-            .imagery_layer()
-            .filter(|_| self.desc.drape_store_imagery);
-        if let Some(layer) = layer {
-            match rasters.as_mut().filter(|r| r.imagery.is_some()) {
-                Some(_) => eprintln!(
-                    "note: --imagery is draped instead of the store's imagery layer {}",
-                    layer.path().display()
-                ),
-                None => {
-                    let r = rasters.get_or_insert_with(DrapedRasters::default);
-                    let budget = self.desc.drape_budget_bytes;
-                    drape_layer_level(r, layer, budget, max_side as usize)
-                        .map_err(VkError::Input)?;
-                }
-            }
-        }
+        let rasters = drape_rasters(
+            self.desc.drape_ask(),
+            &grid,
+            source.imagery_layer(),
+            max_side,
+        )
+        .map_err(VkError::Input)?;
         // A terrain without rasters after one with them gets the placeholders back.
         if rasters.is_some() || self.draped.is_some() {
             self.wait_all()?;
@@ -466,7 +468,7 @@ impl TerrainRenderer {
             let mut samples = SampleCursor::new(gatherer.samples());
             let mut normals = SampleCursor::new(gatherer.normals());
             let normals = staged_normals.then_some((t.normals.raw, &mut normals));
-            let targets = normal_targets(&t, height_sampler);
+            let targets = t.normal_targets(height_sampler);
             let caches = &t.plan.feed.caches;
             let mut hook = gpu_normals.map(|p| {
                 move |f: &mut FrameContext, cmd, jobs: &[ImageUpload]| {
@@ -490,6 +492,10 @@ impl TerrainRenderer {
             )
         });
         self.terrain = Some(t);
+        // The streamed imagery the source holds already, so that the first frame draws it.
+        if loaded.is_ok() {
+            self.fill_imagery(eye)?;
+        }
         Ok(UploadStats {
             bytes: strips.iter().map(ImageUpload::bytes).sum(),
             submissions: loaded?,
@@ -559,7 +565,7 @@ impl TerrainRenderer {
         let mut samples = SampleCursor::new(t.plan.feed.gatherer.samples());
         let mut normals = SampleCursor::new(t.plan.feed.gatherer.normals());
         let spilled_normals = plan.normal_maps.then_some((t.normals.raw, &mut normals));
-        let targets = normal_targets(t, self.pipeline.height_sampler);
+        let targets = t.normal_targets(self.pipeline.height_sampler);
         let (caches, side) = (&t.plan.feed.caches, targets.side);
         let mut hook = self.gpu_normals.as_mut().map(|p| {
             move |f: &mut FrameContext, cmd, jobs: &[ImageUpload]| {
@@ -581,6 +587,15 @@ impl TerrainRenderer {
             hook.as_mut().map(|h| h as &mut GpuNormals),
             &plan.spilled_strips,
         )?;
+        // The streamed imagery's cells, in their own submission before the frame's.
+        let imagery_cells = match self.drape.as_mut() {
+            Some(drape) => {
+                let source = t.plan.feed.gatherer.source().as_ref();
+                let viewer = t.plan.viewer(camera.position);
+                drape.stream.update(d, &mut self.ring, source, viewer)?
+            }
+            None => 0,
+        };
         let mut frame = self.ring.begin_frame(d)?;
         reserve_instances(&mut t.frame_buffers, d, &mut frame, plan.instances.len())?;
         let tess_stats = match self.tess.as_mut() {
@@ -610,6 +625,9 @@ impl TerrainRenderer {
             // shaders/drape.glsl: the level-0 samples the imagery texture spans.
             uniforms.clipmap[2..4].copy_from_slice(&span.map(|n| n as i32));
         }
+        if let Some(drape) = self.drape.as_ref() {
+            drape.stream.write_uniforms(&mut uniforms);
+        }
         let overlay = self.overlay.as_ref();
         let staging = frame.staging();
         let staged = stage_frame(
@@ -622,6 +640,8 @@ impl TerrainRenderer {
         )?;
         let mut stats = FrameStats {
             cpu_select_us,
+            imagery_cells,
+            imagery_cells_pending: self.drape.as_ref().map_or(0, |t| t.stream.pending()),
             cpu_upload_us: t1.elapsed().as_secs_f64() * 1e6,
             ..plan.stats
         };
@@ -770,15 +790,5 @@ impl TerrainRenderer {
 impl Drop for TerrainRenderer {
     fn drop(&mut self) {
         self.destroy();
-    }
-}
-
-/// What the GPU normal pass reads and writes of `t` (the heights fetched through `height_sampler`).
-fn normal_targets(t: &GpuTerrain, height_sampler: vk::Sampler) -> NormalTargets {
-    NormalTargets {
-        levels_view: t.levels.view,
-        height_sampler,
-        normals: t.normals.raw,
-        side: t.plan.clipmap.texture_side(),
     }
 }

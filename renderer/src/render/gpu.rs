@@ -24,7 +24,16 @@ pub struct FrameUniforms {
     pub perez_d: [f32; 4],
     pub perez_e: [f32; 4],
     pub sky_zenith: [f32; 4],
+    /// x: streamed imagery levels (0: none), y: texels per level sample k, z: window side.
+    pub imagery_stream: [i32; 4],
+    /// Per streamed level: its window's first texel (x, y, absolute on the level's raster)
+    /// and z = 1 when every cell of it is filled (render/imagery_stream.rs).
+    pub imagery_regions: [[i32; 4]; IMAGERY_STREAM_LEVELS],
 }
+
+/// Streamed imagery levels the frame uniforms have room for (`imagery_regions`; the GLSL
+/// array's length in shaders/gpu_types.glsl).
+pub const IMAGERY_STREAM_LEVELS: usize = 12;
 
 /// Storage buffer element (std430), one per drawn tile.
 #[repr(C)]
@@ -200,7 +209,9 @@ mod tests {
                 perez_c,
                 perez_d,
                 perez_e,
-                sky_zenith
+                sky_zenith,
+                imagery_stream,
+                imagery_regions
             ]
         );
     }

@@ -33,6 +33,8 @@ pub mod gathered;
 pub mod geo_instances;
 pub mod gltf_model;
 pub mod gpu;
+pub mod imagery_clipmap;
+pub mod imagery_stream;
 pub mod jobs;
 pub mod landcover;
 pub mod models;

@@ -14,6 +14,7 @@ use aerie_terrain::source::{SourceGrid, TerrainSource};
 
 use crate::render::desc::NormalSource;
 use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, TileInstance};
+use crate::render::normal_pass::NormalTargets;
 use crate::render::plan::{PlanState, MAX_INSTANCES};
 use crate::render::stats::RESOLUTIONS;
 use crate::vk::frame_context::FrameContext;
@@ -109,6 +110,17 @@ pub struct GpuTerrain {
 }
 
 impl GpuTerrain {
+    /// What the GPU normal pass reads and writes of the terrain (the heights fetched through
+    /// `height_sampler`).
+    pub fn normal_targets(&self, height_sampler: vk::Sampler) -> NormalTargets {
+        NormalTargets {
+            levels_view: self.levels.view,
+            height_sampler,
+            normals: self.normals.raw,
+            side: self.plan.clipmap.texture_side(),
+        }
+    }
+
     /// Creates the textures and per-frame buffers for `source`'s terrain (checked against the
     /// device's limits); their contents are undefined until initialised and filled.
     pub fn new(

@@ -67,10 +67,13 @@ pub struct FrameStats {
     pub cpu_normals_us: f64,
     pub bytes_normals: u64,
     pub gpu_normals_ms: f64,
+    /// Streamed imagery: cells copied this frame, and cells still wanted after it.
+    pub imagery_cells: u32,
+    pub imagery_cells_pending: u32,
 }
 
 impl FrameStats {
-    pub const CSV_HEADER: &'static str = "frame,finest_level,tiles_considered,tiles_culled,tiles_drawn,refined_r0,refined_r1,refined_r2,refined_r3,refined_r4,refined_r5,refined_r6,instances,tiles_late,tiles_late_stream,tiles_unbounded,triangles,draw_calls,bytes_clipmap,bytes_refined,bytes_uploaded,budget_spills,pool_hits,pool_misses,prefetched,cells_pending,stream_hits,stream_misses,stream_loaded,stream_failed,stream_resident_bytes,stream_budget_bytes,cpu_terrain_data_us,cpu_select_us,cpu_upload_us,cpu_record_us,gpu_upload_ms,gpu_terrain_ms,tiles_hidden,cpu_normals_us,bytes_normals,gpu_normals_ms";
+    pub const CSV_HEADER: &'static str = "frame,finest_level,tiles_considered,tiles_culled,tiles_drawn,refined_r0,refined_r1,refined_r2,refined_r3,refined_r4,refined_r5,refined_r6,instances,tiles_late,tiles_late_stream,tiles_unbounded,triangles,draw_calls,bytes_clipmap,bytes_refined,bytes_uploaded,budget_spills,pool_hits,pool_misses,prefetched,cells_pending,stream_hits,stream_misses,stream_loaded,stream_failed,stream_resident_bytes,stream_budget_bytes,cpu_terrain_data_us,cpu_select_us,cpu_upload_us,cpu_record_us,gpu_upload_ms,gpu_terrain_ms,tiles_hidden,cpu_normals_us,bytes_normals,gpu_normals_ms,imagery_cells,imagery_cells_pending";
 
     /// Copies the source's running totals.
     pub fn set_stream(&mut self, s: &aerie_terrain::source::StreamStats) {
@@ -85,7 +88,7 @@ impl FrameStats {
     pub fn csv_row(&self) -> String {
         let r = &self.tiles_by_refinement;
         format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1},{:.1},{:.1},{:.1},{:.3},{:.3},{},{:.1},{},{:.4}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1},{:.1},{:.1},{:.1},{:.3},{:.3},{},{:.1},{},{:.4},{},{}",
             self.frame,
             self.finest_level,
             self.tiles_considered,
@@ -127,7 +130,9 @@ impl FrameStats {
             self.tiles_hidden,
             self.cpu_normals_us,
             self.bytes_normals,
-            self.gpu_normals_ms
+            self.gpu_normals_ms,
+            self.imagery_cells,
+            self.imagery_cells_pending
         )
     }
 }

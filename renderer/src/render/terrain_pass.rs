@@ -10,7 +10,7 @@ use crate::render::sky_pass::record_sky;
 use crate::render::uniforms::SKY_LINEAR;
 use crate::vk::pipeline::{
     TerrainPipeline, BINDING_CLASSES, BINDING_CLIPMAP, BINDING_FRAME, BINDING_IMAGERY,
-    BINDING_INSTANCES, BINDING_NORMAL_MAPS, BINDING_POOLS,
+    BINDING_IMAGERY_STREAM, BINDING_INSTANCES, BINDING_NORMAL_MAPS, BINDING_POOLS,
 };
 use crate::vk::target::{OffscreenTarget, DEPTH_CLEAR};
 use crate::vk::Device;
@@ -28,8 +28,9 @@ pub fn descriptor_pool_sizes() -> [vk::DescriptorPoolSize; 3] {
         },
         vk::DescriptorPoolSize {
             ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-            // The clipmap, the pools, the normal maps, then the imagery and the classes.
-            descriptor_count: DESCRIPTOR_SETS * (2 + aerie_terrain::select::MAX_REFINEMENT + 2),
+            // The clipmap, the pools, the normal maps, then the imagery, the classes and the
+            // streamed imagery windows.
+            descriptor_count: DESCRIPTOR_SETS * (2 + aerie_terrain::select::MAX_REFINEMENT + 3),
         },
     ]
 }
@@ -75,6 +76,7 @@ pub fn write_descriptors(
     };
     let imagery_info = [drape_image(drape.imagery_view(), drape.linear)];
     let classes_info = [drape_image(drape.classes_view(), drape.nearest)];
+    let stream_info = [drape_image(drape.stream.view(), drape.stream.sampler)];
     let writes = [
         vk::WriteDescriptorSet::default()
             .dst_set(set)
@@ -111,6 +113,11 @@ pub fn write_descriptors(
             .dst_binding(BINDING_CLASSES)
             .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
             .image_info(&classes_info),
+        vk::WriteDescriptorSet::default()
+            .dst_set(set)
+            .dst_binding(BINDING_IMAGERY_STREAM)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .image_info(&stream_info),
     ];
     // `set` comes from this frame's pool, whose previous submission has completed (the frame
     // context); every buffer, view and the sampler written are live; the info arrays outlive

@@ -23,7 +23,9 @@ use aerie_terrain::source::{SampleRect, SourceGrid, TerrainSource};
 
 use crate::render::upload::stream_buffer;
 use crate::vk::frame_context::{FrameContext, FrameRing};
-use crate::vk::pipeline::{BINDING_CLASSES, BINDING_IMAGERY, BINDING_NORMAL_MAPS};
+use crate::vk::pipeline::{
+    BINDING_CLASSES, BINDING_IMAGERY, BINDING_IMAGERY_STREAM, BINDING_NORMAL_MAPS,
+};
 use crate::vk::tess_pipeline::{
     TessPipeline, TESS_BINDING_FRAME, TESS_BINDING_HEIGHTS, TESS_BINDING_PATCHES,
 };
@@ -35,6 +37,7 @@ pub struct FragmentImages {
     pub normals: (vk::ImageView, vk::Sampler),
     pub imagery: (vk::ImageView, vk::Sampler),
     pub classes: (vk::ImageView, vk::Sampler),
+    pub imagery_stream: (vk::ImageView, vk::Sampler),
 }
 
 /// One patch record (`shaders/terrain_tess.glsl` `TessPatchGpu`, std430).
@@ -301,10 +304,11 @@ impl TessTerrain {
                 image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             }]
         };
-        let (n, i, c) = (
+        let (n, i, c, s) = (
             image(images.normals),
             image(images.imagery),
             image(images.classes),
+            image(images.imagery_stream),
         );
         fn sampled<'a>(
             set: vk::DescriptorSet,
@@ -324,6 +328,7 @@ impl TessTerrain {
             sampled(set, BINDING_NORMAL_MAPS, &n),
             sampled(set, BINDING_IMAGERY, &i),
             sampled(set, BINDING_CLASSES, &c),
+            sampled(set, BINDING_IMAGERY_STREAM, &s),
         ];
         // `set` comes from this frame's pool, whose previous submission has completed; every
         // buffer written is live; the info arrays outlive the call.

@@ -6,7 +6,7 @@ use aerie_terrain::geodesy::GeoGrid;
 use aerie_terrain::source::SourceGrid;
 
 use crate::render::atmosphere::{Atmosphere, FOG_SCALE_HEIGHT_M, SUN_DISC_DEG};
-use crate::render::gpu::FrameUniforms;
+use crate::render::gpu::{FrameUniforms, IMAGERY_STREAM_LEVELS};
 
 /// Linear-light sky colour of the plain look (clear colour and haze).
 pub const SKY_LINEAR: [f32; 3] = [0.38, 0.55, 0.80];
@@ -189,6 +189,9 @@ pub fn frame_uniforms(
         perez_d: with_w(a.perez[3], 0.0),
         perez_e: with_w(a.perez[4], 0.0),
         sky_zenith: with_w(a.zenith_over_f0, a.sigma0),
+        // No streamed imagery until render/imagery_stream.rs says so.
+        imagery_stream: [0; 4],
+        imagery_regions: [[0; 4]; IMAGERY_STREAM_LEVELS],
     }
 }
 

@@ -23,6 +23,9 @@ pub const BINDING_NORMAL_MAPS: u32 = 4;
 /// Draped imagery (RGBA8 sRGB, mipmapped) and land-cover classes (R8_UINT): shaders/drape.glsl.
 pub const BINDING_IMAGERY: u32 = 5;
 pub const BINDING_CLASSES: u32 = 6;
+/// The streamed imagery windows (RGBA8 sRGB array, a layer per level, toroidal: REPEAT):
+/// render/imagery_stream.rs, shaders/drape.glsl.
+pub const BINDING_IMAGERY_STREAM: u32 = 7;
 /// Refined-tile pools bound as an array (r = 1..=POOL_BINDINGS).
 pub const POOL_BINDINGS: u32 = aerie_terrain::select::MAX_REFINEMENT;
 
@@ -101,6 +104,12 @@ impl TerrainPipeline {
             ),
             set_binding(BINDING_IMAGERY, T::COMBINED_IMAGE_SAMPLER, 1, S::FRAGMENT),
             set_binding(BINDING_CLASSES, T::COMBINED_IMAGE_SAMPLER, 1, S::FRAGMENT),
+            set_binding(
+                BINDING_IMAGERY_STREAM,
+                T::COMBINED_IMAGE_SAMPLER,
+                1,
+                S::FRAGMENT,
+            ),
         ];
         (self.set_layout, self.layout) = create_set_and_layout(device, &bindings, None)?;
 

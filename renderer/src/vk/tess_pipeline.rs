@@ -11,7 +11,9 @@ use ash::vk;
 use super::device::Device;
 use super::error::VkError;
 use super::graphics_pipeline::{create_with_stages, DepthUse, Primitives};
-use super::pipeline::{BINDING_CLASSES, BINDING_IMAGERY, BINDING_NORMAL_MAPS};
+use super::pipeline::{
+    BINDING_CLASSES, BINDING_IMAGERY, BINDING_IMAGERY_STREAM, BINDING_NORMAL_MAPS,
+};
 use super::set_layout::{create_set_and_layout, set_binding};
 use super::shader::shader_module;
 
@@ -84,6 +86,11 @@ impl TessPipeline {
             ),
             binding(
                 BINDING_CLASSES,
+                vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                S::FRAGMENT,
+            ),
+            binding(
+                BINDING_IMAGERY_STREAM,
                 vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
                 S::FRAGMENT,
             ),

@@ -195,11 +195,16 @@ fn coarse_levels_average_fine_imagery_instead_of_aliasing_it() {
 }
 
 #[test]
-fn the_streamed_store_gathers_a_strip_of_texels_across_pages() {
+fn the_streamed_store_and_the_whole_store_gather_a_strip_of_texels_across_pages() {
     let r = raster(2, 5.0, 5.0, 120, smooth);
     let f = fixture(2, &[r]);
     let (s, _) = StreamedStore::open(&f.store_path, StreamParams::default()).unwrap();
     assert_eq!(s.imagery_texels_per_sample(), Some(2));
+    // The store read whole (`--load-whole`) reads its imagery pages on the spot.
+    let (ds, _) = load_store(&f.store_path).unwrap();
+    let whole = crate::source::InMemoryTerrain::new(std::sync::Arc::new(ds))
+        .with_imagery(open_layer(&f).unwrap());
+    assert_eq!(whole.imagery_texels_per_sample(), Some(2));
     for (level, origin, size) in [
         (0u32, [3i64, 7], [140u32, 20]),
         (1, [10, 0], [30, 60]),
@@ -214,6 +219,12 @@ fn the_streamed_store_gathers_a_strip_of_texels_across_pages() {
         let (w, h) = (size[0] as usize * 2, size[1] as usize * 2);
         let mut got = vec![7u8; w * h * 4];
         s.gather_imagery(&rect, &mut got).unwrap();
+        let mut got_whole = vec![7u8; w * h * 4];
+        whole.gather_imagery(&rect, &mut got_whole).unwrap();
+        assert!(
+            got_whole == got,
+            "level {level}: the whole store gathers another strip"
+        );
         // The oracle: the draper's window, clipped to the level's raster (transparent beyond).
         let (ew, eh) = f.draper.level_extent(level);
         let x0 = origin[0] * 2;

@@ -74,6 +74,7 @@ mod error;
 mod format;
 mod imagery;
 mod imagery_level;
+mod imagery_rect;
 mod imagery_write;
 mod index;
 mod load;
@@ -91,6 +92,7 @@ pub use format::{
 };
 pub use imagery::{imagery_path, ImageryHeader, ImageryLayer, ImageryPage, IMAGERY_MAGIC};
 pub use imagery_level::{choose_level, open_imagery_beside, read_level, LevelImagery};
+pub use imagery_rect::{copy_page_texels, imagery_rect, ImageryRect};
 pub use imagery_write::{store_grid, write_imagery_in, ImagerySummary};
 pub use load::load_store;
 pub use pages::Page;

@@ -20,7 +20,9 @@ use aerie_io::FileSystem;
 use crate::bake::ErrorBake;
 use crate::query::SurfaceGrid;
 use crate::source::{NotResident, SampleRect, SampleWant, SourceGrid, StreamStats, TerrainSource};
-use crate::store::{open_imagery_beside, ImageryLayer, PageId, Store, StoreError};
+use crate::store::{
+    copy_page_texels, imagery_rect, open_imagery_beside, ImageryLayer, PageId, Store, StoreError,
+};
 
 use super::loader::{spawn_workers, Loaded, Shared};
 use super::rect_pages::{rect_pages, RectPages};
@@ -518,63 +520,34 @@ impl TerrainSource for StreamedStore {
         let Some(layer) = self.shared.imagery() else {
             return Ok(());
         };
-        if rect.is_empty() {
-            return Ok(());
-        }
-        let k = layer.texels_per_sample() as i64;
-        let layout = self.shared.store().layout();
-        let level = rect.level.min(layout.levels.len() as u32 - 1);
-        let per = i64::from(layout.q * layout.page_tiles) * k;
-        let g = &self.grid;
-        let extent = |n: u32| (i64::from(n) * k + (1 << level) - 1) >> level;
-        let (ew, eh) = (extent(g.valid_width), extent(g.valid_height));
-        let x0 = (rect.origin[0] >> rect.level) * k;
-        let y0 = (rect.origin[1] >> rect.level) * k;
-        let (w, h) = (i64::from(rect.size[0]) * k, i64::from(rect.size[1]) * k);
-        // The pages holding the texels inside the raster.
-        let span = |a: i64, n: i64, e: i64| {
-            let (lo, hi) = (a.max(0), (a + n).min(e));
-            (lo < hi).then(|| ((lo / per) as u32, ((hi - 1) / per) as u32))
-        };
-        let (Some((px0, px1)), Some((py0, py1))) = (span(x0, w, ew), span(y0, h, eh)) else {
-            return Ok(());
-        };
-        let mut pages = Vec::new();
+        let valid = [self.grid.valid_width, self.grid.valid_height];
+        let r = imagery_rect(
+            self.shared.store().layout(),
+            layer.texels_per_sample(),
+            valid,
+            (rect.level, rect.origin, rect.size),
+        );
+        let mut pages = Vec::with_capacity(r.pages.len());
         {
             let mut st = self.shared.lock();
-            for py in py0..=py1 {
-                for px in px0..=px1 {
-                    let id = PageId { level, px, py };
-                    match st.cache.get(id) {
-                        Some(p) => pages.push(p.clone()),
-                        None => {
-                            let failed = st.failed.contains_key(&id);
-                            if !failed {
-                                st.queue.add(id, LAST);
-                            }
-                            drop(st);
-                            self.shared.wake_workers();
-                            return Err(not_resident(id, failed));
+            for &id in &r.pages {
+                match st.cache.get(id) {
+                    Some(p) => pages.push(p.clone()),
+                    None => {
+                        let failed = st.failed.contains_key(&id);
+                        if !failed {
+                            st.queue.add(id, LAST);
                         }
+                        drop(st);
+                        self.shared.wake_workers();
+                        return Err(not_resident(id, failed));
                     }
                 }
             }
         }
-        let stride = w as usize * 4;
         for p in &pages {
-            let Some(img) = &p.imagery else { continue };
-            let [ox, oy] = [img.origin[0] as i64, img.origin[1] as i64];
-            let [sw, sh] = [img.size[0] as i64, img.size[1] as i64];
-            let (cx0, cx1) = (ox.max(x0), (ox + sw).min(x0 + w));
-            let (cy0, cy1) = (oy.max(y0), (oy + sh).min(y0 + h));
-            if cx0 >= cx1 {
-                continue;
-            }
-            for ty in cy0..cy1 {
-                let src = (((ty - oy) * sw + (cx0 - ox)) * 4) as usize;
-                let dst = (ty - y0) as usize * stride + ((cx0 - x0) * 4) as usize;
-                let n = ((cx1 - cx0) * 4) as usize;
-                out[dst..dst + n].copy_from_slice(&img.rgba[src..src + n]);
+            if let Some(img) = &p.imagery {
+                copy_page_texels(&r, img, out);
             }
         }
         Ok(())

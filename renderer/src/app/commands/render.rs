@@ -143,16 +143,22 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     r.set_lighting(lighting);
     let sun_drawn = lighting.sun_enu;
     let camera = Camera::new(position, attitude, s.view.frustum);
-    // One still image: frames are drawn until nothing is late for streaming (each frame asks
-    // for what it lacked and never waits; the pause between frames lets the pages arrive).
+    // One still image: frames are drawn until nothing is late for streaming and every
+    // streamed imagery window is filled (each frame asks for what it lacked and never waits;
+    // the pause between frames lets the pages arrive). The imagery cells resident are copied
+    // before each frame, not a frame's share at a time.
     let t = std::time::Instant::now();
     let mut warm_up_frames = 0u32;
+    r.fill_imagery(position).map_err(runtime)?;
     let mut stats = r.render(&camera).map_err(runtime)?;
-    while terrain.streamed.is_some()
-        && (stats.tiles_late_stream > 0 || stats.cells_pending > 0)
-        && t.elapsed() < WARM_UP_LIMIT
-    {
+    let waiting = |s: &crate::render::stats::FrameStats| {
+        let heights =
+            terrain.streamed.is_some() && (s.tiles_late_stream > 0 || s.cells_pending > 0);
+        heights || s.imagery_cells_pending > 0
+    };
+    while waiting(&stats) && t.elapsed() < WARM_UP_LIMIT {
         std::thread::sleep(std::time::Duration::from_millis(5));
+        r.fill_imagery(position).map_err(runtime)?;
         stats = r.render(&camera).map_err(runtime)?;
         warm_up_frames += 1;
     }
