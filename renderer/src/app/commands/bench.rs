@@ -323,6 +323,8 @@ fn run_flight(
         Some(aerie_terrain::GeoReference::Geographic { .. })
     );
     let drape = crate::app::renderer_setup::drape_input(&a.drape)?;
+    // `--drape-mb` also bounds a store's imagery layer (what is held whole, what streams).
+    let drape_budget = crate::app::renderer_setup::drape_budget(&a.drape)?;
     for &(config, reported) in &lane_configs {
         if config.mode == LodMode::Tessellation && geographic {
             // The tessellation baseline draws flat grids only (render/tess_pass.rs).
@@ -335,6 +337,7 @@ fn run_flight(
         }
         let mut desc = lane_desc(a, p, config);
         desc.drape = drape.clone();
+        desc.drape_budget_bytes = drape_budget;
         let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
         // Measured configurations draw from the source given; the reference from memory.
         let source = if reported {
@@ -379,6 +382,7 @@ fn run_flight(
         for (v, f) in features.iter().enumerate() {
             let mut desc = lane_desc(a, p, base);
             desc.drape = drape.clone();
+        desc.drape_budget_bytes = drape_budget;
             f.apply(&mut desc);
             let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
             renderer
