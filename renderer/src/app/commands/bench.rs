@@ -382,7 +382,7 @@ fn run_flight(
         for (v, f) in features.iter().enumerate() {
             let mut desc = lane_desc(a, p, base);
             desc.drape = drape.clone();
-        desc.drape_budget_bytes = drape_budget;
+            desc.drape_budget_bytes = drape_budget;
             f.apply(&mut desc);
             let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
             renderer
