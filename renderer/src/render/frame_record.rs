@@ -60,7 +60,7 @@ impl RecordParts<'_> {
             normals: (t.normals.view, self.pipeline.normal_sampler),
             imagery: (self.drape.imagery_view(), self.drape.linear),
             classes: (self.drape.classes_view(), self.drape.nearest),
-            imagery_stream: (self.drape.stream.view(), self.drape.stream.sampler),
+            imagery_stream: (self.drape.stream.view(), self.pipeline.normal_sampler),
         };
         let tess = match self.tess {
             Some(tess) => Some((

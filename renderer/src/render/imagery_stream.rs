@@ -1,8 +1,9 @@
 //! The streamed imagery windows on the GPU (issue 17: a store's imagery paged in like the
 //! heights): one RGBA8 sRGB array texture, a layer per streamed level, `side²` texels holding
 //! that level's window around the eye toroidally (absolute texel t at t mod side, so the
-//! REPEAT sampler at set 0 binding 7 wraps as the window does), drawn by `shaders/drape.glsl`
-//! over the coarse level the imagery texture holds whole. `render/imagery_clipmap.rs` decides
+//! pipeline's repeating bilinear sampler of the normal maps, at set 0 binding 7, wraps as the
+//! window does), drawn by `shaders/drape.glsl` over the coarse level the imagery texture holds
+//! whole. `render/imagery_clipmap.rs` decides
 //! which cell goes where; this room carries it out.
 //!
 //! Each frame, before the frame's own submission: the windows are placed around the eye, and
@@ -24,7 +25,7 @@ use crate::render::upload::{initialise_images, record_image_copies};
 use crate::vk::conv::map_texel_copy;
 use crate::vk::frame_context::FrameRing;
 use crate::vk::image::{Image2d, ImageDesc};
-use crate::vk::{Device, VkError, VkResultExt};
+use crate::vk::{Device, VkError};
 
 /// Cells copied per frame at most: 64 × 16 KiB = 1 MiB of staging (a window's row of cells
 /// at the default side and more).
@@ -51,8 +52,6 @@ pub struct ImageryStreamTotals {
 /// The array texture, its sampler and the windows' state.
 pub struct ImageryStream {
     image: Image2d,
-    /// Bilinear, repeating (the windows are toroidal), no mips (a layer is a level).
-    pub sampler: vk::Sampler,
     clipmap: Option<ImageryClipmap>,
     /// Cells wanted and not filled after the last update.
     pending: u32,
@@ -93,28 +92,11 @@ impl ImageryStream {
         let image = Image2d::new(d, "imagery windows", desc)?;
         let mut this = Self {
             image,
-            sampler: vk::Sampler::null(),
             clipmap,
             pending: 0,
             scratch: Vec::new(),
             totals: ImageryStreamTotals::default(),
         };
-        let info = vk::SamplerCreateInfo::default()
-            .mag_filter(vk::Filter::LINEAR)
-            .min_filter(vk::Filter::LINEAR)
-            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
-            .address_mode_u(vk::SamplerAddressMode::REPEAT)
-            .address_mode_v(vk::SamplerAddressMode::REPEAT)
-            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .max_lod(0.0);
-        // SAFETY: the device is live; the create-info is complete.
-        match unsafe { d.raw.create_sampler(&info, None) }.call("vkCreateSampler") {
-            Ok(s) => this.sampler = s,
-            Err(e) => {
-                this.destroy(d);
-                return Err(e);
-            }
-        }
         if let Err(e) = initialise_images(d, ring, [this.image.raw]) {
             this.destroy(d);
             return Err(e);
@@ -263,8 +245,5 @@ impl ImageryStream {
     /// Call after the device is idle. Idempotent.
     pub fn destroy(&mut self, d: &Device) {
         self.image.destroy(d);
-        // SAFETY: null or created by `new` on this device; no pending command uses it; nulled below.
-        unsafe { d.raw.destroy_sampler(self.sampler, None) };
-        self.sampler = vk::Sampler::null();
     }
 }

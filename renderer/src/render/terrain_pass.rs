@@ -76,7 +76,7 @@ pub fn write_descriptors(
     };
     let imagery_info = [drape_image(drape.imagery_view(), drape.linear)];
     let classes_info = [drape_image(drape.classes_view(), drape.nearest)];
-    let stream_info = [drape_image(drape.stream.view(), drape.stream.sampler)];
+    let stream_info = [drape_image(drape.stream.view(), normal_sampler)];
     let writes = [
         vk::WriteDescriptorSet::default()
             .dst_set(set)

@@ -36,8 +36,8 @@ pub struct TerrainPipeline {
     /// The sky, drawn after the terrain where the depth is still 0.
     pub sky: vk::Pipeline,
     pub height_sampler: vk::Sampler,
-    /// Bilinear and repeating: the normal maps are toroidal, so the texture wraps as the
-    /// level's samples do.
+    /// Bilinear and repeating, no mips: the normal maps and the streamed imagery windows are
+    /// toroidal, so the texture wraps as the level's samples (the window's texels) do.
     pub normal_sampler: vk::Sampler,
 }
 
