@@ -25,6 +25,19 @@ struct FrameUniforms {
     ivec4 imagery_regions[12];   // per level (IMAGERY_STREAM_LEVELS): xy its window's first texel (absolute), z 1 when complete
 };
 
+// std430: a node's place on the WGS84 ellipsoid (render/geo_instances.rs `GeoEye::node_fields`,
+// read by geo_node.glsl): the same fields, in the same order, as the tail of TileInstance; one
+// per base-mesh cell of the tessellation baseline (terrain_tess.tese). All zero on the flat path.
+struct GeoFields {
+    vec4 geo_origin;
+    vec4 geo_axis_r;
+    vec4 geo_axis_t;
+    vec4 geo_axis_z;
+    vec4 geo_radius;
+    vec4 geo_s[9];
+    vec4 geo_n[10];
+};
+
 // std430, one per drawn tile instance.
 struct TileInstance {
     vec2 origin_rel;     // tile's south-west vertex relative to the eye, metres (f64 on CPU -> f32)

@@ -137,23 +137,96 @@ fn tessellation_matches_full_at_high_density_and_draws_less_at_low() {
     assert!(high.stats.instances <= 128 && high.stats.instances > 64);
 }
 
-#[test]
-fn geographic_grids_are_refused_with_a_reason() {
-    let mut hf = synthetic(129, 129, 30.0, 100.0, &[]);
+/// The hills on a 1/240° grid at 47° N (≈ 310 m × 460 m between samples, 1.07° of latitude),
+/// on the WGS84 ellipsoid: over its 80 km × 119 km the Earth's curvature drops the far edge
+/// ~1 km below the eye's tangent plane and the meridians converge by ~1.5 km, so vertices
+/// placed flat would miss the full-resolution frame by many pixels.
+fn geographic_hills() -> Heightfield {
+    let mut hf = hills();
+    let d = 1.0 / 240.0;
+    let (sx, sy) = aerie::terrain::load::geographic_spacing_m(47.0 + 128.0 * d, d, d);
+    hf.spacing_x = sx;
+    hf.spacing_y = sy;
     hf.geo = Some(aerie::terrain::GeoReference::Geographic {
         south_lat_deg: 47.0,
         west_lon_deg: 11.0,
-        dlat_deg: 1.0 / 3600.0,
-        dlon_deg: 1.0 / 3600.0,
+        dlat_deg: d,
+        dlon_deg: d,
     });
-    let d = desc(LodMode::Tessellation, 1.0);
-    let (ds, bake) = prepare(&d, &hf);
-    let mut r = aerie::render::frame::TerrainRenderer::new(&d).expect("renderer");
-    let e = r
-        .load_terrain(ds, bake, DVec3::new(1900.0, 1900.0, 1000.0))
-        .expect_err("a geographic grid is refused");
-    assert!(e.to_string().contains("geographic"), "{e}");
-    let counters = r.validation_counters();
-    r.destroy();
-    assert_validation_clean(&counters);
+    hf
+}
+
+#[test]
+fn on_the_ellipsoid_tessellation_matches_full_at_high_density() {
+    let hf = geographic_hills();
+    let grid = aerie::terrain::geodesy::GeoGrid::of(hf.geo.as_ref(), hf.spacing_x, hf.spacing_y)
+        .expect("a geographic grid");
+    // 2200 m up, five samples south of the grid's middle column, looking north to the horizon.
+    let eye = grid.world_of_grid(
+        glam::DVec2::new(128.0 * hf.spacing_x, -5.0 * hf.spacing_y),
+        2200.0,
+    );
+    let cam = Camera::new(
+        eye,
+        Attitude::from_degrees(0.0, -25.0, 0.0),
+        Frustum::symmetric(90f64.to_radians(), W, H),
+    );
+    let full_desc = desc(LodMode::Full, 1.0);
+    let (ds, bake) = prepare(&full_desc, &hf);
+    let render = |d: &RendererDesc| render_dataset(d, ds.clone(), bake.clone(), &[cam]).remove(0);
+    let full = render(&full_desc);
+    let high = render(&desc(LodMode::Tessellation, 4.0));
+    let low = render(&desc(LodMode::Tessellation, 0.25));
+    let params = MeasureParams {
+        tau_px: 1.0,
+        curvature: true,
+        ..MeasureParams::default()
+    };
+    let err = |f: &Rendered| {
+        measure(
+            &ds,
+            &cam,
+            (W, H),
+            &f.depth,
+            Some(&full.depth),
+            &params,
+            None,
+        )
+    };
+    let (e_high, e_low) = (err(&high), err(&low));
+    eprintln!(
+        "ellipsoid: full {} triangles; tess ×4 {} triangles, max {:.3} px, p99 {:.3} px, mean {:.4} px; ×0.25 {} triangles, max {:.3} px",
+        full.stats.triangles,
+        high.stats.triangles,
+        e_high.max_px(),
+        e_high.p99_px(),
+        e_high.mean_px(),
+        low.stats.triangles,
+        e_low.max_px()
+    );
+    let out = test_output_dir();
+    for (name, f) in [("full", &full), ("high", &high), ("low", &low)] {
+        let path = out.join(format!("tess_geo_{name}.png"));
+        aerie::tools::output::write_png(&path, W, H, &f.rgba).unwrap();
+    }
+    let covered = |f: &Rendered| f.depth.iter().filter(|&&z| z > 0.0).count();
+    assert!(covered(&full) > (W * H / 3) as usize);
+    // Converging to `full` says the vertices are placed on the ellipsoid as the tiles are.
+    assert!(
+        e_high.mean_px() < 0.1 && e_high.p99_px() < 1.0,
+        "{e_high:?}"
+    );
+    assert!(e_high.max_px() < 5.0, "{e_high:?}");
+    assert!(
+        e_low.max_px() > 2.0 * e_high.max_px(),
+        "{e_low:?} vs {e_high:?}"
+    );
+    assert!(low.stats.triangles < high.stats.triangles);
+    // Cells behind the eye are culled by their placed boxes: some, not all.
+    assert_eq!(high.stats.tiles_considered, 64);
+    assert!(
+        high.stats.instances < 128 && high.stats.instances > 16,
+        "{}",
+        high.stats.instances
+    );
 }

@@ -443,8 +443,13 @@ impl TerrainRenderer {
         }
         let d = &self.device;
         if self.desc.select.mode == LodMode::Tessellation {
-            let geo = GeoGrid::of(grid.geo.as_ref(), grid.spacing_x, grid.spacing_y);
-            self.tess = Some(TessTerrain::new(d, &mut self.ring, &source, geo.is_some())?);
+            let earth = GeoGrid::of(grid.geo.as_ref(), grid.spacing_x, grid.spacing_y);
+            self.tess = Some(TessTerrain::new(
+                d,
+                &mut self.ring,
+                &source,
+                earth.as_ref(),
+            )?);
         }
         if let Some(mut old) = self.gpu_normals.take() {
             old.destroy(d);

@@ -17,7 +17,8 @@
 //! bounded in the node's box and ε), rotated to world axes; the shader evaluates them in f32
 //! (`projected_offset`). Offsets stay within half a node, so every rounding is relative to it.
 //!
-//! [`emulate_vertex`] is the shader's arithmetic written again in f32, operation for
+//! The shader side is `shaders/geo_node.glsl`, shared by the tiles and the tessellation
+//! baseline. [`emulate_vertex`] is its arithmetic written again in f32, operation for
 //! operation, so that its precision is tested on the CPU against the f64 reference
 //! (`tests/tests/geodesy.rs`). Keep the two in step.
 
@@ -27,20 +28,8 @@ use aerie_terrain::geodesy::projected::ProjectedGrid;
 use aerie_terrain::geodesy::wgs84::{WGS84_A, WGS84_E2};
 use aerie_terrain::geodesy::{GeoGrid, Geodetic};
 
+pub use crate::render::gpu::GeoFields;
 use crate::render::gpu::TileInstance;
-
-/// The instance fields of one node (see `shaders/gpu_types.glsl`); all zero on the flat path
-/// (`geo_origin.w == 0` tells the shader so).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct GeoFields {
-    pub geo_origin: [f32; 4],
-    pub geo_axis_r: [f32; 4],
-    pub geo_axis_t: [f32; 4],
-    pub geo_axis_z: [f32; 4],
-    pub geo_radius: [f32; 4],
-    pub geo_s: [[f32; 4]; 9],
-    pub geo_n: [[f32; 4]; 10],
-}
 
 /// The eye of a frame over a geographic grid: what every node's frame is computed from.
 #[derive(Debug, Clone, Copy)]
@@ -68,6 +57,12 @@ impl GeoEye {
     /// with `q` quads per side of `step` samples: its frame sits at the centre vertex, so
     /// offsets stay within half a node.
     pub fn node_fields(&self, origin: [i64; 2], step: u32, q: u32) -> GeoFields {
+        self.node_fields_rel(origin, step, q).0
+    }
+
+    /// [`Self::node_fields`] and the f64 vector from the eye to the node's centre vertex (what
+    /// `geo_origin.xyz` rounds): with the eye at the world origin, the centre's world position.
+    pub fn node_fields_rel(&self, origin: [i64; 2], step: u32, q: u32) -> (GeoFields, DVec3) {
         let half = (q / 2) as i64 * step as i64;
         if let Some(p) = &self.grid.projected {
             return self.projected_fields(p, origin, half);
@@ -87,19 +82,25 @@ impl GeoEye {
         let r0_hi = r0 as f32;
         let r0_lo = (r0 - r0_hi as f64) as f32;
         let v4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
-        GeoFields {
+        let fields = GeoFields {
             geo_origin: v4(rel, self.dlat_rad),
             geo_axis_r: v4(axis_r, sp),
             geo_axis_t: v4(axis_t, cp),
             geo_axis_z: v4(axis_z, w0),
             geo_radius: [self.dlon_rad as f32, r0_hi, r0_lo, 0.0],
             ..Default::default()
-        }
+        };
+        (fields, rel)
     }
 
     /// A projected grid's node (see the module documentation): `half` samples from its
     /// south-west vertex `origin` to its centre.
-    fn projected_fields(&self, p: &ProjectedGrid, origin: [i64; 2], half: i64) -> GeoFields {
+    fn projected_fields(
+        &self,
+        p: &ProjectedGrid,
+        origin: [i64; 2],
+        half: i64,
+    ) -> (GeoFields, DVec3) {
         let (sx, sy) = (self.grid.spacing_x, self.grid.spacing_y);
         let centre = DVec2::new(
             (origin[0] + half) as f64 * sx,
@@ -124,7 +125,7 @@ impl GeoEye {
             geo_n[k + 1] = v(poly.normal[k], 0.0);
         }
         geo_n[0] = v(poly.normal0, 0.0);
-        GeoFields {
+        let fields = GeoFields {
             geo_origin: [
                 rel.x as f32,
                 rel.y as f32,
@@ -135,7 +136,8 @@ impl GeoEye {
             geo_s,
             geo_n,
             ..Default::default()
-        }
+        };
+        (fields, rel)
     }
 }
 

@@ -58,6 +58,22 @@ pub struct TileInstance {
     pub geo_n: [[f32; 4]; 10],
 }
 
+/// A node's place on the WGS84 ellipsoid (`shaders/gpu_types.glsl` `GeoFields`, std430; see
+/// `render/geo_instances.rs`): the tail of [`TileInstance`], and one record per base-mesh cell
+/// of the tessellation baseline. All zero on the flat path (`geo_origin.w == 0` tells the
+/// shader so).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq, Default)]
+pub struct GeoFields {
+    pub geo_origin: [f32; 4],
+    pub geo_axis_r: [f32; 4],
+    pub geo_axis_t: [f32; 4],
+    pub geo_axis_z: [f32; 4],
+    pub geo_radius: [f32; 4],
+    pub geo_s: [[f32; 4]; 9],
+    pub geo_n: [[f32; 4]; 10],
+}
+
 /// `VkDrawIndexedIndirectCommand`, as the device reads it (a Pod twin of ash's struct).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq, Eq, Default)]
@@ -240,6 +256,22 @@ mod tests {
                 geo_s,
                 geo_n
             ]
+        );
+    }
+
+    #[test]
+    fn geo_fields_match_glsl_std430_and_the_tile_instance_tail() {
+        check!(
+            GeoFields,
+            Rules::Std430,
+            [geo_origin, geo_axis_r, geo_axis_t, geo_axis_z, geo_radius, geo_s, geo_n]
+        );
+        // terrain.vert builds a GeoFields from the instance's fields: same order, same sizes.
+        let tail = offset_of!(TileInstance, geo_origin);
+        assert_eq!(size_of::<TileInstance>() - tail, size_of::<GeoFields>());
+        assert_eq!(
+            offset_of!(TileInstance, geo_n) - tail,
+            offset_of!(GeoFields, geo_n)
         );
     }
 

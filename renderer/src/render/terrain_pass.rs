@@ -24,7 +24,8 @@ pub fn descriptor_pool_sizes() -> [vk::DescriptorPoolSize; 3] {
         },
         vk::DescriptorPoolSize {
             ty: vk::DescriptorType::STORAGE_BUFFER,
-            descriptor_count: DESCRIPTOR_SETS,
+            // The tiles' instances, or the tessellation set's patches, heights and cells.
+            descriptor_count: DESCRIPTOR_SETS * 3,
         },
         vk::DescriptorPoolSize {
             ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,

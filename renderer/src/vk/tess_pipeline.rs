@@ -26,6 +26,8 @@ const TERRAIN_FRAG: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/terrain.fr
 pub const TESS_BINDING_FRAME: u32 = 0;
 pub const TESS_BINDING_PATCHES: u32 = 1;
 pub const TESS_BINDING_HEIGHTS: u32 = 2;
+/// The drawn cells' frames on the ellipsoid (`GeoFields`, one zeroed record when flat).
+pub const TESS_BINDING_CELLS: u32 = 3;
 
 pub struct TessPipeline {
     pub set_layout: vk::DescriptorSetLayout,
@@ -70,6 +72,11 @@ impl TessPipeline {
             ),
             binding(
                 TESS_BINDING_HEIGHTS,
+                vk::DescriptorType::STORAGE_BUFFER,
+                S::TESSELLATION_EVALUATION,
+            ),
+            binding(
+                TESS_BINDING_CELLS,
                 vk::DescriptorType::STORAGE_BUFFER,
                 S::TESSELLATION_EVALUATION,
             ),

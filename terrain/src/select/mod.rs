@@ -30,7 +30,7 @@ pub use skirts::neighbour_eps;
 pub use tess_density::{sample_density, TessDensity, DEFAULT_TOL_M, TESS_LEVEL_CAP, TESS_PATCH};
 pub use tessellation::{
     distance_factor, edge_factor, rounded_level, select_patches, triangles_emitted, Spacing,
-    TessParams, TessPatch, TessStats,
+    TessParams, TessPatch, TessPlacement, TessStats,
 };
 
 #[cfg(test)]

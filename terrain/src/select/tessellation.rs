@@ -19,6 +19,9 @@
 //!   discard the patch): a flat patch is drawn as its base triangle;
 //! - factors are rounded to 1/256 so that the tessellator's fixed-point rounding and this
 //!   module's agree on the number of segments;
+//! - on the ellipsoid (a geographic or UTM grid, [`TessPlacement`]) each cell's box and each
+//!   lattice vertex's distance are taken from their true world positions (the paper's terrain
+//!   is flat); the GPU places every generated vertex there too (`shaders/geo_node.glsl`);
 //! - `dmin` = 0 and `dmax` the dataset's diagonal by default (the paper's listing hard-codes
 //!   1 m and 6 km for its demo terrain); no coarser patches far away: the paper's base mesh is
 //!   one static grid.
@@ -26,7 +29,8 @@
 use glam::DVec2;
 
 use crate::camera::Camera;
-use crate::tiles::outside_frustum;
+use crate::geodesy::GeoGrid;
+use crate::tiles::{outside_frustum, Aabb};
 
 use super::bound::tile_aabb;
 use super::tess_density::TessDensity;
@@ -143,11 +147,49 @@ fn quantise(level: f64, max_level: u32) -> f32 {
     ((level.clamp(1.0, top as f64) * 256.0).round() / 256.0) as f32
 }
 
-/// The frame's patches over `density` (cells `spacing` metres per sample) seen by `camera`,
-/// appended to `out` (cleared first), and what it cost.
+/// The base mesh placed on the WGS84 ellipsoid: each cell's world box and each lattice
+/// vertex's world position. World axes (ENU at the grid's south-west sample) do not move with
+/// the eye, so both are computed once, at load.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TessPlacement {
+    /// Per cell, `cy * cells[0] + cx`: a box holding the cell's surface between its lowest and
+    /// highest sample (`GeoGrid::node_geometry`, the ellipsoid's sag included).
+    pub boxes: Vec<Aabb>,
+    /// Per lattice vertex, `ly * (cells[0] + 1) + lx`: its world position at its height.
+    pub corners: Vec<glam::DVec3>,
+}
+
+impl TessPlacement {
+    /// `density`'s cells over `grid` (grid metres = samples × the grid's spacings).
+    pub fn new(density: &TessDensity, grid: &GeoGrid) -> Self {
+        let [nx, ny] = density.cells;
+        let sp = DVec2::new(grid.spacing_x, grid.spacing_y);
+        let at = |lx: u32, ly: u32| {
+            let s = density.corner_sample(lx, ly);
+            DVec2::new(s[0] as f64, s[1] as f64) * sp
+        };
+        let mut boxes = Vec::with_capacity((nx * ny) as usize);
+        for cy in 0..ny {
+            for cx in 0..nx {
+                let [lo, hi] = density.cell_range[(cy * nx + cx) as usize];
+                let (a, b) = (at(cx, cy), at(cx + 1, cy + 1));
+                boxes.push(grid.node_geometry(a, b, lo, hi).aabb);
+            }
+        }
+        let corners = (0..=ny)
+            .flat_map(|ly| (0..=nx).map(move |lx| (lx, ly)))
+            .map(|(lx, ly)| grid.world_of_grid(at(lx, ly), density.corner_height(lx, ly) as f64))
+            .collect();
+        Self { boxes, corners }
+    }
+}
+
+/// The frame's patches over `density` (cells `spacing` metres per sample; on the ellipsoid
+/// where `placed` says) seen by `camera`, appended to `out` (cleared first), and what it cost.
 pub fn select_patches(
     density: &TessDensity,
     spacing: [f64; 2],
+    placed: Option<&TessPlacement>,
     camera: &Camera,
     params: &TessParams,
     out: &mut Vec<TessPatch>,
@@ -161,7 +203,10 @@ pub fn select_patches(
     };
     // A function of the lattice vertex alone: every cell computes the same value for it.
     let fd = |lx: u32, ly: u32| {
-        let p = corner(lx, ly).extend(density.corner_height(lx, ly) as f64);
+        let p = match placed {
+            Some(pl) => pl.corners[(ly * (nx + 1) + lx) as usize],
+            None => corner(lx, ly).extend(density.corner_height(lx, ly) as f64),
+        };
         distance_factor((p - eye).length(), params.d_min_m, params.d_max_m)
     };
     let (g, max) = (params.global, params.max_level);
@@ -172,9 +217,14 @@ pub fn select_patches(
     };
     for cy in 0..ny {
         for cx in 0..nx {
-            let range = density.cell_range[(cy * nx + cx) as usize];
-            let (lo, hi) = (corner(cx, cy), corner(cx + 1, cy + 1));
-            let aabb = tile_aabb(lo, hi, range[0], range[1], eye, params.curvature, cell_diag);
+            let aabb = match placed {
+                Some(pl) => pl.boxes[(cy * nx + cx) as usize],
+                None => {
+                    let range = density.cell_range[(cy * nx + cx) as usize];
+                    let (lo, hi) = (corner(cx, cy), corner(cx + 1, cy + 1));
+                    tile_aabb(lo, hi, range[0], range[1], eye, params.curvature, cell_diag)
+                }
+            };
             if outside_frustum(camera, &aabb) {
                 stats.culled += 1;
                 continue;
@@ -316,7 +366,7 @@ mod tests {
         let d = TessDensity::new(&hs, [w as u32, h as u32], 32, 0.5).unwrap();
         let cam = camera_at(DVec3::new(64.0 * 30.0, -3000.0, 3000.0), -35.0);
         let mut out = Vec::new();
-        let s = select_patches(&d, [30.0, 30.0], &cam, &params(32.0), &mut out);
+        let s = select_patches(&d, [30.0, 30.0], None, &cam, &params(32.0), &mut out);
         assert!(s.patches > 0);
         let flat: Vec<_> = out.iter().filter(|p| p.cell[0] == 0).collect();
         // An inner rough cell (the grid's border rows and columns show fewer directions).
@@ -333,11 +383,81 @@ mod tests {
             assert!(p.outer.iter().all(|&f| f > 8.0) && p.inner > 8.0, "{p:?}");
         }
         // A larger knob: more triangles; nearer the eye: higher factors.
-        let more = select_patches(&d, [30.0, 30.0], &cam, &params(64.0), &mut Vec::new());
+        let more = select_patches(&d, [30.0, 30.0], None, &cam, &params(64.0), &mut Vec::new());
         assert!(more.triangles > s.triangles);
         let far = camera_at(DVec3::new(64.0 * 30.0, -15000.0, 3000.0), -10.0);
-        let fewer = select_patches(&d, [30.0, 30.0], &far, &params(32.0), &mut Vec::new());
+        let fewer = select_patches(&d, [30.0, 30.0], None, &far, &params(32.0), &mut Vec::new());
         assert!(fewer.triangles < s.triangles, "{fewer:?} {s:?}");
+    }
+
+    /// A 1/1200° grid at 47° N, 257 × 257 samples (cells of 32: 8 × 8), on the ellipsoid.
+    fn geo_grid() -> GeoGrid {
+        let d = 1.0 / 1200.0;
+        let (sx, sy) = crate::load::geographic_spacing_m(47.05, d, d);
+        let geo = crate::heightfield::GeoReference::Geographic {
+            south_lat_deg: 47.0,
+            west_lon_deg: 11.0,
+            dlat_deg: d,
+            dlon_deg: d,
+        };
+        GeoGrid::of(Some(&geo), sx, sy).unwrap()
+    }
+
+    #[test]
+    fn placed_boxes_hold_every_sample_on_the_ellipsoid_and_cull_by_them() {
+        let (w, h) = (257usize, 257usize);
+        let hs = heights(w, h, |c, r| {
+            (800.0 + 600.0 * ((c as f32 * 0.04).sin() * (r as f32 * 0.05).cos())).max(0.0)
+        });
+        let d = TessDensity::new(&hs, [w as u32, h as u32], 32, 0.5).unwrap();
+        let grid = geo_grid();
+        let placed = TessPlacement::new(&d, &grid);
+        assert_eq!(placed.boxes.len(), 64);
+        assert_eq!(placed.corners.len(), 81);
+        let sp = DVec2::new(grid.spacing_x, grid.spacing_y);
+        // Every sample of every cell (its edges included) lies in the cell's box.
+        for cy in 0..8u32 {
+            for cx in 0..8u32 {
+                let b = placed.boxes[(cy * 8 + cx) as usize];
+                for r in cy * 32..=cy * 32 + 32 {
+                    for c in cx * 32..=cx * 32 + 32 {
+                        let hgt = hs[r as usize * w + c as usize] as f64;
+                        let p = grid.world_of_grid(DVec2::new(c as f64, r as f64) * sp, hgt);
+                        assert!(
+                            p.cmpge(b.min - 1e-6).all() && p.cmple(b.max + 1e-6).all(),
+                            "cell ({cx}, {cy}) sample ({c}, {r}): {p:?} outside {b:?}"
+                        );
+                    }
+                }
+            }
+        }
+        // The far corner sits below the flat plane by the Earth's curvature (~ d²/2R).
+        let far = placed.corners[80];
+        let flat_z = d.corner_height(8, 8) as f64;
+        let drop = (far.x * far.x + far.y * far.y) / (2.0 * 6.371e6);
+        assert!(
+            (flat_z - far.z - drop).abs() < 0.05 * drop,
+            "{far:?} {drop}"
+        );
+        // Looking north from the middle of the south edge: the cells behind the eye are
+        // culled, those ahead drawn, and the distances are the placed ones.
+        let eye = grid.world_of_grid(DVec2::new(128.0, 100.0) * sp, 2500.0);
+        let cam = camera_at(eye, -20.0);
+        let mut out = Vec::new();
+        let s = select_patches(
+            &d,
+            [sp.x, sp.y],
+            Some(&placed),
+            &cam,
+            &params(32.0),
+            &mut out,
+        );
+        assert!(s.culled > 0 && s.patches > 0, "{s:?}");
+        assert!(
+            out.iter().all(|p| p.cell[1] >= 2),
+            "cells behind the eye drawn"
+        );
+        assert!(out.iter().any(|p| p.cell[1] == 7));
     }
 
     #[test]
@@ -350,7 +470,7 @@ mod tests {
         // Looking north over part of the grid from its south-west corner.
         let cam = camera_at(DVec3::new(600.0, -500.0, 1500.0), -20.0);
         let mut out = Vec::new();
-        let s = select_patches(&d, [30.0, 30.0], &cam, &params(32.0), &mut out);
+        let s = select_patches(&d, [30.0, 30.0], None, &cam, &params(32.0), &mut out);
         assert!(s.culled > 0 && s.patches > 0, "{s:?}");
         assert_eq!(s.patches + 2 * s.culled, 2 * s.cells);
         let get = |cx: u32, cy: u32, nw: bool| {

@@ -318,23 +318,10 @@ fn run_flight(
     let eye0 = flight.pose_at(0.0).0;
     let t_setup = Instant::now();
     let mut lanes: Vec<Lane> = Vec::new();
-    let geographic = matches!(
-        ds.hf.geo,
-        Some(aerie_terrain::GeoReference::Geographic { .. })
-    );
     let drape = crate::app::renderer_setup::drape_input(&a.drape)?;
     // `--drape-mb` also bounds a store's imagery layer (what is held whole, what streams).
     let drape_budget = crate::app::renderer_setup::drape_budget(&a.drape)?;
     for &(config, reported) in &lane_configs {
-        if config.mode == LodMode::Tessellation && geographic {
-            // The tessellation baseline draws flat grids only (render/tess_pass.rs).
-            eprintln!(
-                "{}: not run on {}: a geographic grid, which the tessellation baseline does not draw",
-                config.label(),
-                input.dem.display()
-            );
-            continue;
-        }
         let mut desc = lane_desc(a, p, config);
         desc.drape = drape.clone();
         desc.drape_budget_bytes = drape_budget;
