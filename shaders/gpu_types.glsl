@@ -50,6 +50,8 @@ struct TileInstance {
     uint slot_x;         // pool texel of this node's south-west vertex (r > 0)
     uint slot_y;
     uint slot_stride;    // pool texels between adjacent vertices: 2^(node level - (L - r))
+    // CDLOD's geomorph (terrain/src/select/cdlod_morph.rs `Morph::to_gpu`); all zero in other modes.
+    vec4 morph;          // xy: the node's zone (start, end), metres from the eye, y = 0 none; x = -1: a quadrant drawn for its parent (fully morphed), zw its parent's zone
     // Geographic grids on the WGS84 ellipsoid (render/geo_instances.rs); all zero on the flat path.
     vec4 geo_origin;     // xyz: node's centre vertex at h = 0 relative to the eye, world metres (f64 -> f32); w: latitude step per sample (rad), or on a projected grid samples -> u; 0 = flat
     vec4 geo_axis_r;     // xyz: world axis of the centre's meridian frame pointing away from the polar axis; w: sin(lat0)

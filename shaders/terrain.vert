@@ -49,6 +49,35 @@ float fetch(TileInstance t, ivec2 ij) {
     }
 }
 
+// CDLOD's geomorph (terrain/src/select/cdlod_morph.rs, whose `morph_k` and `morph_vertex` are
+// this arithmetic on the CPU: keep them in step). The morph factor of a vertex `dist` metres
+// from the eye in `zone` (start, end); 0 for an empty zone.
+float morph_k(vec2 zone, float dist) {
+    return zone.y > 0.0 ? clamp((dist - zone.x) / max(zone.y - zone.x, 1e-3), 0.0, 1.0) : 0.0;
+}
+
+// Vertex ij slid by k1 onto the next coarser grid — an odd coordinate towards its lower-left
+// neighbour, along the row, the column or the quads' south-west → north-east diagonal, its
+// height along that edge — and, for a quadrant drawn for its parent (k1 = 1), by k2 onto the
+// grid after. Returns the fractional vertex; `h` becomes its height.
+vec2 morph_vertex(TileInstance t, ivec2 ij, float k1, float k2, inout float h) {
+    ivec2 odd = ij & 1;
+    vec2 f = vec2(ij);
+    if (k1 > 0.0 && odd != ivec2(0)) {
+        h = mix(h, fetch(t, ij - odd), k1);
+        f -= vec2(odd) * k1;
+    }
+    if (k2 > 0.0) {
+        ivec2 p = ij - odd;
+        ivec2 odd2 = (p >> 1) & 1;
+        if (odd2 != ivec2(0)) {
+            h = mix(h, fetch(t, p - 2 * odd2), k2);
+            f -= 2.0 * vec2(odd2) * k2;
+        }
+    }
+    return f;
+}
+
 void main() {
     TileInstance t = tiles[gl_InstanceIndex];
     // Every instance is one m×m node; its vertex spacing is `step` samples.
@@ -72,42 +101,53 @@ void main() {
     ivec2 lim = (frame.grid_size.xy - 1 - t.origin_sample + step - 1) / step;
     ij = min(ij, lim);
     float h = fetch(t, ij);
-    v_grid = vec2(t.origin_sample + ij * step);
+    // Heights per sample along the grid's axes, from central differences at the drawn
+    // resolution (neighbours outside the node come from the same texture; a pool slot clamps at
+    // its edge): the shading normal.
     ivec2 lo = ij - 1;
     ivec2 hi = ij + 1;
-    if (t.geo_origin.w != 0.0) {
+    vec2 dh = vec2(fetch(t, ivec2(hi.x, ij.y)) - fetch(t, ivec2(lo.x, ij.y)),
+        fetch(t, ivec2(ij.x, hi.y)) - fetch(t, ivec2(ij.x, lo.y))) / (vec2(hi - lo) * float(step));
+    bool geo = t.geo_origin.w != 0.0;
+    GeoFields g = GeoFields(t.geo_origin, t.geo_axis_r, t.geo_axis_t, t.geo_axis_z,
+        t.geo_radius, t.geo_s, t.geo_n);
+    float skirt_m = skirt ? t.skirt_m : 0.0;
+    // CDLOD: the factors from the unmorphed vertex's distance to the eye (the reference's
+    // `eyeDist`), then the vertex morphed.
+    vec2 f = vec2(ij);
+    bool quadrant = t.morph.x < 0.0;
+    if (t.morph.y > 0.0 || quadrant) {
+        vec3 rel0;
+        if (geo) {
+            rel0 = geo_vertex(g, vec2((ij - n / 2) * step), h, dh).rel;
+        } else {
+            vec2 xy0 = t.origin_rel + vec2(ij) * float(step) * frame.grid_spacing.xy;
+            rel0 = vec3(xy0, h - frame.grid_spacing.z - frame.grid_spacing.w * dot(xy0, xy0));
+        }
+        float dist = length(rel0);
+        float k1 = quadrant ? 1.0 : morph_k(t.morph.xy, dist);
+        float k2 = quadrant ? morph_k(t.morph.zw, dist) : 0.0;
+        f = morph_vertex(t, ij, k1, k2, h);
+    }
+    v_grid = vec2(t.origin_sample) + f * float(step);
+    v_height = h;
+    v_tile = uint(findMSB(t.step)) | (t.refinement << 8);
+    if (geo) {
         // On the ellipsoid (geographic or projected): the node's frame plus the vertex's offset.
-        GeoFields g = GeoFields(t.geo_origin, t.geo_axis_r, t.geo_axis_t, t.geo_axis_z,
-            t.geo_radius, t.geo_s, t.geo_n);
-        // Heights per sample along the grid's axes, from central differences.
-        vec2 span = vec2(hi - lo) * float(step);
-        vec2 dh = vec2(fetch(t, ivec2(hi.x, ij.y)) - fetch(t, ivec2(lo.x, ij.y)),
-            fetch(t, ivec2(ij.x, hi.y)) - fetch(t, ivec2(ij.x, lo.y))) / span;
-        GeoVertex gv = geo_vertex(g, vec2((ij - n / 2) * step), skirt ? h - t.skirt_m : h, dh);
+        GeoVertex gv = geo_vertex(g, (f - vec2(n / 2)) * float(step), h - skirt_m, dh);
         v_rel = gv.rel;
         v_normal = gv.normal;
-        v_height = h;
         v_up = gv.up;
         v_north = gv.north;
-        v_tile = uint(findMSB(t.step)) | (t.refinement << 8);
         gl_Position = frame.relative_world_to_clip * vec4(gv.rel, 1.0);
         return;
     }
-    vec2 xy = t.origin_rel + vec2(ij) * float(step) * frame.grid_spacing.xy;
-    float z = h - frame.grid_spacing.z - frame.grid_spacing.w * dot(xy, xy);
-    if (skirt) z -= t.skirt_m;
-
-    // Normal from central differences at the drawn resolution (neighbours outside the node
-    // come from the same texture; a pool slot clamps at its edge).
-    vec2 span = vec2(hi - lo) * float(step) * frame.grid_spacing.xy;
-    float dhdx = (fetch(t, ivec2(hi.x, ij.y)) - fetch(t, ivec2(lo.x, ij.y))) / span.x;
-    float dhdy = (fetch(t, ivec2(ij.x, hi.y)) - fetch(t, ivec2(ij.x, lo.y))) / span.y;
-
+    vec2 xy = t.origin_rel + f * float(step) * frame.grid_spacing.xy;
+    float z = h - frame.grid_spacing.z - frame.grid_spacing.w * dot(xy, xy) - skirt_m;
+    vec2 slope = dh / frame.grid_spacing.xy;
     v_rel = vec3(xy, z);
-    v_normal = normalize(vec3(-dhdx, -dhdy, 1.0));
-    v_height = h;
+    v_normal = normalize(vec3(-slope.x, -slope.y, 1.0));
     v_up = vec3(0.0, 0.0, 1.0);
     v_north = vec3(0.0, 1.0, 0.0);
-    v_tile = uint(findMSB(t.step)) | (t.refinement << 8);
     gl_Position = frame.relative_world_to_clip * vec4(xy, z, 1.0);
 }

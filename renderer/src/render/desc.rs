@@ -132,6 +132,37 @@ impl RendererDesc {
         }
     }
 
+    /// The clipmap over `grid` for a terrain baked as `bake`, or why that bake cannot be drawn
+    /// by this renderer (sizes, tile size, levels), naming the re-bake that fixes it (pure).
+    pub fn clipmap_for_bake(
+        &self,
+        grid: &aerie_terrain::source::SourceGrid,
+        bake: &aerie_terrain::bake::ErrorBake,
+    ) -> Result<ClipmapDesc, String> {
+        if bake.width != grid.width || bake.height != grid.height {
+            return Err(format!(
+                "bake is for {}x{} samples, dataset has {}x{}",
+                bake.width, bake.height, grid.width, grid.height
+            ));
+        }
+        if bake.params.tile_size != self.tile_size {
+            return Err(format!(
+                "bake uses tiles of {} vertices, renderer {}: re-bake with --tile-size {}",
+                bake.params.tile_size, self.tile_size, self.tile_size
+            ));
+        }
+        let clipmap = self.clipmap(grid);
+        clipmap.validate().map_err(|e| format!("clipmap: {e}"))?;
+        let level_count = clipmap.level_count();
+        if bake.levels.len() < level_count as usize {
+            return Err(format!(
+                "bake has {} levels, the clipmap needs {level_count}: re-bake with --levels 0",
+                bake.levels.len()
+            ));
+        }
+        Ok(clipmap)
+    }
+
     /// The sample rectangles the first frame draws from wherever the eye is: the coarsest
     /// level's whole texture (it never moves). A caller streaming its terrain waits for these
     /// once before loading it — the only wait — so that the first frame has the whole terrain

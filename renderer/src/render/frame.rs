@@ -217,6 +217,11 @@ impl TerrainRenderer {
         &self.device.name
     }
 
+    /// The last frame's tile selection (before the budget's decisions): for tests and tools.
+    pub fn selection(&self) -> &Selection {
+        &self.selection
+    }
+
     pub fn validation_counters(&self) -> Arc<ValidationCounters> {
         self.instance.counters()
     }
@@ -383,29 +388,10 @@ impl TerrainRenderer {
             grid.geo.as_ref(),
         )
         .map_err(VkError::Input)?;
-        if bake.width != grid.width || bake.height != grid.height {
-            return Err(VkError::Input(format!(
-                "bake is for {}x{} samples, dataset has {}x{}",
-                bake.width, bake.height, grid.width, grid.height
-            )));
-        }
-        if bake.params.tile_size != self.desc.tile_size {
-            return Err(VkError::Input(format!(
-                "bake uses tiles of {} vertices, renderer {}: re-bake with --tile-size {}",
-                bake.params.tile_size, self.desc.tile_size, self.desc.tile_size
-            )));
-        }
-        let clipmap = self.desc.clipmap(&grid);
-        clipmap
-            .validate()
-            .map_err(|e| VkError::Input(format!("clipmap: {e}")))?;
+        let clipmap = (self.desc)
+            .clipmap_for_bake(&grid, &bake)
+            .map_err(VkError::Input)?;
         let level_count = clipmap.level_count();
-        if bake.levels.len() < level_count as usize {
-            return Err(VkError::Input(format!(
-                "bake has {} levels, the clipmap needs {level_count}: re-bake with --levels 0",
-                bake.levels.len()
-            )));
-        }
         GpuTerrain::check_level_limits(&self.device, &clipmap)?;
         if let Some(mut old) = self.terrain.take() {
             self.wait_all()?;

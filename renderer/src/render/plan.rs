@@ -37,6 +37,7 @@ use aerie_terrain::bake::ErrorBake;
 use aerie_terrain::camera::Camera;
 use aerie_terrain::clipmap::{place_levels, ClipmapDesc, LevelPlacement};
 use aerie_terrain::pool::{RefinedTilePool, Request, TileKey};
+use aerie_terrain::select::cdlod_morph::Morph;
 use aerie_terrain::select::{
     select_tiles, select_tiles_multi_ready, DrawItem, SelectParams, Selection, View,
 };
@@ -54,7 +55,7 @@ use crate::render::jobs::{
 };
 use crate::render::normal_map::normal_bytes;
 use crate::render::stats::{FrameStats, RESOLUTIONS};
-use crate::render::tile_instances::{build_instances, InstanceFrame};
+use crate::render::tile_instances::{build_instances, quarter_mesh_saving, InstanceFrame};
 pub use crate::render::tile_instances::{indirect_draws, slot_placement};
 
 /// Largest number of m×m instances one frame may draw (48 bytes each per frame in flight): the
@@ -415,7 +416,16 @@ pub fn plan_frame(
         },
         &plan.draw_list,
     );
-    let (draws, triangles) = indirect_draws(&groups, inputs.tile_indices);
+    let (draws, mut triangles) = indirect_draws(&groups, inputs.tile_indices);
+    // CDLOD's quadrants drawn for their parents count as the parent's quarter mesh they show.
+    let quadrants = plan
+        .draw_list
+        .iter()
+        .filter(|(i, _)| i.morph.quadrant)
+        .count() as u64;
+    if inputs.tile_indices.1 > 0 {
+        triangles -= quadrants * quarter_mesh_saving(state.clipmap.tile_quads);
+    }
     let total = instances.len();
     if total > MAX_INSTANCES {
         return Err(PlanError::Other(format!(
@@ -638,6 +648,12 @@ fn coarsen(
             node_tx,
             node_ty,
             eps_m: bake.eps(node_level, node_tx, node_ty),
+            // A node drawn coarser than chosen is no longer in its level's morph zone.
+            morph: if node_level == i.node_level {
+                i.morph
+            } else {
+                Morph::NONE
+            },
             ..i
         };
         let seen = draw_list[start..]

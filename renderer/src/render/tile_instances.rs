@@ -80,6 +80,7 @@ pub fn build_instances(
             slot_x,
             slot_y,
             slot_stride,
+            morph: item.morph.to_gpu(),
             geo_origin: g.geo_origin,
             geo_axis_r: g.geo_axis_r,
             geo_axis_t: g.geo_axis_t,
@@ -91,6 +92,18 @@ pub fn build_instances(
     }
     let sizes = groups.each_ref().map(|g| g.len() as u32);
     (groups.concat(), sizes)
+}
+
+/// Triangles of a skirted tile of `q` quads a side (grid 2q², skirt 2 per perimeter edge).
+pub fn skirted_tile_triangles(q: u32) -> u64 {
+    let q = q as u64;
+    2 * q * q + 8 * q
+}
+
+/// What one CDLOD quadrant drawn for its parent saves on the count: it is drawn as a whole
+/// tile of `q` quads fully morphed, and shows the parent's quarter mesh of q/2 quads a side.
+pub fn quarter_mesh_saving(q: u32) -> u64 {
+    skirted_tile_triangles(q) - skirted_tile_triangles(q / 2)
 }
 
 /// One indexed indirect command per refinement group, each starting where the previous ended,
@@ -114,4 +127,20 @@ pub fn indirect_draws(
         triangles += n as u64 * (index_count as u64 / 3);
     }
     (draws, triangles)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_quadrant_counts_as_the_parents_quarter_mesh() {
+        use aerie_terrain::mesh::skirted_tile_indices;
+        for q in [8u32, 16, 32] {
+            let full = skirted_tile_indices(q + 1).len() as u64 / 3;
+            let quarter = skirted_tile_indices(q / 2 + 1).len() as u64 / 3;
+            assert_eq!(skirted_tile_triangles(q), full);
+            assert_eq!(quarter_mesh_saving(q), full - quarter);
+        }
+    }
 }

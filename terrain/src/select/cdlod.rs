@@ -10,11 +10,14 @@
 //! by the parent over that quadrant. The coarsest level's range is unbounded (the reference
 //! ends it at the visibility distance; here the dataset ends first).
 //!
-//! Departures, both forced by the renderer drawing whole m×m nodes:
-//! - a quadrant the parent covers is drawn as the child node at the child's level (CDLOD draws
-//!   the parent's quarter mesh there: a quarter of these triangles, at the parent's error);
-//! - no vertex morphing: the node set is CDLOD's, the geomorph that hides its popping is not
-//!   drawn (it changes neither the triangles nor the error bound at the end of a range).
+//! Each drawn node carries its level's geomorph zone (`cdlod_morph.rs`): its vertices slide onto
+//! the parent's grid as they near the end of its range, as the reference's vertex shader does;
+//! the coarsest level, whose range is unbounded, does not morph.
+//!
+//! Departure, forced by the renderer drawing whole m×m nodes: a quadrant the parent covers is
+//! drawn as the child node fully morphed onto the parent's grid — the parent's quarter mesh
+//! exactly, its surface and its error — and then morphed by the parent's zone; it is counted
+//! as the quarter mesh's triangles (the GPU also draws the collapsed ones, of no area).
 //!
 //! Where a node lies outside the clipmap's finer patch it is a ring tile of its level and its
 //! subtree is drawn from one refined-tile pool slot, at most `max_refinement` levels finer
@@ -31,6 +34,7 @@ use super::bound::{
     curvature_interpolation_error, min_depth_of, outside_of, projected_error_px, tile_aabb,
     vertical_gain_of,
 };
+use super::cdlod_morph::{morph_zones, Morph};
 use super::selection::{DrawItem, SelectParams, Selection, View, MAX_REFINEMENT};
 
 /// The LOD range of level `level` (metres): `range_factor` node sides, so that it doubles per
@@ -96,6 +100,8 @@ struct Ctx<'a> {
     valid_max: DVec2,
     side0: f64,
     placements: &'a [LevelPlacement],
+    /// Each level's morph zone (start, end), metres.
+    zones: Vec<[f64; 2]>,
 }
 
 /// A node as CDLOD and the draw record see it.
@@ -106,8 +112,8 @@ struct Seen {
     rho_px: f64,
 }
 
-/// A node to draw (level, tx, ty, ε, ρ).
-type Node = (u32, u32, u32, f32, f32);
+/// A node to draw (level, tx, ty, ε, ρ) and how it morphs.
+type Node = ((u32, u32, u32, f32, f32), Morph);
 
 impl Ctx<'_> {
     fn has_terrain(&self, level: u32, tx: u32, ty: u32) -> bool {
@@ -191,12 +197,34 @@ impl Ctx<'_> {
             ),
             side0: 0.0,
             placements: &[],
+            zones: Vec::new(),
         };
         ctx.seen(level, tx, ty).distance
     }
 
     fn range(&self, level: u32) -> f64 {
         cdlod_range_m(self.params.cdlod_range, self.side0, level)
+    }
+
+    /// How a node of `level` drawn whole morphs (`root`: the coarsest level does not).
+    fn morph(&self, level: u32, root: bool) -> Morph {
+        if root {
+            return Morph::NONE;
+        }
+        let z = self.zones[level as usize];
+        Morph {
+            zone: [z[0] as f32, z[1] as f32],
+            ..Morph::NONE
+        }
+    }
+
+    /// How a quadrant of a `parent_level` node, drawn for it, morphs.
+    fn quadrant_morph(&self, parent_level: u32, parent_root: bool) -> Morph {
+        Morph {
+            quadrant: true,
+            parent_zone: self.morph(parent_level, parent_root).zone,
+            ..Morph::NONE
+        }
     }
 
     /// `LODSelect` of node (level, tx, ty); `finest` is the lowest level it may split to.
@@ -219,17 +247,21 @@ impl Ctx<'_> {
             CdlodDecision::LeftToParent => false,
             CdlodDecision::Culled => true,
             CdlodDecision::Draw => {
-                out.push((level, tx, ty, s.eps as f32, s.rho_px as f32));
+                let node = (level, tx, ty, s.eps as f32, s.rho_px as f32);
+                out.push((node, self.morph(level, root)));
                 true
             }
             CdlodDecision::Split => {
                 for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                     let (cx, cy) = (2 * tx + dx, 2 * ty + dy);
                     if !self.visit(level - 1, cx, cy, finest, false, out) {
-                        // The parent's quadrant: drawn as the child node (module docs).
+                        // The parent's quadrant: drawn as the child node morphed onto the
+                        // parent's grid (module docs), at the parent's error.
                         let c = self.seen(level - 1, cx, cy);
                         if c.visible {
-                            out.push((level - 1, cx, cy, c.eps as f32, c.rho_px as f32));
+                            let (eps, rho) = (s.eps.max(c.eps), s.rho_px.max(c.rho_px));
+                            let node = (level - 1, cx, cy, eps as f32, rho as f32);
+                            out.push((node, self.quadrant_morph(level, root)));
                         }
                     }
                 }
@@ -283,6 +315,10 @@ pub(super) fn select_cdlod(
         ),
         side0: q as f64 * spacing.max_element(),
         placements,
+        zones: morph_zones(
+            |l| cdlod_range_m(params.cdlod_range, q as f64 * spacing.max_element(), l),
+            bake.levels.len().saturating_sub(1) as u32,
+        ),
     };
     let top = placements.len() - 1;
     let roots = &bake.levels[coarsest.level as usize];
@@ -337,13 +373,11 @@ fn visit_clipmap(
                         stats.drawn += 1;
                         stats.refined[0] += 1;
                         stats.nodes += 1;
-                        out.items.push(DrawItem::whole(
-                            level - 1,
-                            cx,
-                            cy,
-                            c.eps as f32,
-                            c.rho_px as f32,
-                        ));
+                        let (eps, rho) = (s.eps.max(c.eps), s.rho_px.max(c.rho_px));
+                        out.items.push(DrawItem {
+                            morph: ctx.quadrant_morph(level, root),
+                            ..DrawItem::whole(level - 1, cx, cy, eps as f32, rho as f32)
+                        });
                     }
                 }
             }
@@ -357,7 +391,12 @@ fn visit_clipmap(
     ctx.visit(level, tx, ty, level - cap, root, nodes);
     out.levels[i].considered += 1;
     out.levels[i].drawn += 1;
-    out.push_refined(i, level, tx, ty, nodes);
+    let plain: Vec<_> = nodes.iter().map(|n| n.0).collect();
+    let first = out.items.len();
+    out.push_refined(i, level, tx, ty, &plain);
+    for (item, n) in out.items[first..].iter_mut().zip(nodes.iter()) {
+        item.morph = n.1;
+    }
     true
 }
 
@@ -495,5 +534,47 @@ mod tests {
             counts.push(sel.items.len());
         }
         assert!(counts[0] < counts[1] && counts[1] < counts[2], "{counts:?}");
+    }
+
+    /// Every drawn node morphs over its own level's zone — the coarsest level not at all — and
+    /// a quadrant drawn for its parent is fully morphed onto the parent's grid, then over the
+    /// parent's zone; the selection itself (which nodes) is the same as without morphing.
+    #[test]
+    fn nodes_carry_their_levels_morph_zone() {
+        let eye = DVec3::new(700.0, 1900.0, 250.0);
+        let mut quadrants = 0;
+        for range in [2.0, 4.0, 8.0] {
+            let (sel, _) = select(range, eye, -60.0);
+            // The roots: the coarsest clipmap level's tiles, whose range is unbounded.
+            let desc = scene().1;
+            let places = crate::clipmap::place_levels(&desc, [eye.x / 10.0, eye.y / 10.0]);
+            let top = places.last().unwrap().level;
+            let zones = morph_zones(|l| cdlod_range_m(range, 160.0, l), top);
+            let zone = |l: u32| {
+                let z = zones[l as usize];
+                [z[0] as f32, z[1] as f32]
+            };
+            assert!(!sel.items.is_empty());
+            for it in &sel.items {
+                let m = it.morph;
+                if m.quadrant {
+                    quadrants += 1;
+                    let parent = it.node_level + 1;
+                    let want = if parent == top {
+                        [0.0, 0.0]
+                    } else {
+                        zone(parent)
+                    };
+                    assert_eq!(m.parent_zone, want, "{it:?}");
+                    assert_eq!(m.to_gpu()[..2], [-1.0, 0.0]);
+                } else if it.node_level == top {
+                    assert_eq!(m, Morph::NONE, "{it:?}");
+                } else {
+                    assert_eq!(m.zone, zone(it.node_level), "{it:?}");
+                    assert!(m.zone[0] < m.zone[1]);
+                }
+            }
+        }
+        assert!(quadrants > 0, "no quadrant drawn for its parent");
     }
 }

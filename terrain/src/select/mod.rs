@@ -6,6 +6,7 @@
 
 mod bound;
 mod cdlod;
+pub mod cdlod_morph;
 mod horizon;
 mod node_cache;
 mod quadtree;

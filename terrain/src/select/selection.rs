@@ -1,6 +1,7 @@
 //! What a selection takes and gives: the LOD mode and parameters, the views, the draw items
 //! and per-level statistics.
 
+use super::cdlod_morph::Morph;
 use crate::camera::Camera;
 use crate::geodesy::GeoGrid;
 
@@ -105,6 +106,8 @@ pub struct DrawItem {
     pub eps_m: f32,
     /// Its projected error bound, pixels.
     pub rho_px: f32,
+    /// CDLOD's geomorph of the node (`cdlod_morph.rs`); [`Morph::NONE`] in every other mode.
+    pub morph: Morph,
 }
 
 impl DrawItem {
@@ -120,6 +123,7 @@ impl DrawItem {
             node_ty: ty,
             eps_m,
             rho_px,
+            morph: Morph::NONE,
         }
     }
 }
@@ -230,6 +234,7 @@ impl Selection {
                 node_ty,
                 eps_m,
                 rho_px,
+                morph: Morph::NONE,
             });
         }
     }

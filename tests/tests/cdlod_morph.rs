@@ -1,0 +1,234 @@
+//! CDLOD's geomorph on lavapipe with validation on, against a CPU oracle: every pixel of the
+//! frame is ray-cast against the morphed meshes of the nodes the selection drew — each vertex
+//! slid by the factor of its own distance to the eye (`aerie_terrain::select::cdlod_morph`, the
+//! shader's arithmetic on the CPU) — and the depth the GPU drew must be that surface's. The same
+//! oracle without the morph must miss a visible share of the pixels (so the test sees the morph),
+//! and the frame's triangle count must count each quadrant drawn for its parent as the parent's
+//! quarter mesh.
+
+use aerie::camera::{Attitude, Camera, Frustum};
+use aerie::render::frame::TerrainRenderer;
+use aerie::render::tile_instances::{quarter_mesh_saving, skirted_tile_triangles};
+use aerie::terrain::heightfield::Heightfield;
+use aerie::terrain::select::cdlod_morph::{morph_k, morph_vertex};
+use aerie::terrain::select::{DrawItem, LodMode, SelectParams};
+use aerie_tests::*;
+use glam::DVec3;
+
+const W: u32 = 256;
+const H: u32 = 144;
+const N: usize = 513;
+const SPACING: f64 = 10.0;
+
+fn hills() -> Heightfield {
+    let heights = (0..N)
+        .flat_map(|r| (0..N).map(move |c| (c as f64, r as f64)))
+        .map(|(c, r)| {
+            (250.0
+                + 180.0 * (c * 0.031).sin() * (r * 0.023).cos()
+                + 45.0 * (c * 0.17 + r * 0.11).sin()
+                + 12.0 * (c * 0.53 - r * 0.41).cos()) as f32
+        })
+        .collect();
+    Heightfield {
+        width: N,
+        height: N,
+        spacing_x: SPACING,
+        spacing_y: SPACING,
+        heights,
+        geo: None,
+        voids_filled: 0,
+        spacing_note: "synthetic".into(),
+    }
+}
+
+/// A node's triangles, world metres.
+type Mesh = Vec<[DVec3; 3]>;
+
+/// Möller–Trumbore: the ray's distance to triangle (a, b, c), if it hits.
+fn ray_triangle(o: DVec3, d: DVec3, a: DVec3, b: DVec3, c: DVec3) -> Option<f64> {
+    let (e1, e2) = (b - a, c - a);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = o - a;
+    let u = s.dot(p) * inv;
+    let q = s.cross(e1);
+    let v = d.dot(q) * inv;
+    let eps = 1e-9;
+    if u < -eps || v < -eps || u + v > 1.0 + eps {
+        return None;
+    }
+    let t = e2.dot(q) * inv;
+    (t > 0.0).then_some(t)
+}
+
+/// The node's mesh as the shader draws it (morphed unless `morph` is false), world metres.
+fn node_triangles(
+    hf: &Heightfield,
+    it: &DrawItem,
+    q: u32,
+    eye: DVec3,
+    morph: bool,
+) -> Vec<[DVec3; 3]> {
+    let step = 1i64 << it.node_level;
+    let node = q as i64 * step;
+    let origin = [it.node_tx as i64 * node, it.node_ty as i64 * node];
+    let sample = |ij: [i32; 2]| {
+        let c = (origin[0] + ij[0] as i64 * step) as usize;
+        let r = (origin[1] + ij[1] as i64 * step) as usize;
+        hf.heights[r * hf.width + c]
+    };
+    let side = q as i32 + 1;
+    let m = it.morph;
+    let verts: Vec<DVec3> = (0..side * side)
+        .map(|k| {
+            let ij = [k % side, k / side];
+            let world = |f: [f32; 2], h: f32| {
+                DVec3::new(
+                    (origin[0] as f64 + f[0] as f64 * step as f64) * SPACING,
+                    (origin[1] as f64 + f[1] as f64 * step as f64) * SPACING,
+                    h as f64,
+                )
+            };
+            let p0 = world([ij[0] as f32, ij[1] as f32], sample(ij));
+            if !morph {
+                return p0;
+            }
+            let dist = (p0 - eye).length() as f32;
+            let (k1, k2) = if m.quadrant {
+                (1.0, morph_k(m.parent_zone, dist))
+            } else {
+                (morph_k(m.zone, dist), 0.0)
+            };
+            let (f, h) = morph_vertex(ij, k1, k2, sample);
+            world(f, h)
+        })
+        .collect();
+    aerie::terrain::mesh::tile_indices(side as u32)
+        .chunks(3)
+        .map(|t| {
+            [
+                verts[t[0] as usize],
+                verts[t[1] as usize],
+                verts[t[2] as usize],
+            ]
+        })
+        .collect()
+}
+
+#[test]
+fn the_morphed_surface_is_drawn_and_quadrants_count_as_quarter_meshes() {
+    let hf = hills();
+    let mut desc = test_desc(W, H);
+    desc.select = SelectParams {
+        mode: LodMode::Cdlod,
+        cdlod_range: 3.0,
+        curvature: false,
+        ..SelectParams::default()
+    };
+    let (ds, bake) = prepare(&desc, &hf);
+    let eye = DVec3::new(2560.0, 400.0, 900.0);
+    let cam = Camera::new(
+        eye,
+        Attitude::from_degrees(0.0, -18.0, 0.0),
+        Frustum::symmetric(90f64.to_radians(), W, H),
+    );
+    let mut r = TerrainRenderer::new(&desc).expect("renderer");
+    r.load_terrain(ds, bake, eye).expect("load");
+    let mut stats = r.render(&cam).expect("render");
+    for _ in 0..3 {
+        stats = r.render(&cam).expect("render");
+    }
+    let depth = r.depth();
+    let items = r.selection().items.clone();
+    let counters = r.validation_counters();
+    r.destroy();
+    assert_validation_clean(&counters);
+    assert_eq!(stats.tiles_late, 0, "{stats:?}");
+
+    // The count: whole tiles, less what each quadrant's quarter mesh saves.
+    let q = desc.tile_size - 1;
+    let quadrants = items.iter().filter(|i| i.morph.quadrant).count() as u64;
+    let morphing = items.iter().filter(|i| i.morph.zone[1] > 0.0).count();
+    assert_eq!(
+        stats.triangles,
+        items.len() as u64 * skirted_tile_triangles(q) - quadrants * quarter_mesh_saving(q)
+    );
+    eprintln!(
+        "{} nodes, {morphing} with a morph zone, {quadrants} quadrants for their parents; {} triangles",
+        items.len(),
+        stats.triangles
+    );
+    assert!(quadrants > 0 && morphing > 0);
+
+    // Each node's meshes, morphed and not, for the nodes inside the grid's last sample.
+    let inside = |it: &DrawItem| {
+        let node = (q as usize) << it.node_level;
+        (it.node_tx as usize + 1) * node < N && (it.node_ty as usize + 1) * node < N
+    };
+    let meshes: Vec<(&DrawItem, Mesh, Mesh)> = items
+        .iter()
+        .filter(|it| inside(it))
+        .map(|it| {
+            (
+                it,
+                node_triangles(&hf, it, q, eye, true),
+                node_triangles(&hf, it, q, eye, false),
+            )
+        })
+        .collect();
+    let (mut covered, mut matched, mut unmorphed_off, mut in_quadrant) = (0, 0, 0, 0);
+    for py in 0..H {
+        for px in 0..W {
+            let z = depth[(py * W + px) as usize];
+            let Some(p) = cam.unproject_px(px, py, W, H, z) else {
+                continue;
+            };
+            let d = p - eye;
+            let t_gpu = d.length();
+            let dir = d / t_gpu;
+            let node_of = meshes.iter().find(|(it, _, _)| {
+                let side = ((q as u64) << it.node_level) as f64 * SPACING;
+                let (x0, y0) = (it.node_tx as f64 * side, it.node_ty as f64 * side);
+                (x0..=x0 + side).contains(&p.x) && (y0..=y0 + side).contains(&p.y)
+            });
+            let Some((it, morphed, flat)) = node_of else {
+                continue;
+            };
+            covered += 1;
+            let nearest = |tris: &[[DVec3; 3]]| {
+                tris.iter()
+                    .filter_map(|t| ray_triangle(eye, dir, t[0], t[1], t[2]))
+                    .fold(f64::INFINITY, f64::min)
+            };
+            let tol = 1e-3 * t_gpu + 0.02;
+            if (nearest(morphed) - t_gpu).abs() <= tol {
+                matched += 1;
+                in_quadrant += it.morph.quadrant as u32;
+            }
+            if (nearest(flat) - t_gpu).abs() > tol {
+                unmorphed_off += 1;
+            }
+        }
+    }
+    eprintln!(
+        "{covered} pixels over nodes inside the grid: {matched} on the morphed surface ({in_quadrant} in quadrants), {unmorphed_off} off the unmorphed one"
+    );
+    assert!(covered > (W * H / 3) as usize, "{covered}");
+    // Skirts (below node edges where neighbours meet at different levels) are the only pixels
+    // not on the top surface.
+    assert!(
+        matched as f64 >= 0.98 * covered as f64,
+        "{matched} of {covered}"
+    );
+    assert!(in_quadrant > 0);
+    // Without the morph the oracle misses a visible share: the frame shows it.
+    assert!(
+        unmorphed_off as f64 >= 0.05 * covered as f64,
+        "{unmorphed_off} of {covered}"
+    );
+}
