@@ -2,6 +2,8 @@
 //! slack, the box inputs and, on the ellipsoid, the node's box, normal and normal spread — kept
 //! across frames: on geographic data computing them (a lattice of sines and cosines per node)
 //! was most of a frame's selection, and none of it changes while the dataset stays the same.
+//! On the flat plane the values are two table reads and the curvature slack, cheaper than a
+//! lookup here: that path computes them each time (16385², τ = 1, 720p: 229 → 194 µs).
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};

@@ -110,8 +110,12 @@ impl Frame<'_> {
         (self.grid.spacing * (1u64 << level_drawn) as f64).length()
     }
 
-    /// The node's camera-independent values (from the cache after the first time).
+    /// The node's camera-independent values (from the cache after the first time on the
+    /// ellipsoid; on the plane they are two table reads, cheaper than the cache's lookup).
     fn fixed(&self, level: u32, tx: u32, ty: u32) -> NodeFixed {
+        if self.params.earth.is_none() {
+            return self.compute_fixed(level, tx, ty);
+        }
         self.cache
             .borrow_mut()
             .get(level, tx, ty, || self.compute_fixed(level, tx, ty))
