@@ -55,16 +55,19 @@ fn desc(mode: LodMode, tess_scale: f64) -> RendererDesc {
     d
 }
 
-#[test]
-fn tessellation_matches_full_at_high_density_and_draws_less_at_low() {
-    let hf = hills();
-    let cam = Camera::new(
-        DVec3::new(3840.0, -1500.0, 2200.0),
-        Attitude::from_degrees(0.0, -25.0, 0.0),
-        Frustum::symmetric(90f64.to_radians(), W, H),
-    );
+/// `full`, tessellation ×4 and ×0.25 of `hf` from `cam` (PNGs `tess_{prefix}{name}.png`), and
+/// the two tessellations' errors against `full`'s depth.
+struct TessRun {
+    full: Rendered,
+    high: Rendered,
+    low: Rendered,
+    e_high: aerie::tools::image_error::ImageError,
+    e_low: aerie::tools::image_error::ImageError,
+}
+
+fn tess_against_full(hf: &Heightfield, cam: Camera, prefix: &str) -> TessRun {
     let full_desc = desc(LodMode::Full, 1.0);
-    let (ds, bake) = prepare(&full_desc, &hf);
+    let (ds, bake) = prepare(&full_desc, hf);
     let render = |d: &RendererDesc| render_dataset(d, ds.clone(), bake.clone(), &[cam]).remove(0);
     let full = render(&full_desc);
     let high = render(&desc(LodMode::Tessellation, 4.0));
@@ -87,32 +90,45 @@ fn tessellation_matches_full_at_high_density_and_draws_less_at_low() {
     };
     let (e_high, e_low) = (err(&high), err(&low));
     eprintln!(
-        "full: {} triangles; tess ×4: {} triangles, max {:.3} px, mean {:.4} px; tess ×0.25: {} triangles, max {:.3} px",
+        "{prefix}full: {} triangles; tess ×4: {} triangles, max {:.3} px, p99 {:.3} px, mean {:.4} px, holes {}; tess ×0.25: {} triangles, max {:.3} px, holes {}",
         full.stats.triangles,
         high.stats.triangles,
         e_high.max_px(),
+        e_high.p99_px(),
         e_high.mean_px(),
+        e_high.holes_px,
         low.stats.triangles,
-        e_low.max_px()
+        e_low.max_px(),
+        e_low.holes_px
     );
     let out = test_output_dir();
     for (name, f) in [("full", &full), ("high", &high), ("low", &low)] {
-        let path = out.join(format!("tess_{name}.png"));
+        let path = out.join(format!("tess_{prefix}{name}.png"));
         aerie::tools::output::write_png(&path, W, H, &f.rgba).unwrap();
-        let cov = f.depth.iter().filter(|&&z| z > 0.0).count();
-        eprintln!("{name}: covered {cov} of {}", W * H);
     }
-    let e_full = err(&full);
-    eprintln!(
-        "full vs itself: max {:.3} mean {:.4} holes {}",
-        e_full.max_px(),
-        e_full.mean_px(),
-        e_full.holes_px
+    TessRun {
+        full,
+        high,
+        low,
+        e_high,
+        e_low,
+    }
+}
+
+#[test]
+fn tessellation_matches_full_at_high_density_and_draws_less_at_low() {
+    let cam = Camera::new(
+        DVec3::new(3840.0, -1500.0, 2200.0),
+        Attitude::from_degrees(0.0, -25.0, 0.0),
+        Frustum::symmetric(90f64.to_radians(), W, H),
     );
-    eprintln!(
-        "high holes {} low holes {}",
-        e_high.holes_px, e_low.holes_px
-    );
+    let TessRun {
+        full,
+        high,
+        low,
+        e_high,
+        e_low,
+    } = tess_against_full(&hills(), cam, "");
     // Terrain covers most of the frame in every mode.
     let covered = |f: &Rendered| f.depth.iter().filter(|&&z| z > 0.0).count();
     assert!(covered(&high) > (W * H / 2) as usize);
@@ -171,44 +187,13 @@ fn on_the_ellipsoid_tessellation_matches_full_at_high_density() {
         Attitude::from_degrees(0.0, -25.0, 0.0),
         Frustum::symmetric(90f64.to_radians(), W, H),
     );
-    let full_desc = desc(LodMode::Full, 1.0);
-    let (ds, bake) = prepare(&full_desc, &hf);
-    let render = |d: &RendererDesc| render_dataset(d, ds.clone(), bake.clone(), &[cam]).remove(0);
-    let full = render(&full_desc);
-    let high = render(&desc(LodMode::Tessellation, 4.0));
-    let low = render(&desc(LodMode::Tessellation, 0.25));
-    let params = MeasureParams {
-        tau_px: 1.0,
-        curvature: true,
-        ..MeasureParams::default()
-    };
-    let err = |f: &Rendered| {
-        measure(
-            &ds,
-            &cam,
-            (W, H),
-            &f.depth,
-            Some(&full.depth),
-            &params,
-            None,
-        )
-    };
-    let (e_high, e_low) = (err(&high), err(&low));
-    eprintln!(
-        "ellipsoid: full {} triangles; tess ×4 {} triangles, max {:.3} px, p99 {:.3} px, mean {:.4} px; ×0.25 {} triangles, max {:.3} px",
-        full.stats.triangles,
-        high.stats.triangles,
-        e_high.max_px(),
-        e_high.p99_px(),
-        e_high.mean_px(),
-        low.stats.triangles,
-        e_low.max_px()
-    );
-    let out = test_output_dir();
-    for (name, f) in [("full", &full), ("high", &high), ("low", &low)] {
-        let path = out.join(format!("tess_geo_{name}.png"));
-        aerie::tools::output::write_png(&path, W, H, &f.rgba).unwrap();
-    }
+    let TessRun {
+        full,
+        high,
+        low,
+        e_high,
+        e_low,
+    } = tess_against_full(&hf, cam, "geo_");
     let covered = |f: &Rendered| f.depth.iter().filter(|&&z| z > 0.0).count();
     assert!(covered(&full) > (W * H / 3) as usize);
     // Converging to `full` says the vertices are placed on the ellipsoid as the tiles are.
