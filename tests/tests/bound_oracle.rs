@@ -158,10 +158,13 @@ fn drop(eye: DVec3, x: f64, y: f64) -> f64 {
 /// Largest on-screen distance (px) between true samples and the drawn surface of one tile,
 /// computed independently of the bake: own barycentric interpolation over the SW–NE diagonal
 /// at level L−r, vertices dropped by curvature and interpolated linearly as on the GPU.
-fn tile_error_px(hf: &Heightfield, cam: &Camera, level: u32, tx: u32, ty: u32, r: u32) -> f64 {
+/// The worst projected distance between the true samples of level-`level` tile (tx, ty) and the
+/// surface drawn over it: the level-`drawn` grid (the tile's own level, or its parent's for a
+/// quadrant drawn at the parent's resolution).
+fn tile_error_px(hf: &Heightfield, cam: &Camera, level: u32, tx: u32, ty: u32, drawn: u32) -> f64 {
     let q = (M - 1) as usize;
     let side = q << level;
-    let step = 1usize << (level - r);
+    let step = 1usize << drawn;
     let (c0, r0) = (tx as usize * side, ty as usize * side);
     let eye = cam.position;
     let vertex = |c: usize, row: usize| {
@@ -213,6 +216,7 @@ fn every_drawn_tile_is_within_tau_for_a_thousand_random_cameras() {
     let tau = 1.0;
     let mut rng = Rng(2026);
     let (mut tiles_checked, mut refined_checked) = (0u64, 0u64);
+    let mut quadrants_checked = 0u64;
     let mut worst_ratio: f64 = 0.0;
     for k in 0..1002 {
         let s = &scenes[k % scenes.len()];
@@ -223,19 +227,28 @@ fn every_drawn_tile_is_within_tau_for_a_thousand_random_cameras() {
             "{}: camera {k} has unbounded tiles",
             s.name
         );
-        // A sample of the drawn tiles per camera (all of them would take minutes in debug).
+        // A sample of the drawn tiles per camera (all of them would take minutes in debug), and
+        // as many of the quadrants drawn at their parent's resolution.
         let n = sel.items.len();
-        for j in 0..n.min(6) {
-            let item = sel.items[(rng.next() * n as f64) as usize % n];
-            let _ = j;
-            // The node is drawn as the level-`node_level` surface over its own tile.
+        let quads: Vec<_> = sel.items.iter().filter(|i| i.morph.quadrant).collect();
+        let mut sample: Vec<_> = (0..n.min(6))
+            .map(|_| sel.items[(rng.next() * n as f64) as usize % n])
+            .collect();
+        for _ in 0..quads.len().min(6) {
+            sample.push(*quads[(rng.next() * quads.len() as f64) as usize % quads.len()]);
+        }
+        for item in sample {
+            // The node is drawn as the level-`node_level` surface over its own tile, a quadrant
+            // as its parent's.
+            let drawn = item.node_level + item.morph.quadrant as u32;
+            quadrants_checked += item.morph.quadrant as u64;
             let err = tile_error_px(
                 &s.ds.hf,
                 &cam,
                 item.node_level,
                 item.node_tx,
                 item.node_ty,
-                0,
+                drawn,
             );
             assert!(
                 err <= tau + 1e-6,
@@ -263,11 +276,11 @@ fn every_drawn_tile_is_within_tau_for_a_thousand_random_cameras() {
         }
     }
     eprintln!(
-        "bound oracle: {tiles_checked} tiles ({refined_checked} refined) within τ; tightest measured/bound = {worst_ratio:.3}"
+        "bound oracle: {tiles_checked} tiles ({refined_checked} refined, {quadrants_checked} quadrants at their parent's resolution) within τ; tightest measured/bound = {worst_ratio:.3}"
     );
     assert!(
-        tiles_checked > 3000 && refined_checked > 300,
-        "{tiles_checked} / {refined_checked}"
+        tiles_checked > 3000 && refined_checked > 300 && quadrants_checked > 300,
+        "{tiles_checked} / {refined_checked} / {quadrants_checked}"
     );
 }
 
@@ -471,11 +484,12 @@ fn select_geo(g: &GeoScene, cam: &Camera, tau: f64) -> Selection {
 /// [`tile_error_px`] on the ellipsoid: each true sample at its exact position; the drawn
 /// point at that sample is the GPU's interpolation (SW–NE diagonal) of the level's vertices,
 /// each at its exact position.
-fn geo_tile_error_px(g: &GeoScene, cam: &Camera, level: u32, tx: u32, ty: u32) -> f64 {
+/// [`tile_error_px`] on the ellipsoid: the level-`drawn` grid over level-`level` tile (tx, ty).
+fn geo_tile_error_px(g: &GeoScene, cam: &Camera, level: u32, tx: u32, ty: u32, drawn: u32) -> f64 {
     let hf = &g.s.ds.hf;
     let q = (M - 1) as usize;
     let side = q << level;
-    let step = 1usize << level;
+    let step = 1usize << drawn;
     let (c0, r0) = (tx as usize * side, ty as usize * side);
     let vertex = |c: usize, row: usize| g.world(c, row, hf.at(c, row) as f64);
     let on_screen = |p: DVec2| p.x >= 0.0 && p.x <= W as f64 && p.y >= 0.0 && p.y <= H as f64;
@@ -516,6 +530,7 @@ fn geodetic_oracle(scenes: &[GeoScene], cameras: usize, seed: u64, what: &str) -
     let tau = 1.0;
     let mut rng = Rng(seed);
     let (mut tiles_checked, mut refined_checked) = (0u64, 0u64);
+    let mut quadrants_checked = 0u64;
     let mut worst_ratio: f64 = 0.0;
     for k in 0..cameras {
         let g = &scenes[k % scenes.len()];
@@ -527,9 +542,19 @@ fn geodetic_oracle(scenes: &[GeoScene], cameras: usize, seed: u64, what: &str) -
             g.s.name
         );
         let n = sel.items.len();
-        for _ in 0..n.min(6) {
-            let item = sel.items[(rng.next() * n as f64) as usize % n];
-            let err = geo_tile_error_px(g, &cam, item.node_level, item.node_tx, item.node_ty);
+        let quads: Vec<_> = sel.items.iter().filter(|i| i.morph.quadrant).collect();
+        let mut sample: Vec<_> = (0..n.min(6))
+            .map(|_| sel.items[(rng.next() * n as f64) as usize % n])
+            .collect();
+        for _ in 0..quads.len().min(3) {
+            sample.push(*quads[(rng.next() * quads.len() as f64) as usize % quads.len()]);
+        }
+        for item in sample {
+            // A quadrant is drawn as its parent's surface.
+            let drawn = item.node_level + item.morph.quadrant as u32;
+            quadrants_checked += item.morph.quadrant as u64;
+            let err =
+                geo_tile_error_px(g, &cam, item.node_level, item.node_tx, item.node_ty, drawn);
             assert!(
                 err <= tau + 1e-6,
                 "{}: camera {k} {:?}: node L{} ({}, {}) of tile L{} r{} projects {err:.4} px > τ (bound said {:.4})",
@@ -555,8 +580,9 @@ fn geodetic_oracle(scenes: &[GeoScene], cameras: usize, seed: u64, what: &str) -
         }
     }
     eprintln!(
-        "{what} bound oracle: {tiles_checked} tiles ({refined_checked} refined) within τ; tightest measured/bound = {worst_ratio:.3}"
+        "{what} bound oracle: {tiles_checked} tiles ({refined_checked} refined, {quadrants_checked} quadrants at their parent's resolution) within τ; tightest measured/bound = {worst_ratio:.3}"
     );
+    assert!(quadrants_checked > 0, "{what}: no quadrant checked");
     (tiles_checked, refined_checked)
 }
 

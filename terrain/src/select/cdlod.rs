@@ -115,6 +115,14 @@ struct Seen {
 /// A node to draw (level, tx, ty, ε, ρ) and how it morphs.
 type Node = ((u32, u32, u32, f32, f32), Morph);
 
+/// One frame's scratch lists (a ring tile's nodes, and the same without their morph for
+/// `Selection::push_refined`), allocated once per frame.
+#[derive(Default)]
+struct Scratch {
+    nodes: Vec<Node>,
+    plain: Vec<(u32, u32, u32, f32, f32)>,
+}
+
 impl Ctx<'_> {
     fn has_terrain(&self, level: u32, tx: u32, ty: u32) -> bool {
         let t = &self.bake.levels[level as usize];
@@ -322,10 +330,10 @@ pub(super) fn select_cdlod(
     };
     let top = placements.len() - 1;
     let roots = &bake.levels[coarsest.level as usize];
-    let mut nodes = Vec::new();
+    let mut scratch = Scratch::default();
     for ty in 0..roots.tiles_y {
         for tx in 0..roots.tiles_x {
-            visit_clipmap(&ctx, top, tx, ty, true, &mut nodes, out);
+            visit_clipmap(&ctx, top, tx, ty, true, &mut scratch, out);
         }
     }
     out.finest_level = out.levels.iter().position(|l| l.drawn > 0).unwrap_or(0) as u32;
@@ -344,7 +352,7 @@ fn visit_clipmap(
     tx: u32,
     ty: u32,
     root: bool,
-    nodes: &mut Vec<Node>,
+    scratch: &mut Scratch,
     out: &mut Selection,
 ) -> bool {
     let level = ctx.placements[i].level;
@@ -365,7 +373,7 @@ fn visit_clipmap(
         CdlodDecision::Split if descend => {
             for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                 let (cx, cy) = (2 * tx + dx, 2 * ty + dy);
-                if !visit_clipmap(ctx, i - 1, cx, cy, false, nodes, out) {
+                if !visit_clipmap(ctx, i - 1, cx, cy, false, scratch, out) {
                     let c = ctx.seen(level - 1, cx, cy);
                     if c.visible {
                         let stats = &mut out.levels[i - 1];
@@ -387,13 +395,15 @@ fn visit_clipmap(
     }
     // A ring tile: its subtree from one pool slot, at most `cap` levels finer.
     let cap = ctx.params.max_refinement.min(level).min(MAX_REFINEMENT);
+    let Scratch { nodes, plain } = scratch;
     nodes.clear();
     ctx.visit(level, tx, ty, level - cap, root, nodes);
     out.levels[i].considered += 1;
     out.levels[i].drawn += 1;
-    let plain: Vec<_> = nodes.iter().map(|n| n.0).collect();
+    plain.clear();
+    plain.extend(nodes.iter().map(|n| n.0));
     let first = out.items.len();
-    out.push_refined(i, level, tx, ty, &plain);
+    out.push_refined(i, level, tx, ty, plain);
     for (item, n) in out.items[first..].iter_mut().zip(nodes.iter()) {
         item.morph = n.1;
     }

@@ -12,6 +12,7 @@ use super::bound::{
     curvature_interpolation_error, frustum_spread_gain, frustum_vertical_gain, projected_error_px,
     tile_aabb, CornerPass,
 };
+use super::cdlod_morph::Morph;
 use super::node_cache::{NodeCache, NodeFixed};
 use super::selection::{
     AllReady, DrawItem, LevelStats, LodMode, SelectParams, Selection, TileReadiness, View,
@@ -78,6 +79,9 @@ struct Frame<'a> {
     /// Horizon culling: the eyes' horizons and the nodes it hid.
     horizon: Option<&'a super::horizon::HorizonSet>,
     hidden: std::cell::Cell<u32>,
+    /// The ring tile being refined: which of its nodes are quadrants drawn at their parent's
+    /// resolution ([`SelectParams::parent_quadrants`]), by index in its node list.
+    quadrants: std::cell::RefCell<Vec<usize>>,
 }
 
 /// One channel's camera with what the bound needs from it.
@@ -175,13 +179,50 @@ impl Frame<'_> {
             return self.evaluate_reference(level, tx, ty, cull);
         }
         let node = self.fixed(level, tx, ty);
-        let (eps, geo, slack) = (node.eps, node.geo, node.slack);
+        let own = (node.eps, node.slack);
+        self.evaluate_as(level, &node, own, None, cull).map(|e| e.0)
+    }
+
+    /// The quadrant (level, tx, ty) of its parent drawn at the parent's resolution — the
+    /// parent's ε and slack (its surface over the quadrant is the parent's there, and the
+    /// quadrant's normals turn less than the parent's) over the quadrant's own box — and the
+    /// same node at its own resolution, from one pass over the box (with the parent's cell
+    /// slack in it, the larger); `None` when no view sees the quadrant.
+    fn evaluate_quadrant(&self, level: u32, tx: u32, ty: u32) -> Option<(NodeEval, NodeEval)> {
+        #[cfg(test)]
+        if self.reference {
+            let parent = self.compute_fixed(level + 1, tx / 2, ty / 2);
+            let node = self.compute_fixed(level, tx, ty);
+            let (p, own) = ((parent.eps, parent.slack), (node.eps, node.slack));
+            let q = self.evaluate_reference_as(level + 1, &node, p.0, p.1, true)?;
+            let o = self.evaluate_reference_as(level + 1, &node, own.0, own.1, true)?;
+            return Some((q, o));
+        }
+        let parent = self.fixed(level + 1, tx / 2, ty / 2);
+        let node = self.fixed(level, tx, ty);
+        let (p, own) = ((parent.eps, parent.slack), (node.eps, node.slack));
+        let (q, o) = self.evaluate_as(level + 1, &node, p, Some(own), true)?;
+        Some((q, o.unwrap_or(q)))
+    }
+
+    /// [`Self::evaluate`] of the node `node` drawn at level `drawn`'s resolution (its own, or
+    /// its parent's for a quadrant) for an error and gain slack `first`, and `second` from the
+    /// same corners.
+    fn evaluate_as(
+        &self,
+        drawn: u32,
+        node: &NodeFixed,
+        first: (f64, f64),
+        second: Option<(f64, f64)>,
+        cull: bool,
+    ) -> Option<(NodeEval, Option<NodeEval>)> {
+        let geo = node.geo;
         let (mut seen, mut hidden) = (false, false);
-        let (mut rho_px, mut rho_norm) = (0.0f64, 0.0f64);
+        let mut rho = [(0.0f64, 0.0f64); 2];
         for (vi, v) in self.views.iter().enumerate() {
             let aabb = match &geo {
                 Some(n) => n.aabb,
-                None => self.aabb(level, &node, v.camera.position),
+                None => self.aabb(drawn, node, v.camera.position),
             };
             let corners = aabb.corners().map(|c| v.to_view.transform_point3(c));
             let f = &v.camera.frustum;
@@ -196,24 +237,28 @@ impl Frame<'_> {
             }
             seen = true;
             let z_min = pass.z_min.max(v.camera.near);
-            let c = match (&geo, cull) {
+            let gain = |slack: f64| match (&geo, cull) {
                 (Some(n), true) => pass.spread_gain(f, v.rotation * n.up, slack),
                 (Some(n), false) => frustum_spread_gain(f, v.rotation * n.up, slack),
                 (None, true) => pass.vertical_gain(f, v.up),
                 (None, false) => v.vertical_gain,
             };
-            let rho = projected_error_px(eps, z_min, v.focal, c);
-            rho_px = rho_px.max(rho);
-            rho_norm = rho_norm.max(rho / v.tau);
+            let errors = [Some(first), second];
+            for (k, e) in errors.iter().enumerate() {
+                let Some((eps, slack)) = *e else { continue };
+                let r = projected_error_px(eps, z_min, v.focal, gain(slack));
+                rho[k] = (rho[k].0.max(r), rho[k].1.max(r / v.tau));
+            }
         }
         if hidden && !seen {
             self.hidden.set(self.hidden.get() + 1);
         }
-        seen.then_some(NodeEval {
+        let eval = |eps: f64, (rho_px, rho_norm): (f64, f64)| NodeEval {
             eps,
             rho_px,
             rho_norm,
-        })
+        };
+        seen.then(|| (eval(first.0, rho[0]), second.map(|e| eval(e.0, rho[1]))))
     }
 
     /// Distance LOD: split while the eye is within `distance_factor` node sides of the node's
@@ -290,11 +335,27 @@ impl Frame<'_> {
             return (rho_norm > 1.0 && self.params.mode == LodMode::Bounded) as u32;
         }
         let mut missed = 0;
+        let quadrants = self.params.parent_quadrants && self.params.mode == LodMode::Bounded;
         for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
             let (cx, cy) = (2 * tx + dx, 2 * ty + dy);
-            if has_terrain(self.bake, level - 1, cx, cy) {
-                missed += self.subdivide(level - 1, cx, cy, finest, out);
+            if !has_terrain(self.bake, level - 1, cx, cy) {
+                continue;
             }
+            if quadrants {
+                // The quadrant at this node's resolution first: its box is the child's, so
+                // unseen here is unseen at any resolution.
+                let Some((q, own)) = self.evaluate_quadrant(level - 1, cx, cy) else {
+                    continue;
+                };
+                if q.rho_norm <= 1.0 {
+                    out.push((level - 1, cx, cy, q.eps as f32, q.rho_px as f32));
+                    self.quadrants.borrow_mut().push(out.len() - 1);
+                } else {
+                    missed += self.subdivide_seen(level - 1, cx, cy, own, finest, out);
+                }
+                continue;
+            }
+            missed += self.subdivide(level - 1, cx, cy, finest, out);
         }
         missed
     }
@@ -400,6 +461,7 @@ pub fn select_tiles_multi_ready(
         reference: reference::active(),
         horizon: cull_hidden.then_some(&horizon),
         hidden: std::cell::Cell::new(0),
+        quadrants: std::cell::RefCell::new(Vec::new()),
     };
 
     if params.mode == LodMode::Bounded && params.coarsen {
@@ -484,8 +546,16 @@ fn refine_ring_tile(
 ) -> u32 {
     let cap = frame.params.max_refinement.min(level).min(MAX_REFINEMENT);
     nodes.clear();
+    frame.quadrants.borrow_mut().clear();
     let missed = frame.subdivide_seen(level, tx, ty, eval, level - cap, nodes);
+    let first = out.items.len();
     out.push_refined(level_index, level, tx, ty, nodes);
+    for &k in frame.quadrants.borrow().iter() {
+        out.items[first + k].morph = Morph {
+            quadrant: true,
+            ..Morph::NONE
+        };
+    }
     missed
 }
 
@@ -503,11 +573,12 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
     let roots = &frame.bake.levels[coarsest.level as usize];
     let mut nodes = Vec::new();
     let top = placements.len() - 1;
-    let mut stack: Vec<(usize, u32, u32)> = (0..roots.tiles_y)
+    // Nodes to visit, with their evaluation when a quadrant test made it already.
+    let mut stack: Vec<(usize, u32, u32, Option<NodeEval>)> = (0..roots.tiles_y)
         .rev()
-        .flat_map(|ty| (0..roots.tiles_x).rev().map(move |tx| (top, tx, ty)))
+        .flat_map(|ty| (0..roots.tiles_x).rev().map(move |tx| (top, tx, ty, None)))
         .collect();
-    while let Some((i, tx, ty)) = stack.pop() {
+    while let Some((i, tx, ty, known)) = stack.pop() {
         let level = placements[i].level;
         if !has_terrain(frame.bake, level, tx, ty) {
             continue;
@@ -520,7 +591,7 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
             continue;
         }
         // A split node is not a tile of its own: `considered` counts drawn + culled.
-        let Some(eval) = frame.evaluate(level, tx, ty, true) else {
+        let Some(eval) = known.or_else(|| frame.evaluate(level, tx, ty, true)) else {
             out.levels[i].considered += 1;
             out.levels[i].culled += 1;
             continue;
@@ -553,7 +624,44 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
             };
             if !children.iter().any(missing) {
                 for (cx, cy) in children {
-                    stack.push((i - 1, cx, cy));
+                    if frame.params.parent_quadrants && has_terrain(frame.bake, child_level, cx, cy)
+                    {
+                        // The quadrant at this node's resolution, when it meets τ so (the
+                        // child tile fully morphed onto this node's grid).
+                        match frame.evaluate_quadrant(child_level, cx, cy) {
+                            None => {
+                                out.levels[i - 1].considered += 1;
+                                out.levels[i - 1].culled += 1;
+                                continue;
+                            }
+                            Some((q, _)) if q.rho_norm <= 1.0 => {
+                                let stats = &mut out.levels[i - 1];
+                                stats.considered += 1;
+                                stats.drawn += 1;
+                                stats.refined[0] += 1;
+                                stats.nodes += 1;
+                                out.items.push(DrawItem {
+                                    morph: Morph {
+                                        quadrant: true,
+                                        ..Morph::NONE
+                                    },
+                                    ..DrawItem::whole(
+                                        child_level,
+                                        cx,
+                                        cy,
+                                        q.eps as f32,
+                                        q.rho_px as f32,
+                                    )
+                                });
+                                continue;
+                            }
+                            Some((_, own)) => {
+                                stack.push((i - 1, cx, cy, Some(own)));
+                                continue;
+                            }
+                        }
+                    }
+                    stack.push((i - 1, cx, cy, None));
                 }
                 continue;
             }

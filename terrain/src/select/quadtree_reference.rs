@@ -8,7 +8,7 @@ use super::super::bound::{
     frustum_spread_gain, min_depth_of, outside_of, projected_error_px, spread_gain_of,
     vertical_gain_of,
 };
-use super::{Frame, NodeEval};
+use super::{Frame, NodeEval, NodeFixed};
 
 thread_local! {
     static REFERENCE: Cell<bool> = const { Cell::new(false) };
@@ -37,13 +37,25 @@ impl Frame<'_> {
         cull: bool,
     ) -> Option<NodeEval> {
         let node = self.compute_fixed(level, tx, ty);
-        let (eps, geo, slack) = (node.eps, node.geo, node.slack);
+        self.evaluate_reference_as(level, &node, node.eps, node.slack, cull)
+    }
+
+    /// [`Frame::evaluate_as`] on the reference path.
+    pub(super) fn evaluate_reference_as(
+        &self,
+        drawn: u32,
+        node: &NodeFixed,
+        eps: f64,
+        slack: f64,
+        cull: bool,
+    ) -> Option<NodeEval> {
+        let geo = node.geo;
         let mut seen = false;
         let (mut rho_px, mut rho_norm) = (0.0f64, 0.0f64);
         for v in &self.views {
             let aabb = match &geo {
                 Some(n) => n.aabb,
-                None => self.aabb(level, &node, v.camera.position),
+                None => self.aabb(drawn, node, v.camera.position),
             };
             let corners = aabb.corners().map(|c| v.to_view.transform_point3(c));
             let f = &v.camera.frustum;

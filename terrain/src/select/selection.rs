@@ -62,6 +62,12 @@ pub struct SelectParams {
     /// `Bounded`: drop nodes hidden behind nearer terrain from every view (`horizon.rs`): a
     /// hidden node has no visible error, so it is neither refined nor drawn.
     pub horizon_cull: bool,
+    /// `Bounded`: when a node misses τ, each quadrant that meets τ at the node's own resolution
+    /// (its ε over the quadrant's box: the quadrant's surface is the node's there, so its error
+    /// is within the node's ε) is drawn so — the quarter of the node's mesh, as a child node
+    /// fully morphed onto the node's grid (`cdlod_morph.rs`) — instead of splitting into a
+    /// finer child there.
+    pub parent_quadrants: bool,
 }
 
 impl Default for SelectParams {
@@ -77,6 +83,7 @@ impl Default for SelectParams {
             tess_density: super::tess_density::TESS_PATCH as f64,
             earth: None,
             horizon_cull: false,
+            parent_quadrants: true,
         }
     }
 }
