@@ -56,6 +56,8 @@ for name in $names; do
   timeout --signal=INT --kill-after=20 "$left" "$aerie" bench --suite "$part" --out "$out/$name" --overwrite
   rc=$?
   rm -f "$part"
+  # The report names the suite file it read: the original, not the temporary part.
+  [ -f "$out/$name/suite.md" ] && sed -i "1s|$part|$suite, dataset $name|" "$out/$name/suite.md"
   dt=$(($(date +%s) - t0))
   echo "$name,$rc,$dt" >>"$out/datasets.csv"
   if [ "$rc" -eq 0 ]; then
