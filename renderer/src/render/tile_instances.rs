@@ -51,21 +51,41 @@ pub fn build_instances(
 ) -> (Vec<TileInstance>, [u32; RESOLUTIONS]) {
     let q = f.tile_quads;
     let eye = f.eye;
-    let mut groups: [Vec<TileInstance>; RESOLUTIONS] = Default::default();
     let nodes: Vec<(u32, u32, u32, f32)> = draw_list
         .iter()
         .map(|(i, _)| (i.node_level, i.node_tx, i.node_ty, i.eps_m))
         .collect();
     let reach = neighbour_eps(&nodes);
     let geo = f.earth.map(|g| GeoEye::new(g, eye));
-    for (&(item, slot), &reach_m) in draw_list.iter().zip(&reach) {
+    // The records are written once, in their final place: a counting sort of the draw list by
+    // refinement (stable, so each group keeps the list's order) into one vector of the exact
+    // size (records are ~450 bytes: growing and concatenating per-group vectors copied each
+    // several times).
+    let mut sizes = [0u32; RESOLUTIONS];
+    for (item, _) in draw_list {
+        sizes[item.refinement as usize] += 1;
+    }
+    let mut next = [0usize; RESOLUTIONS];
+    for r in 1..RESOLUTIONS {
+        next[r] = next[r - 1] + sizes[r - 1] as usize;
+    }
+    let mut order = vec![0u32; draw_list.len()];
+    for (k, (item, _)) in draw_list.iter().enumerate() {
+        let at = &mut next[item.refinement as usize];
+        order[*at] = k as u32;
+        *at += 1;
+    }
+    let mut instances = Vec::with_capacity(draw_list.len());
+    for &k in &order {
+        let (item, slot) = draw_list[k as usize];
+        let reach_m = reach[k as usize];
         let node = (q as i64) << item.node_level;
         let origin = [item.node_tx as i64 * node, item.node_ty as i64 * node];
         let (slot_x, slot_y, slot_stride) = slot_placement(&item, q);
         let g = geo.map_or(GeoFields::default(), |e| {
             e.node_fields(origin, 1 << item.node_level, q)
         });
-        groups[item.refinement as usize].push(TileInstance {
+        instances.push(TileInstance {
             origin_rel: [
                 (origin[0] as f64 * f.spacing[0] - eye.x) as f32,
                 (origin[1] as f64 * f.spacing[1] - eye.y) as f32,
@@ -90,8 +110,7 @@ pub fn build_instances(
             geo_n: g.geo_n,
         });
     }
-    let sizes = groups.each_ref().map(|g| g.len() as u32);
-    (groups.concat(), sizes)
+    (instances, sizes)
 }
 
 /// Triangles of a skirted tile of `q` quads a side (grid 2q², skirt 2 per perimeter edge).
@@ -132,6 +151,37 @@ pub fn indirect_draws(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The records come grouped by refinement, unrefined first, each group in the draw list's
+    /// order, and the sizes count the groups.
+    #[test]
+    fn instances_are_grouped_by_refinement_in_list_order() {
+        let refined = |r: u32, k: u32| DrawItem {
+            refinement: r,
+            node_level: 4 - r,
+            node_tx: k << r,
+            ..DrawItem::whole(4, k, 0, 1.0, 0.5)
+        };
+        let list: Vec<(DrawItem, u32)> = [(2, 0), (0, 1), (1, 2), (2, 3), (0, 4), (2, 5)]
+            .iter()
+            .map(|&(r, k)| (refined(r, k), k))
+            .collect();
+        let f = InstanceFrame {
+            tile_quads: 16,
+            spacing: [10.0, 10.0],
+            earth: None,
+            eye: DVec3::ZERO,
+            skirt_factor: 2.0,
+            skirt_min_m: 0.0,
+        };
+        let (instances, sizes) = build_instances(&f, &list);
+        assert_eq!(&sizes[..3], &[2, 1, 3]);
+        assert!(sizes[3..].iter().all(|&n| n == 0));
+        let slots: Vec<u32> = instances.iter().map(|i| i.slot).collect();
+        assert_eq!(slots, [1, 4, 2, 0, 3, 5]);
+        let refinements: Vec<u32> = instances.iter().map(|i| i.refinement).collect();
+        assert_eq!(refinements, [0, 0, 1, 2, 2, 2]);
+    }
 
     #[test]
     fn a_quadrant_counts_as_the_parents_quarter_mesh() {

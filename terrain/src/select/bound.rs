@@ -1,7 +1,7 @@
 //! The error bound: tile boxes with the curvature drop, view depths, the vertical-error gain
 //! on screen and the projected error in pixels.
 
-use glam::{DVec2, DVec3};
+use glam::{DMat4, DVec2, DVec3};
 
 use crate::camera::{Camera, Frustum};
 use crate::tiles::Aabb;
@@ -53,6 +53,19 @@ pub fn tile_aabb(
         min: DVec3::new(lo.x, lo.y, zlo),
         max: DVec3::new(hi.x, hi.y, zhi),
     }
+}
+
+/// The eight corners of `aabb` in view space (`m`: world → view), in [`Aabb::corners`]
+/// order, each bit for bit `m.transform_point3(corner)`: the same products summed in the same
+/// order, `w + (z·Z + (y·Y + x·X))`, with the six products shared between the corners instead
+/// of formed eight times.
+pub(super) fn view_corners(m: &DMat4, aabb: &Aabb) -> [DVec3; 8] {
+    let (a, b) = (aabb.min, aabb.max);
+    let x = [m.x_axis.truncate() * a.x, m.x_axis.truncate() * b.x];
+    let y = [m.y_axis.truncate() * a.y, m.y_axis.truncate() * b.y];
+    let z = [m.z_axis.truncate() * a.z, m.z_axis.truncate() * b.z];
+    let w = m.w_axis.truncate();
+    std::array::from_fn(|i| w + (z[i >> 2] + (y[(i >> 1) & 1] + x[i & 1])))
 }
 
 /// Smallest view depth of a box (view depth is linear, so a corner attains it), clamped to the
@@ -208,16 +221,13 @@ pub(super) struct CornerPass {
 }
 
 impl CornerPass {
+    /// The pass. The (a, b) ranges — sixteen divisions — are formed only for a box inside the
+    /// frustum with every corner in front of the eye: a culled box's gains are never read, and
+    /// with a corner behind the gains take the whole frustum's ranges.
     pub(super) fn of(corners: &[DVec3; 8], f: &Frustum, near: f64) -> Self {
         let mut z_min = f64::INFINITY;
         let [mut n, mut r, mut l, mut u, mut d] = [true; 5];
         let mut behind = false;
-        let (mut a_lo, mut a_hi, mut b_lo, mut b_hi) = (
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        );
         for p in corners {
             z_min = z_min.min(p.z);
             n &= p.z < near;
@@ -225,16 +235,24 @@ impl CornerPass {
             l &= p.x < f.tan_left * p.z;
             u &= -p.y > f.tan_up * p.z;
             d &= -p.y < f.tan_down * p.z;
-            if p.z <= 1e-9 {
-                behind = true;
-            } else if !behind {
+            behind |= p.z <= 1e-9;
+        }
+        let outside = n || r || l || u || d;
+        let (mut a_lo, mut a_hi, mut b_lo, mut b_hi) = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
+        if !outside && !behind {
+            for p in corners {
                 let (a, b) = (p.x / p.z, p.y / p.z);
                 (a_lo, a_hi) = (a_lo.min(a), a_hi.max(a));
                 (b_lo, b_hi) = (b_lo.min(b), b_hi.max(b));
             }
         }
         Self {
-            outside: n || r || l || u || d,
+            outside,
             z_min,
             behind,
             a: [a_lo, a_hi],

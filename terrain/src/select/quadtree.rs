@@ -10,7 +10,7 @@ use crate::tiles::Aabb;
 
 use super::bound::{
     curvature_interpolation_error, frustum_spread_gain, frustum_vertical_gain, projected_error_px,
-    tile_aabb, CornerPass,
+    tile_aabb, view_corners, CornerPass,
 };
 use super::cdlod_morph::Morph;
 use super::node_cache::{NodeCache, NodeFixed};
@@ -41,6 +41,11 @@ impl Grid {
                 (bake.valid_height - 1) as f64 * bake.spacing_y,
             ),
         }
+    }
+
+    /// Diagonal of a cell of level `level_drawn` in metres.
+    fn cell_diagonal(&self, level_drawn: u32) -> f64 {
+        (self.spacing * (1u64 << level_drawn) as f64).length()
     }
 
     /// Horizontal rectangle of a level tile in metres, clipped to the valid data.
@@ -79,6 +84,9 @@ struct Frame<'a> {
     /// Horizon culling: the eyes' horizons and the nodes it hid.
     horizon: Option<&'a super::horizon::HorizonSet>,
     hidden: std::cell::Cell<u32>,
+    /// [`Grid::cell_diagonal`] of every level of the bake, formed once a frame (a square root
+    /// per node evaluation otherwise).
+    diagonals: Vec<f64>,
     /// The ring tile being refined: which of its nodes are quadrants drawn at their parent's
     /// resolution ([`SelectParams::parent_quadrants`]), by index in its node list.
     quadrants: std::cell::RefCell<Vec<usize>>,
@@ -111,12 +119,19 @@ struct NodeEval {
 
 impl Frame<'_> {
     fn cell_diagonal(&self, level_drawn: u32) -> f64 {
-        (self.grid.spacing * (1u64 << level_drawn) as f64).length()
+        match self.diagonals.get(level_drawn as usize) {
+            Some(&d) => d,
+            None => self.grid.cell_diagonal(level_drawn),
+        }
     }
 
     /// The node's camera-independent values (from the cache after the first time on the
     /// ellipsoid; on the plane they are two table reads, cheaper than the cache's lookup).
     fn fixed(&self, level: u32, tx: u32, ty: u32) -> NodeFixed {
+        #[cfg(test)]
+        if self.reference {
+            return self.compute_fixed(level, tx, ty);
+        }
         if self.params.earth.is_none() {
             return self.compute_fixed(level, tx, ty);
         }
@@ -187,8 +202,15 @@ impl Frame<'_> {
     /// parent's ε and slack (its surface over the quadrant is the parent's there, and the
     /// quadrant's normals turn less than the parent's) over the quadrant's own box — and the
     /// same node at its own resolution, from one pass over the box (with the parent's cell
-    /// slack in it, the larger); `None` when no view sees the quadrant.
-    fn evaluate_quadrant(&self, level: u32, tx: u32, ty: u32) -> Option<(NodeEval, NodeEval)> {
+    /// slack in it, the larger); `None` when no view sees the quadrant. `parent`: the parent's
+    /// fixed values, formed once for its four quadrants.
+    fn evaluate_quadrant(
+        &self,
+        parent: &NodeFixed,
+        level: u32,
+        tx: u32,
+        ty: u32,
+    ) -> Option<(NodeEval, NodeEval)> {
         #[cfg(test)]
         if self.reference {
             let parent = self.compute_fixed(level + 1, tx / 2, ty / 2);
@@ -198,7 +220,6 @@ impl Frame<'_> {
             let o = self.evaluate_reference_as(level + 1, &node, own.0, own.1, true)?;
             return Some((q, o));
         }
-        let parent = self.fixed(level + 1, tx / 2, ty / 2);
         let node = self.fixed(level, tx, ty);
         let (p, own) = ((parent.eps, parent.slack), (node.eps, node.slack));
         let (q, o) = self.evaluate_as(level + 1, &node, p, Some(own), true)?;
@@ -224,7 +245,7 @@ impl Frame<'_> {
                 Some(n) => n.aabb,
                 None => self.aabb(drawn, node, v.camera.position),
             };
-            let corners = aabb.corners().map(|c| v.to_view.transform_point3(c));
+            let corners = view_corners(&v.to_view, &aabb);
             let f = &v.camera.frustum;
             let pass = CornerPass::of(&corners, f, v.camera.near);
             // The one culling point: a node no view keeps is not drawn.
@@ -237,11 +258,16 @@ impl Frame<'_> {
             }
             seen = true;
             let z_min = pass.z_min.max(v.camera.near);
+            // On the plane the gain does not depend on the slack: formed once for both errors.
+            let flat_gain = match (&geo, cull) {
+                (Some(_), _) => 0.0,
+                (None, true) => pass.vertical_gain(f, v.up),
+                (None, false) => v.vertical_gain,
+            };
             let gain = |slack: f64| match (&geo, cull) {
                 (Some(n), true) => pass.spread_gain(f, v.rotation * n.up, slack),
                 (Some(n), false) => frustum_spread_gain(f, v.rotation * n.up, slack),
-                (None, true) => pass.vertical_gain(f, v.up),
-                (None, false) => v.vertical_gain,
+                (None, _) => flat_gain,
             };
             let errors = [Some(first), second];
             for (k, e) in errors.iter().enumerate() {
@@ -336,15 +362,16 @@ impl Frame<'_> {
         }
         let mut missed = 0;
         let quadrants = self.params.parent_quadrants && self.params.mode == LodMode::Bounded;
+        let parent = quadrants.then(|| self.fixed(level, tx, ty));
         for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
             let (cx, cy) = (2 * tx + dx, 2 * ty + dy);
             if !has_terrain(self.bake, level - 1, cx, cy) {
                 continue;
             }
-            if quadrants {
+            if let Some(parent) = &parent {
                 // The quadrant at this node's resolution first: its box is the child's, so
                 // unseen here is unseen at any resolution.
-                let Some((q, own)) = self.evaluate_quadrant(level - 1, cx, cy) else {
+                let Some((q, own)) = self.evaluate_quadrant(parent, level - 1, cx, cy) else {
                     continue;
                 };
                 if q.rho_norm <= 1.0 {
@@ -453,6 +480,9 @@ pub fn select_tiles_multi_ready(
         split_now: distance.then_some(&split_now),
         bake,
         grid: Grid::of(bake),
+        diagonals: (0..=bake.levels.len() as u32)
+            .map(|l| Grid::of(bake).cell_diagonal(l))
+            .collect(),
         views,
         params,
         ready,
@@ -623,12 +653,18 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                     && !frame.ready.is_ready(child_level, cx, cy)
             };
             if !children.iter().any(missing) {
+                let parent = frame
+                    .params
+                    .parent_quadrants
+                    .then(|| frame.fixed(level, tx, ty));
                 for (cx, cy) in children {
-                    if frame.params.parent_quadrants && has_terrain(frame.bake, child_level, cx, cy)
+                    if let Some(parent) = parent
+                        .as_ref()
+                        .filter(|_| has_terrain(frame.bake, child_level, cx, cy))
                     {
                         // The quadrant at this node's resolution, when it meets τ so (the
                         // child tile fully morphed onto this node's grid).
-                        match frame.evaluate_quadrant(child_level, cx, cy) {
+                        match frame.evaluate_quadrant(parent, child_level, cx, cy) {
                             None => {
                                 out.levels[i - 1].considered += 1;
                                 out.levels[i - 1].culled += 1;

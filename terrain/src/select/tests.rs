@@ -216,3 +216,36 @@ fn curvature_lowers_the_box_by_the_far_drop() {
     );
     assert_eq!(above.max.z, 200.0);
 }
+
+/// The shared-product corner transform is `transform_point3` bit for bit, on cameras at every
+/// attitude and boxes from a metre to the Earth's radius away.
+#[test]
+fn view_corners_are_transform_point3_bit_for_bit() {
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for _ in 0..2000 {
+        let scale = 10f64.powf(6.8 * next());
+        let eye = DVec3::new(next() - 0.5, next() - 0.5, next()) * scale;
+        let att = Attitude::from_degrees(360.0 * next(), 180.0 * next() - 90.0, 360.0 * next());
+        let cam = Camera::new(eye, att, Frustum::symmetric(90f64.to_radians(), 1280, 720));
+        let lo = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * scale;
+        let aabb = Aabb {
+            min: lo,
+            max: lo + DVec3::new(next(), next(), next()) * scale * 0.1,
+        };
+        let m = cam.world_to_view();
+        let want = aabb.corners().map(|c| m.transform_point3(c));
+        let got = super::bound::view_corners(&m, &aabb);
+        for (g, w) in got.iter().zip(&want) {
+            assert_eq!(
+                g.to_array().map(f64::to_bits),
+                w.to_array().map(f64::to_bits)
+            );
+        }
+    }
+}
