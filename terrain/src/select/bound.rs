@@ -55,17 +55,35 @@ pub fn tile_aabb(
     }
 }
 
-/// The eight corners of `aabb` in view space (`m`: world → view), in [`Aabb::corners`]
-/// order, each bit for bit `m.transform_point3(corner)`: the same products summed in the same
-/// order, `w + (z·Z + (y·Y + x·X))`, with the six products shared between the corners instead
-/// of formed eight times.
-pub(super) fn view_corners(m: &DMat4, aabb: &Aabb) -> [DVec3; 8] {
+/// The eight corners of a box in view space, coordinate by coordinate (index as in
+/// [`Aabb::corners`]): the corner pass then compares and divides two lanes at a time.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct ViewCorners {
+    pub x: [f64; 8],
+    pub y: [f64; 8],
+    pub z: [f64; 8],
+}
+
+/// The eight corners of `aabb` in view space (`m`: world → view), each bit for bit
+/// `m.transform_point3(corner)`: the same products summed in the same order,
+/// `w + (z·Z + (y·Y + x·X))`, with the six products shared between the corners instead of
+/// formed eight times.
+pub(super) fn view_corners(m: &DMat4, aabb: &Aabb) -> ViewCorners {
     let (a, b) = (aabb.min, aabb.max);
     let x = [m.x_axis.truncate() * a.x, m.x_axis.truncate() * b.x];
     let y = [m.y_axis.truncate() * a.y, m.y_axis.truncate() * b.y];
     let z = [m.z_axis.truncate() * a.z, m.z_axis.truncate() * b.z];
     let w = m.w_axis.truncate();
-    std::array::from_fn(|i| w + (z[i >> 2] + (y[(i >> 1) & 1] + x[i & 1])))
+    let mut c = ViewCorners {
+        x: [0.0; 8],
+        y: [0.0; 8],
+        z: [0.0; 8],
+    };
+    for i in 0..8 {
+        let p = w + (z[i >> 2] + (y[(i >> 1) & 1] + x[i & 1]));
+        (c.x[i], c.y[i], c.z[i]) = (p.x, p.y, p.z);
+    }
+    c
 }
 
 /// Smallest view depth of a box (view depth is linear, so a corner attains it), clamped to the
@@ -224,18 +242,19 @@ impl CornerPass {
     /// The pass. The (a, b) ranges — sixteen divisions — are formed only for a box inside the
     /// frustum with every corner in front of the eye: a culled box's gains are never read, and
     /// with a corner behind the gains take the whole frustum's ranges.
-    pub(super) fn of(corners: &[DVec3; 8], f: &Frustum, near: f64) -> Self {
+    pub(super) fn of(c: &ViewCorners, f: &Frustum, near: f64) -> Self {
         let mut z_min = f64::INFINITY;
         let [mut n, mut r, mut l, mut u, mut d] = [true; 5];
         let mut behind = false;
-        for p in corners {
-            z_min = z_min.min(p.z);
-            n &= p.z < near;
-            r &= p.x > f.tan_right * p.z;
-            l &= p.x < f.tan_left * p.z;
-            u &= -p.y > f.tan_up * p.z;
-            d &= -p.y < f.tan_down * p.z;
-            behind |= p.z <= 1e-9;
+        for i in 0..8 {
+            let (x, y, z) = (c.x[i], c.y[i], c.z[i]);
+            z_min = z_min.min(z);
+            n &= z < near;
+            r &= x > f.tan_right * z;
+            l &= x < f.tan_left * z;
+            u &= -y > f.tan_up * z;
+            d &= -y < f.tan_down * z;
+            behind |= z <= 1e-9;
         }
         let outside = n || r || l || u || d;
         let (mut a_lo, mut a_hi, mut b_lo, mut b_hi) = (
@@ -245,10 +264,11 @@ impl CornerPass {
             f64::NEG_INFINITY,
         );
         if !outside && !behind {
-            for p in corners {
-                let (a, b) = (p.x / p.z, p.y / p.z);
-                (a_lo, a_hi) = (a_lo.min(a), a_hi.max(a));
-                (b_lo, b_hi) = (b_lo.min(b), b_hi.max(b));
+            let a: [f64; 8] = std::array::from_fn(|i| c.x[i] / c.z[i]);
+            let b: [f64; 8] = std::array::from_fn(|i| c.y[i] / c.z[i]);
+            for i in 0..8 {
+                (a_lo, a_hi) = (a_lo.min(a[i]), a_hi.max(a[i]));
+                (b_lo, b_hi) = (b_lo.min(b[i]), b_hi.max(b[i]));
             }
         }
         Self {
