@@ -247,3 +247,50 @@ fn view_corners_are_transform_point3_bit_for_bit() {
         }
     }
 }
+
+/// On random quadtree covers (every part a node, split at random down to level 0, tiles far
+/// from the origin so packed keys carry large coordinates), each node's reach is the largest ε
+/// among itself and every node sharing a stretch of edge with it, found by brute force.
+#[test]
+fn neighbour_eps_is_the_brute_force_edge_maximum() {
+    let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        seed
+    };
+    for case in 0..40 {
+        let top = 5u32;
+        let base = 1u32 << 20; // level-`top` root tile coordinates
+        let mut nodes = Vec::new();
+        let mut stack = vec![(top, base + case, base + 2 * case)];
+        while let Some((l, x, y)) = stack.pop() {
+            if l > 0 && next() % 3 != 0 {
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    stack.push((l - 1, 2 * x + dx, 2 * y + dy));
+                }
+            } else {
+                nodes.push((l, x, y, (next() % 1000) as f32 / 10.0));
+            }
+        }
+        // Squares in level-0 units: [x·2^l, (x+1)·2^l) on each axis.
+        let span = |l: u32, v: u32| ((v as u64) << l, ((v as u64) + 1) << l);
+        let touch = |a: (u32, u32, u32, f32), b: (u32, u32, u32, f32)| {
+            let ((ax0, ax1), (ay0, ay1)) = (span(a.0, a.1), span(a.0, a.2));
+            let ((bx0, bx1), (by0, by1)) = (span(b.0, b.1), span(b.0, b.2));
+            let overlap = |p0: u64, p1: u64, q0: u64, q1: u64| p0.max(q0) < p1.min(q1);
+            ((ax1 == bx0 || bx1 == ax0) && overlap(ay0, ay1, by0, by1))
+                || ((ay1 == by0 || by1 == ay0) && overlap(ax0, ax1, bx0, bx1))
+        };
+        let got = neighbour_eps(&nodes);
+        for (i, &a) in nodes.iter().enumerate() {
+            let want = nodes
+                .iter()
+                .filter(|&&b| touch(a, b))
+                .map(|b| b.3)
+                .fold(a.3, f32::max);
+            assert_eq!(got[i], want, "case {case}, node {a:?} of {}", nodes.len());
+        }
+    }
+}
