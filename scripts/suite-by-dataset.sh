@@ -10,9 +10,11 @@
 # AERIE: the aerie binary (a release build); SUITE: the suite TOML; OUT: the output folder;
 # BUDGET_S: seconds for the whole run; DATASET: run only these (default: every dataset, in the
 # file's order). Prints a line per dataset and writes OUT/datasets.csv (name, exit code, seconds).
+# Each dataset runs with `--resume`: run again with the same OUT, the script goes on where the
+# last one stopped (flights already benched are taken from their records, not flown again).
 set -uo pipefail
 if [ $# -lt 4 ]; then
-  sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'
   exit 2
 fi
 aerie=$1 suite=$2 out=$3 budget=$4
@@ -53,7 +55,7 @@ for name in $names; do
     END { flush() }' "$suite" >"$part"
   t0=$(date +%s)
   echo "suite-by-dataset: $name (${left} s of the budget left)"
-  timeout --signal=INT --kill-after=20 "$left" "$aerie" bench --suite "$part" --out "$out/$name" --overwrite
+  timeout --signal=INT --kill-after=20 "$left" "$aerie" bench --suite "$part" --out "$out/$name" --resume
   rc=$?
   rm -f "$part"
   # The report names the suite file it read: the original, not the temporary part.

@@ -199,6 +199,36 @@ fn a_tiny_suite_reports_ratios_read_off_its_curves() {
         "{}",
         e.message
     );
+
+    // --resume takes the flight from its record instead of flying it again (its results.csv is
+    // not rewritten) and writes the same combined report.
+    let results = out.join("mixed-follow/results.csv");
+    let modified = |p: &Path| std::fs::metadata(p).unwrap().modified().unwrap();
+    let read = |name: &str| std::fs::read_to_string(out.join(name)).unwrap();
+    let (flown, md, ratios) = (modified(&results), read("suite.md"), read("ratios.csv"));
+    let resume = |suite: &Path| {
+        aerie(&[
+            "bench",
+            "--suite",
+            suite.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--resume",
+        ])
+        .map_err(|f| f.message)
+        .unwrap()
+    };
+    resume(&suite);
+    assert_eq!(modified(&results), flown, "the flight was flown again");
+    assert_eq!(read("suite.md"), md);
+    assert_eq!(read("ratios.csv"), ratios);
+    // Other settings: the record does not match, the flight is flown again with them.
+    std::fs::write(&suite, SUITE.replace("frames = 3", "frames = 2")).unwrap();
+    resume(&suite);
+    assert_ne!(modified(&results), flown);
+    let summary = table(&out.join("mixed-follow/summary.csv"));
+    assert!(summary.iter().all(|r| r["frames"] == "2"), "{summary:?}");
+    assert!(read("suite.md").contains("2 measured frames"));
 }
 
 /// A bad suite is refused before anything runs, naming the file, line and key.

@@ -11,7 +11,7 @@ pub use super::bound::EARTH_RADIUS_M;
 pub const MAX_REFINEMENT: u32 = 6;
 
 /// How the level of detail is decided. Everything else (levels, pipeline, uploads) is shared.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum LodMode {
     /// Error-bounded tiled clipmaps: refine until ρ ≤ τ (ours).

@@ -34,6 +34,7 @@ mod rows;
 mod suite;
 mod suite_config;
 mod suite_report;
+mod suite_resume;
 
 use std::io::IsTerminal;
 use std::path::Path;
@@ -175,6 +176,7 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             data: a.data.as_deref(),
             out: &a.out,
             overwrite: a.overwrite,
+            resume: a.resume,
         };
         return suite::run(&paths, &mut |job| suite_flight(&a, job));
     }
@@ -246,6 +248,8 @@ fn suite_flight(
     args.tess_density = join(&r.sweeps.tess_density);
     args.oracle_nodes = r.oracle_nodes;
     args.flight = None;
+    // A flight flown again under --resume replaces what an interrupted run left in its folder.
+    args.overwrite = a.overwrite || a.resume;
     let p = plan(&args)?;
     let duration = (r.warmup + r.frames) as f64 / r.fps;
     let terrain = Terrain::in_memory(job.ds.clone(), job.bake.clone());

@@ -17,6 +17,11 @@ pub struct BenchArgs {
     /// into its own folder under --out, with one combined report (suite.md, ratios.csv).
     #[arg(long, conflicts_with_all = ["dem", "flight"])]
     pub suite: Option<PathBuf>,
+    /// Go on with an interrupted suite in --out: a flight whose folder holds the record of a
+    /// run with the same settings, dataset and flight is taken from it, the others are flown
+    /// (their folders replaced), and the combined report covers them all.
+    #[arg(long, requires = "suite")]
+    pub resume: bool,
     /// Folder the suite's relative dataset paths start from (default: the suite file's folder).
     #[arg(long, requires = "suite")]
     pub data: Option<PathBuf>,

@@ -6,7 +6,7 @@
 use aerie_terrain::select::LodMode;
 
 /// One configuration of the run: a mode, τ for `bounded`, the knob of a swept baseline.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BenchConfig {
     pub mode: LodMode,
     /// τ (px) for `bounded`; None for the modes that do not use it.

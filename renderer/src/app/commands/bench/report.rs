@@ -11,7 +11,7 @@ use crate::tools::image_error::ImageError;
 use aerie_terrain::select::LodMode;
 
 /// Nearest-rank order statistics of a sample.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Quantiles {
     pub median: f64,
     pub p95: f64,
@@ -69,7 +69,7 @@ pub(crate) struct RunInfo {
 }
 
 /// Image error of one configuration over the measured frames.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct ImageSummary {
     /// Largest per-pixel error of any frame, confirmed by a neighbouring pixel
     /// (`ImageError::confirmed`): the headline number.
@@ -90,7 +90,7 @@ pub(crate) struct ImageSummary {
 }
 
 /// One configuration over the measured (non-warm-up) frames.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Summary {
     pub config: BenchConfig,
     pub frames: usize,

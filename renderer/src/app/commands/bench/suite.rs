@@ -13,6 +13,9 @@ use super::flights::waypoints_csv;
 use super::report::Summary;
 use super::suite_config::{parse_suite, DatasetSource, DatasetSpec, RunSettings, Suite};
 use super::suite_report::{write_report, FlightResult, SuiteInfo};
+use super::suite_resume::{
+    fingerprint, read_record, remove_record, write_record, FlightRecord, Resume,
+};
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::prepare::prepare_terrain;
 use crate::render::frame::RendererDesc;
@@ -45,6 +48,8 @@ pub(crate) struct SuitePaths<'a> {
     pub data: Option<&'a Path>,
     pub out: &'a Path,
     pub overwrite: bool,
+    /// `--resume`: flights whose record matches are taken from it (`suite_resume.rs`).
+    pub resume: bool,
 }
 
 /// Largest suite file read.
@@ -68,9 +73,9 @@ pub(super) fn run(paths: &SuitePaths, flight: &mut FlightRunner) -> Result<(), F
         Some(d) => d.to_path_buf(),
         None => file.parent().map(Path::to_path_buf).unwrap_or_default(),
     };
-    check_out(paths.out, paths.overwrite)?;
+    check_out(paths.out, paths.overwrite || paths.resume)?;
     let work = std::env::temp_dir().join(format!("aerie-suite-{}", std::process::id()));
-    let result = run_pairs(paths.out, &suite, &root, &work, &name, flight);
+    let result = run_pairs(paths, &suite, &root, &work, &name, flight);
     // Best effort: the temporary copies and bakes are of no use afterwards.
     let _ = std::fs::remove_dir_all(&work);
     result
@@ -89,7 +94,7 @@ fn check_out(out: &Path, overwrite: bool) -> Result<(), Failure> {
     if used && !overwrite {
         return Err(bad_input(format!(
             "--out {}: folder is not empty; pass --overwrite to replace an earlier suite's \
-             results, or choose an empty folder",
+             results, --resume to go on with an interrupted one, or choose an empty folder",
             out.display()
         )));
     }
@@ -98,30 +103,57 @@ fn check_out(out: &Path, overwrite: bool) -> Result<(), Failure> {
 }
 
 fn run_pairs(
-    out: &Path,
+    paths: &SuitePaths,
     suite: &Suite,
     root: &Path,
     work: &Path,
     source: &str,
     run_flight: &mut FlightRunner,
 ) -> Result<(), Failure> {
-    let r = &suite.run;
+    let (out, r) = (paths.out, &suite.run);
     let tile_size = RendererDesc::default().tile_size;
     let total = r.warmup + r.frames;
     let pairs = suite.pairs();
     let mut results: Vec<FlightResult> = Vec::new();
-    let mut device = String::new();
+    let mut devices: Vec<String> = Vec::new();
     for d in &suite.datasets {
         let mine: Vec<_> = pairs.iter().filter(|(pd, _)| pd.name == d.name).collect();
         if mine.is_empty() {
             continue;
         }
-        let dem = materialise(d, root, work)?;
-        let (ds, bake) = prepare_terrain(&dem, tile_size)?;
+        // Copied (or generated) and baked only when one of its flights is flown.
+        let mut prepared: Option<(PathBuf, Arc<Dataset>, Arc<ErrorBake>)> = None;
         for (_, f) in mine {
             let key = format!("{}-{}", d.name, f.spec.name);
             eprintln!("suite: {key} ({}/{})", results.len() + 1, pairs.len());
-            let csv = waypoints_csv(&ds, &f.spec, total, r.fps);
+            let dir = out.join(&key);
+            let print = fingerprint(r, d, f);
+            if paths.resume {
+                match read_record(&dir, &print) {
+                    Resume::Record(rec) => {
+                        eprintln!("suite: {key} taken from {} (--resume)", dir.display());
+                        devices.push(rec.device);
+                        results.push(FlightResult {
+                            dataset: d.name.clone(),
+                            flight: f.spec.name.clone(),
+                            dataset_summary: rec.dataset_summary,
+                            summaries: rec.summaries,
+                        });
+                        continue;
+                    }
+                    Resume::Run(why) => eprintln!("suite: {key} is flown: {why}"),
+                }
+            }
+            remove_record(&dir).map_err(runtime)?;
+            if prepared.is_none() {
+                let dem = materialise(d, root, work)?;
+                let (ds, bake) = prepare_terrain(&dem, tile_size)?;
+                prepared = Some((dem, ds, bake));
+            }
+            let Some((dem, ds, bake)) = prepared.as_ref() else {
+                unreachable!("prepared just above");
+            };
+            let csv = waypoints_csv(ds, &f.spec, total, r.fps);
             let csv_path = out.join("flights").join(format!("{key}.csv"));
             write_text(&csv_path, &csv)
                 .map_err(|e| runtime(format!("{}: {e}", csv_path.display())))?;
@@ -129,18 +161,25 @@ fn run_pairs(
                 .map_err(|e| runtime(format!("generated flight {key}: {e}")))?;
             let job = FlightJob {
                 run: r,
-                dem: &dem,
-                ds: &ds,
-                bake: &bake,
+                dem,
+                ds,
+                bake,
                 waypoints,
                 described: format!(
                     "suite {source}, flight {:?}: {:?}, waypoints flights/{key}.csv",
                     f.spec.name, f.spec.kind
                 ),
-                out: out.join(&key),
+                out: dir.clone(),
             };
             let (dev, summaries) = run_flight(&job)?;
-            device = dev;
+            let record = FlightRecord::new(print, dev.clone(), ds.summary(), summaries.clone());
+            if let Err(e) = write_record(&dir, &record) {
+                // The flight's own report is written; only resuming it later is lost.
+                eprintln!(
+                    "suite: {key}: its record could not be written ({e}); --resume flies it again"
+                );
+            }
+            devices.push(dev);
             results.push(FlightResult {
                 dataset: d.name.clone(),
                 flight: f.spec.name.clone(),
@@ -151,7 +190,7 @@ fn run_pairs(
     }
     let info = SuiteInfo {
         source: source.to_string(),
-        device,
+        device: distinct(devices).join("; "),
         size: r.size.clone(),
         fov: r.fov,
         frames: r.frames,
@@ -159,6 +198,18 @@ fn run_pairs(
         fps: r.fps,
     };
     write_report(out, &info, &results)
+}
+
+/// The devices the flights ran on, each once, in the order first met (a resumed suite may have
+/// run on several).
+fn distinct(devices: Vec<String>) -> Vec<String> {
+    let mut seen: Vec<String> = Vec::new();
+    for d in devices {
+        if !seen.contains(&d) {
+            seen.push(d);
+        }
+    }
+    seen
 }
 
 /// The dataset's path in `work`: copied from under `root`, or generated.
