@@ -50,7 +50,6 @@ fn plan_stages(c: &mut Criterion) {
         let name = scene.name;
         let mut desc = RendererDesc::default();
         desc.select.tau_px = 1.0;
-        desc.select.earth = scene.earth;
         let ds = Arc::new(scene.ds);
         let source: Arc<dyn TerrainSource> = Arc::new(InMemoryTerrain::new(Arc::clone(&ds)));
         let clipmap = desc.clipmap(source.grid());

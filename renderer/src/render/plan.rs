@@ -140,6 +140,10 @@ impl PlanState {
     ) -> Self {
         let grid = source.grid();
         let spacing = [grid.spacing_x, grid.spacing_y];
+        // Geographic and UTM grids are drawn on the ellipsoid (issue 14), the rest on the flat
+        // plane: decided here, once, for every planner (renderer, `fly --no-draw`, benchmarks)
+        // from the source's grid.
+        let earth = GeoGrid::of(grid.geo.as_ref(), grid.spacing_x, grid.spacing_y);
         let feed = Feed::new(clipmap.clone(), spacing, Gatherer::new(source));
         let pools = (1..=pool_capacity.len() as u32)
             .map(|r| PoolSlots {
@@ -159,7 +163,7 @@ impl PlanState {
             prefetch_selections: 0,
             shared: SharedSelection::default(),
             shared_selections: 0,
-            earth: None,
+            earth,
         }
     }
 

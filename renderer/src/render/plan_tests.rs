@@ -654,3 +654,49 @@ fn channels_sharing_a_selection_select_once_per_frame() {
     }
     assert_eq!(st.shared_selections, 3, "one shared selection per frame");
 }
+
+/// Every planner — the renderer, `fly --no-draw`, the benchmarks — plans a geographic grid on
+/// the ellipsoid and the rest on the flat plane: the planner decides it from its source's grid
+/// (`fly --no-draw` once planned geographic data flat, so its CPU figures were of another
+/// path than the renderer's), and the frame's instance records then carry ellipsoid frames.
+#[test]
+fn geographic_data_is_planned_on_the_ellipsoid_by_every_planner() {
+    let frame_of = |st: &mut PlanState| {
+        let select = SelectParams::default();
+        let cam = camera(1280.0, 1280.0, 900.0, 30.0);
+        let inp = inputs(0, &cam, &select, 64 << 20);
+        let mut sel = Selection::default();
+        let strips = select_frame(st, &inp, &mut sel);
+        plan_frame(st, &inp, &sel, strips).unwrap()
+    };
+    let mut flat = state(&[8; 6]);
+    assert!(flat.earth.is_none());
+    let plan = frame_of(&mut flat);
+    assert!(!plan.instances.is_empty());
+    assert!(plan.instances.iter().all(|i| i.geo_origin == [0.0; 4]));
+
+    let d = 1.0 / 1200.0;
+    let mut hf = rough_dataset().hf.clone();
+    hf.geo = Some(aerie_terrain::GeoReference::Geographic {
+        south_lat_deg: 47.0,
+        west_lon_deg: 11.0,
+        dlat_deg: d,
+        dlon_deg: d,
+    });
+    (hf.spacing_x, hf.spacing_y) = aerie_terrain::load::geographic_spacing_m(47.05, d, d);
+    let ds = Arc::new(Dataset::from_heightfield(
+        hf,
+        "plan test, geographic".into(),
+    ));
+    let b = Arc::new(bake(&ds, BakeParams::default(), &|_, _| {}));
+    let mut geo = PlanState::new(b, Arc::new(InMemoryTerrain::new(ds)), clipmap(), &[8; 6]);
+    let earth = geo
+        .earth
+        .expect("a geographic grid is drawn on the ellipsoid");
+    assert_eq!((earth.south_lat_deg, earth.west_lon_deg), (47.0, 11.0));
+    let plan = frame_of(&mut geo);
+    assert!(!plan.instances.is_empty());
+    // geo_origin.w is the grid's latitude step in radians: the shader's ellipsoid path.
+    let dlat = d.to_radians() as f32;
+    assert!(plan.instances.iter().all(|i| i.geo_origin[3] == dlat));
+}

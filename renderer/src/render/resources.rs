@@ -138,10 +138,9 @@ impl GpuTerrain {
         let max = d.properties.limits.max_image_dimension2_d;
         let max_layers = d.properties.limits.max_image_array_layers;
         let grid = source.grid().clone();
+        // Geographic data is drawn on the ellipsoid (`PlanState::new` places it); the rest on
+        // the flat plane.
         let mut plan = PlanState::new(bake, source, clipmap, pool_capacity);
-        // Geographic data is drawn on the ellipsoid (issue 14); the rest on the flat plane.
-        plan.earth =
-            aerie_terrain::geodesy::GeoGrid::of(grid.geo.as_ref(), grid.spacing_x, grid.spacing_y);
         let image_desc = |w: u32, layers: u32| ImageDesc {
             width: w,
             height: w,
