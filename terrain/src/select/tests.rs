@@ -249,7 +249,7 @@ fn view_corners_are_transform_point3_bit_for_bit() {
 }
 
 /// On random quadtree covers (every part a node, split at random down to level 0, tiles far
-/// from the origin so packed keys carry large coordinates), each node's reach is the largest ε
+/// from the origin), each node's reach is the largest ε
 /// among itself and every node sharing a stretch of edge with it, found by brute force.
 #[test]
 fn neighbour_eps_is_the_brute_force_edge_maximum() {
@@ -260,9 +260,14 @@ fn neighbour_eps_is_the_brute_force_edge_maximum() {
         seed ^= seed << 17;
         seed
     };
+    // Level-0 coordinates up to 2^25 and up to 2^31.
     for case in 0..40 {
         let top = 5u32;
-        let base = 1u32 << 20; // level-`top` root tile coordinates
+        let base = if case % 2 == 0 {
+            1u32 << 20
+        } else {
+            1u32 << 26
+        };
         let mut nodes = Vec::new();
         let mut stack = vec![(top, base + case, base + 2 * case)];
         while let Some((l, x, y)) = stack.pop() {
