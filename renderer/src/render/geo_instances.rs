@@ -53,6 +53,12 @@ impl GeoEye {
         }
     }
 
+    /// Whether the grid is projected (UTM): its nodes carry polynomials (`geo_s`, `geo_n`);
+    /// a geographic grid's leave them zero.
+    pub fn projected(&self) -> bool {
+        self.grid.projected.is_some()
+    }
+
     /// The fields of the node whose south-west vertex is sample `origin` (col, row), drawn
     /// with `q` quads per side of `step` samples: its frame sits at the centre vertex, so
     /// offsets stay within half a node.

@@ -2,12 +2,13 @@
 //! `TileInstance` per drawn node (relative to the eye, grouped by refinement) and one indexed
 //! indirect command per group.
 
+use bytemuck::Zeroable;
 use glam::DVec3;
 
 use aerie_terrain::geodesy::GeoGrid;
 use aerie_terrain::select::{neighbour_eps, DrawItem};
 
-use crate::render::geo_instances::{GeoEye, GeoFields};
+use crate::render::geo_instances::GeoEye;
 use crate::render::gpu::{DrawIndexedIndirect, TileInstance};
 use crate::render::stats::RESOLUTIONS;
 
@@ -75,40 +76,41 @@ pub fn build_instances(
         order[*at] = k as u32;
         *at += 1;
     }
-    let mut instances = Vec::with_capacity(draw_list.len());
-    for &k in &order {
+    // Zeroed records filled in place: the ~450-byte records are not built aside and copied,
+    // and the fields a node does not use (the ellipsoid's on the plane, a UTM node's
+    // polynomials on a geographic grid) stay zero without being written.
+    let mut instances = vec![TileInstance::zeroed(); draw_list.len()];
+    for (t, &k) in instances.iter_mut().zip(&order) {
         let (item, slot) = draw_list[k as usize];
         let reach_m = reach[k as usize];
         let node = (q as i64) << item.node_level;
         let origin = [item.node_tx as i64 * node, item.node_ty as i64 * node];
         let (slot_x, slot_y, slot_stride) = slot_placement(&item, q);
-        let g = geo.map_or(GeoFields::default(), |e| {
-            e.node_fields(origin, 1 << item.node_level, q)
-        });
-        instances.push(TileInstance {
-            origin_rel: [
-                (origin[0] as f64 * f.spacing[0] - eye.x) as f32,
-                (origin[1] as f64 * f.spacing[1] - eye.y) as f32,
-            ],
-            origin_sample: [origin[0] as i32, origin[1] as i32],
-            step: 1 << item.node_level,
-            level: item.level,
-            refinement: item.refinement,
-            slot,
-            // ε + max(ε, neighbours' ε) at the default factor 2 (see neighbour_eps).
-            skirt_m: 0.5 * f.skirt_factor * (item.eps_m + reach_m) + f.skirt_min_m,
-            slot_x,
-            slot_y,
-            slot_stride,
-            morph: item.morph.to_gpu(),
-            geo_origin: g.geo_origin,
-            geo_axis_r: g.geo_axis_r,
-            geo_axis_t: g.geo_axis_t,
-            geo_axis_z: g.geo_axis_z,
-            geo_radius: g.geo_radius,
-            geo_s: g.geo_s,
-            geo_n: g.geo_n,
-        });
+        t.origin_rel = [
+            (origin[0] as f64 * f.spacing[0] - eye.x) as f32,
+            (origin[1] as f64 * f.spacing[1] - eye.y) as f32,
+        ];
+        t.origin_sample = [origin[0] as i32, origin[1] as i32];
+        t.step = 1 << item.node_level;
+        t.level = item.level;
+        t.refinement = item.refinement;
+        t.slot = slot;
+        // ε + max(ε, neighbours' ε) at the default factor 2 (see neighbour_eps).
+        t.skirt_m = 0.5 * f.skirt_factor * (item.eps_m + reach_m) + f.skirt_min_m;
+        (t.slot_x, t.slot_y, t.slot_stride) = (slot_x, slot_y, slot_stride);
+        t.morph = item.morph.to_gpu();
+        if let Some(e) = &geo {
+            let g = e.node_fields(origin, 1 << item.node_level, q);
+            t.geo_origin = g.geo_origin;
+            t.geo_axis_r = g.geo_axis_r;
+            t.geo_axis_t = g.geo_axis_t;
+            t.geo_axis_z = g.geo_axis_z;
+            t.geo_radius = g.geo_radius;
+            if e.projected() {
+                t.geo_s = g.geo_s;
+                t.geo_n = g.geo_n;
+            }
+        }
     }
     (instances, sizes)
 }
