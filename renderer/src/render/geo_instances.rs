@@ -69,6 +69,41 @@ impl GeoEye {
     /// [`Self::node_fields`] and the f64 vector from the eye to the node's centre vertex (what
     /// `geo_origin.xyz` rounds): with the eye at the world origin, the centre's world position.
     pub fn node_fields_rel(&self, origin: [i64; 2], step: u32, q: u32) -> (GeoFields, DVec3) {
+        self.with_eye(&self.node_frame(origin, step, q))
+    }
+
+    /// [`Self::node_fields`] through `cache`, which keeps each node's [`NodeFrame`] across
+    /// frames: per frame only the centre relative to the eye is formed (the same fields bit for
+    /// bit). `cache` must have begun the frame on this eye's grid ([`GeoNodeCache::begin`]).
+    pub fn node_fields_cached(
+        &self,
+        cache: &mut GeoNodeCache,
+        origin: [i64; 2],
+        step: u32,
+        q: u32,
+    ) -> GeoFields {
+        debug_assert_eq!(
+            cache.grid.as_ref(),
+            Some(&self.grid),
+            "the cache began elsewhere"
+        );
+        let frame = *cache
+            .nodes
+            .entry((origin, step, q))
+            .or_insert_with(|| self.node_frame(origin, step, q));
+        self.with_eye(&frame).0
+    }
+
+    /// The node's fields with `geo_origin.xyz` its centre relative to this eye.
+    fn with_eye(&self, frame: &NodeFrame) -> (GeoFields, DVec3) {
+        let rel = self.to_world * (frame.centre_ecef - self.eye_ecef);
+        let mut fields = frame.fields;
+        fields.geo_origin[..3].copy_from_slice(&[rel.x as f32, rel.y as f32, rel.z as f32]);
+        (fields, rel)
+    }
+
+    /// Everything of a node's fields that does not depend on the eye.
+    fn node_frame(&self, origin: [i64; 2], step: u32, q: u32) -> NodeFrame {
         let half = (q / 2) as i64 * step as i64;
         if let Some(p) = &self.grid.projected {
             return self.projected_fields(p, origin, half);
@@ -77,7 +112,6 @@ impl GeoEye {
         let lat_deg = self.grid.south_lat_deg + row * self.grid.dlat_deg;
         let lon_deg = self.grid.west_lon_deg + col * self.grid.dlon_deg;
         let centre = aerie_terrain::geodesy::geodetic_to_ecef(Geodetic::new(lat_deg, lon_deg, 0.0));
-        let rel = self.to_world * (centre - self.eye_ecef);
         let (sp, cp) = lat_deg.to_radians().sin_cos();
         let (sl, cl) = lon_deg.to_radians().sin_cos();
         let axis_r = self.to_world * DVec3::new(cl, sl, 0.0);
@@ -89,24 +123,22 @@ impl GeoEye {
         let r0_lo = (r0 - r0_hi as f64) as f32;
         let v4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
         let fields = GeoFields {
-            geo_origin: v4(rel, self.dlat_rad),
+            geo_origin: [0.0, 0.0, 0.0, self.dlat_rad as f32],
             geo_axis_r: v4(axis_r, sp),
             geo_axis_t: v4(axis_t, cp),
             geo_axis_z: v4(axis_z, w0),
             geo_radius: [self.dlon_rad as f32, r0_hi, r0_lo, 0.0],
             ..Default::default()
         };
-        (fields, rel)
+        NodeFrame {
+            centre_ecef: centre,
+            fields,
+        }
     }
 
     /// A projected grid's node (see the module documentation): `half` samples from its
     /// south-west vertex `origin` to its centre.
-    fn projected_fields(
-        &self,
-        p: &ProjectedGrid,
-        origin: [i64; 2],
-        half: i64,
-    ) -> (GeoFields, DVec3) {
+    fn projected_fields(&self, p: &ProjectedGrid, origin: [i64; 2], half: i64) -> NodeFrame {
         let (sx, sy) = (self.grid.spacing_x, self.grid.spacing_y);
         let centre = DVec2::new(
             (origin[0] + half) as f64 * sx,
@@ -114,7 +146,6 @@ impl GeoEye {
         );
         let half_m = DVec2::new(half as f64 * sx, half as f64 * sy);
         let poly = p.node_polynomial(centre, half_m);
-        let rel = self.to_world * (poly.centre_ecef - self.eye_ecef);
         let north = self
             .grid
             .local_enu_axes(poly.lat0_deg, poly.lon0_deg)
@@ -132,18 +163,88 @@ impl GeoEye {
         }
         geo_n[0] = v(poly.normal0, 0.0);
         let fields = GeoFields {
-            geo_origin: [
-                rel.x as f32,
-                rel.y as f32,
-                rel.z as f32,
-                (1.0 / half.max(1) as f64) as f32,
-            ],
+            geo_origin: [0.0, 0.0, 0.0, (1.0 / half.max(1) as f64) as f32],
             geo_radius: [0.0, 0.0, 0.0, 1.0],
             geo_s,
             geo_n,
             ..Default::default()
         };
-        (fields, rel)
+        NodeFrame {
+            centre_ecef: poly.centre_ecef,
+            fields,
+        }
+    }
+}
+
+/// A node's fields on the ellipsoid without the eye: its centre in ECEF and every field but
+/// `geo_origin.xyz` (the centre relative to the eye, formed each frame).
+#[derive(Debug, Clone, Copy)]
+struct NodeFrame {
+    centre_ecef: DVec3,
+    fields: GeoFields,
+}
+
+/// Nodes held before the cache starts afresh (a frame draws a few thousand).
+const GEO_CACHE_CAPACITY: usize = 1 << 16;
+
+/// Each drawn node's [`NodeFrame`] kept across frames (a frame's nodes are mostly the last
+/// frame's): the latitude and longitude trigonometry, and a UTM node's polynomial fit, are done
+/// once per node instead of once per frame. Keyed by (south-west sample, step, quads); starts
+/// afresh when the grid changes or it holds [`GEO_CACHE_CAPACITY`] nodes.
+#[derive(Debug, Default)]
+pub struct GeoNodeCache {
+    grid: Option<GeoGrid>,
+    nodes: std::collections::HashMap<([i64; 2], u32, u32), NodeFrame, FastHash>,
+}
+
+/// A multiply–rotate hasher for the cache's small integer keys (std's SipHash cost as much as
+/// the trigonometry the cache saves); the high half folded onto the low one, where the table
+/// picks its bucket.
+#[derive(Debug, Default, Clone, Copy)]
+struct FastHasher(u64);
+
+impl std::hash::Hasher for FastHasher {
+    fn finish(&self) -> u64 {
+        self.0 ^ (self.0 >> 32)
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    fn write_u32(&mut self, v: u32) {
+        self.write_u64(v as u64);
+    }
+    fn write_i64(&mut self, v: i64) {
+        self.write_u64(v as u64);
+    }
+    fn write_usize(&mut self, v: usize) {
+        self.write_u64(v as u64);
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+type FastHash = std::hash::BuildHasherDefault<FastHasher>;
+
+impl GeoNodeCache {
+    /// Starts a frame on `grid`: forgets every node when the grid changed or the cache is full.
+    pub fn begin(&mut self, grid: &GeoGrid) {
+        if self.grid.as_ref() != Some(grid) || self.nodes.len() >= GEO_CACHE_CAPACITY {
+            self.nodes.clear();
+            self.grid = Some(*grid);
+        }
+    }
+
+    /// Nodes held.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Whether it holds none.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
     }
 }
 
@@ -274,6 +375,45 @@ mod tests {
             30.0,
         )
         .unwrap()
+    }
+
+    /// A node's fields from the cache, filled under other eyes, are the fields computed afresh
+    /// for this eye, bit for bit, on a geographic and a UTM grid; a cache that began on another
+    /// grid forgets its nodes.
+    #[test]
+    fn cached_node_fields_equal_fresh_ones_whatever_eye_filled_the_cache() {
+        let utm = GeoReference::Projected {
+            crs: "EPSG:32632".into(),
+            easting: 170_000.0,
+            northing: 5_200_000.0,
+        };
+        let grids = [
+            grid(47.0, 11.0, 1.0 / 1200.0),
+            GeoGrid::of(Some(&utm), 30.0, 30.0).unwrap(),
+        ];
+        let nodes = [([0i64, 0], 1u32), ([1024, 2048], 32), ([4096, 512], 8)];
+        let eyes = [
+            glam::DVec2::new(0.0, 0.0),
+            glam::DVec2::new(40_000.0, 60_000.0),
+            glam::DVec2::new(-5_000.0, 90_000.0),
+        ];
+        let mut cache = GeoNodeCache::default();
+        for g in &grids {
+            for (k, e) in eyes.iter().enumerate() {
+                let eye = GeoEye::new(g, g.world_of_grid(*e, 1500.0 + 700.0 * k as f64));
+                cache.begin(g);
+                for &(origin, step) in &nodes {
+                    let cached = eye.node_fields_cached(&mut cache, origin, step, 16);
+                    let fresh = eye.node_fields(origin, step, 16);
+                    assert_eq!(
+                        bytemuck::bytes_of(&cached),
+                        bytemuck::bytes_of(&fresh),
+                        "{origin:?} step {step}, eye {k}"
+                    );
+                }
+                assert_eq!(cache.len(), nodes.len(), "filled once per grid");
+            }
+        }
     }
 
     fn instance(f: GeoFields, step: u32) -> TileInstance {

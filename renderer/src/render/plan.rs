@@ -48,6 +48,7 @@ use crate::render::gathered::Gatherer;
 
 use aerie_terrain::geodesy::GeoGrid;
 
+use crate::render::geo_instances::GeoNodeCache;
 use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, TileInstance};
 use crate::render::jobs::{
     eye_samples, refined_upload, split_level_uploads, within_data_cap, ImageUpload, PlanError,
@@ -118,6 +119,8 @@ pub struct PlanState {
     pub shared_selections: u64,
     /// A geographic dataset drawn on the WGS84 ellipsoid (`GeoGrid::of`); None: the flat plane.
     pub earth: Option<GeoGrid>,
+    /// The drawn nodes' eye-independent ellipsoid fields, kept across frames.
+    pub geo_cache: GeoNodeCache,
 }
 
 /// The selection shared by a set of channels, kept while the set and the level placement stay
@@ -164,6 +167,7 @@ impl PlanState {
             shared: SharedSelection::default(),
             shared_selections: 0,
             earth,
+            geo_cache: GeoNodeCache::default(),
         }
     }
 
@@ -419,6 +423,7 @@ pub fn plan_frame(
             skirt_min_m: inputs.skirt_min_m,
         },
         &plan.draw_list,
+        &mut state.geo_cache,
     );
     let (draws, mut triangles) = indirect_draws(&groups, inputs.tile_indices);
     // CDLOD's quadrants drawn for their parents count as the parent's quarter mesh they show.

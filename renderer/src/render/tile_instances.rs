@@ -8,7 +8,7 @@ use glam::DVec3;
 use aerie_terrain::geodesy::GeoGrid;
 use aerie_terrain::select::{neighbour_eps, DrawItem};
 
-use crate::render::geo_instances::GeoEye;
+use crate::render::geo_instances::{GeoEye, GeoNodeCache};
 use crate::render::gpu::{DrawIndexedIndirect, TileInstance};
 use crate::render::stats::RESOLUTIONS;
 
@@ -49,6 +49,7 @@ pub fn slot_placement(item: &DrawItem, tile_quads: u32) -> (u32, u32, u32) {
 pub fn build_instances(
     f: &InstanceFrame,
     draw_list: &[(DrawItem, u32)],
+    geo_cache: &mut GeoNodeCache,
 ) -> (Vec<TileInstance>, [u32; RESOLUTIONS]) {
     let q = f.tile_quads;
     let eye = f.eye;
@@ -57,7 +58,10 @@ pub fn build_instances(
         .map(|(i, _)| (i.node_level, i.node_tx, i.node_ty, i.eps_m))
         .collect();
     let reach = neighbour_eps(&nodes);
-    let geo = f.earth.map(|g| GeoEye::new(g, eye));
+    let geo = f.earth.map(|g| {
+        geo_cache.begin(g);
+        GeoEye::new(g, eye)
+    });
     // The records are written once, in their final place: a counting sort of the draw list by
     // refinement (stable, so each group keeps the list's order) into one vector of the exact
     // size (records are ~450 bytes: growing and concatenating per-group vectors copied each
@@ -100,7 +104,7 @@ pub fn build_instances(
         (t.slot_x, t.slot_y, t.slot_stride) = (slot_x, slot_y, slot_stride);
         t.morph = item.morph.to_gpu();
         if let Some(e) = &geo {
-            let g = e.node_fields(origin, 1 << item.node_level, q);
+            let g = e.node_fields_cached(geo_cache, origin, 1 << item.node_level, q);
             t.geo_origin = g.geo_origin;
             t.geo_axis_r = g.geo_axis_r;
             t.geo_axis_t = g.geo_axis_t;
@@ -176,7 +180,7 @@ mod tests {
             skirt_factor: 2.0,
             skirt_min_m: 0.0,
         };
-        let (instances, sizes) = build_instances(&f, &list);
+        let (instances, sizes) = build_instances(&f, &list, &mut GeoNodeCache::default());
         assert_eq!(&sizes[..3], &[2, 1, 3]);
         assert!(sizes[3..].iter().all(|&n| n == 0));
         let slots: Vec<u32> = instances.iter().map(|i| i.slot).collect();
