@@ -87,9 +87,13 @@ impl GeoEye {
             Some(&self.grid),
             "the cache began elsewhere"
         );
+        let key = (
+            ((origin[0] as u64) << 32) | (origin[1] as u64 & 0xffff_ffff),
+            ((step as u64) << 16) | q as u64,
+        );
         let frame = *cache
             .nodes
-            .entry((origin, step, q))
+            .entry(key)
             .or_insert_with(|| self.node_frame(origin, step, q));
         self.with_eye(&frame).0
     }
@@ -194,7 +198,9 @@ const GEO_CACHE_CAPACITY: usize = 1 << 16;
 #[derive(Debug, Default)]
 pub struct GeoNodeCache {
     grid: Option<GeoGrid>,
-    nodes: std::collections::HashMap<([i64; 2], u32, u32), NodeFrame, FastHash>,
+    /// Keyed by (south-west sample column << 32 | row, step << 16 | quads): two hashing
+    /// rounds (sample indices of a grid at most 2^32 wide, steps and quads far below 2^16).
+    nodes: std::collections::HashMap<(u64, u64), NodeFrame, FastHash>,
 }
 
 /// A multiply–rotate hasher for the cache's small integer keys (std's SipHash cost as much as
@@ -211,15 +217,6 @@ impl std::hash::Hasher for FastHasher {
         for &b in bytes {
             self.write_u64(b as u64);
         }
-    }
-    fn write_u32(&mut self, v: u32) {
-        self.write_u64(v as u64);
-    }
-    fn write_i64(&mut self, v: i64) {
-        self.write_u64(v as u64);
-    }
-    fn write_usize(&mut self, v: usize) {
-        self.write_u64(v as u64);
     }
     fn write_u64(&mut self, v: u64) {
         self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);

@@ -69,8 +69,11 @@ impl CacheKey {
 pub(super) struct NodeHasher(u64);
 
 impl Hasher for NodeHasher {
+    /// The high half folded onto the low one: a product's low bits depend only on the key's
+    /// low bits (here the tile row), and the table picks its bucket from the low bits — without
+    /// the fold every node of a row shared a bucket chain.
     fn finish(&self) -> u64 {
-        self.0
+        self.0 ^ (self.0 >> 32)
     }
     fn write(&mut self, bytes: &[u8]) {
         for &b in bytes {
