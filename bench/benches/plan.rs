@@ -10,27 +10,15 @@ use std::hint::black_box;
 use std::sync::Arc;
 
 use aerie::render::desc::RendererDesc;
-use aerie::render::jobs::StagingBudget;
-use aerie::render::plan::{plan_frame, select_frame, FrameInputs, PlanState};
+use aerie::render::plan::{plan_frame, select_frame, PlanState};
 use aerie::terrain::mesh::skirted_tile_indices;
 use aerie::terrain::select::Selection;
 use aerie::terrain::source::{InMemoryTerrain, TerrainSource};
-use aerie_bench::{selection_size, TargetScene};
+use aerie_bench::{selection_size, thread_cpu_us, TargetScene};
 use criterion::{criterion_group, criterion_main, Criterion};
 
 /// Staging offsets are aligned as on lavapipe and most discrete GPUs.
 const ALIGNMENT: u64 = 256;
-
-/// This thread's CPU time, microseconds.
-fn thread_cpu_us() -> f64 {
-    let mut t = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `t` is a valid, writable timespec; CLOCK_THREAD_CPUTIME_ID exists on Linux.
-    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
-    t.tv_sec as f64 * 1e6 + t.tv_nsec as f64 * 1e-3
-}
 
 /// Median and p99 of per-frame times.
 fn median_p99(mut v: Vec<f64>) -> (f64, f64) {
@@ -65,20 +53,7 @@ fn plan_stages(c: &mut Criterion) {
         // One frame: (select µs, plan µs, instances), each stage in thread CPU time.
         let mut frame = |k: u64, timed: bool| {
             let camera = &cams[k as usize % cams.len()];
-            let inputs = FrameInputs {
-                frame: k,
-                camera,
-                viewport,
-                channels: &[],
-                channels_generation: 0,
-                select: &desc.select,
-                prefetch_frames: desc.prefetch_frames,
-                skirt_factor: desc.skirt_factor,
-                skirt_min_m: desc.skirt_min_m,
-                overlay_bytes: None,
-                tile_indices: indices,
-                staging: StagingBudget::new(desc.staging_budget, ALIGNMENT),
-            };
+            let inputs = desc.solo_frame_inputs(k, camera, viewport, indices, ALIGNMENT);
             let t0 = if timed { thread_cpu_us() } else { 0.0 };
             let strips = select_frame(&mut state, &inputs, &mut sel);
             let t1 = if timed { thread_cpu_us() } else { 0.0 };

@@ -9,19 +9,8 @@ use std::hint::black_box;
 use aerie::camera::Camera;
 use aerie::terrain::clipmap::place_levels;
 use aerie::terrain::select::{select_tiles, SelectParams, Selection};
-use aerie_bench::{selection_size, TargetScene};
+use aerie_bench::{selection_size, thread_cpu_us, TargetScene};
 use criterion::{criterion_group, criterion_main, Criterion};
-
-/// This thread's CPU time, microseconds.
-fn thread_cpu_us() -> f64 {
-    let mut t = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `t` is a valid, writable timespec; CLOCK_THREAD_CPUTIME_ID exists on Linux.
-    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
-    t.tv_sec as f64 * 1e6 + t.tv_nsec as f64 * 1e-3
-}
 
 fn selection_target(c: &mut Criterion) {
     let size = selection_size();

@@ -7,6 +7,7 @@ pub mod camera;
 pub mod clipmap;
 pub mod dataset;
 pub mod drape;
+pub mod fast_hash;
 pub mod gather;
 pub mod gen;
 pub mod geodesy;

@@ -90,15 +90,19 @@ fn a_tiny_suite_reports_ratios_read_off_its_curves() {
     let suite = dir.path().join("tiny.toml");
     std::fs::write(&suite, SUITE).unwrap();
     let out = dir.path().join("out");
-    aerie(&[
-        "bench",
-        "--suite",
-        suite.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ])
-    .map_err(|f| f.message)
-    .unwrap();
+    // `aerie bench --suite <suite> --out <out>` and more flags.
+    let bench = |extra: &[&str]| {
+        let mut args = vec![
+            "bench",
+            "--suite",
+            suite.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        aerie(&args)
+    };
+    bench(&[]).map_err(|f| f.message).unwrap();
 
     // One folder per flight with its own bench report, and the flight's waypoints.
     for f in [
@@ -185,14 +189,7 @@ fn a_tiny_suite_reports_ratios_read_off_its_curves() {
     assert!(md.contains("frames over τ + 0.5 px"));
 
     // A used folder is refused without --overwrite, naming it.
-    let e = aerie(&[
-        "bench",
-        "--suite",
-        suite.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ])
-    .unwrap_err();
+    let e = bench(&[]).unwrap_err();
     assert_eq!(e.code, 2);
     assert!(
         e.message.contains("--out") && e.message.contains("not empty"),
@@ -206,25 +203,14 @@ fn a_tiny_suite_reports_ratios_read_off_its_curves() {
     let modified = |p: &Path| std::fs::metadata(p).unwrap().modified().unwrap();
     let read = |name: &str| std::fs::read_to_string(out.join(name)).unwrap();
     let (flown, md, ratios) = (modified(&results), read("suite.md"), read("ratios.csv"));
-    let resume = |suite: &Path| {
-        aerie(&[
-            "bench",
-            "--suite",
-            suite.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--resume",
-        ])
-        .map_err(|f| f.message)
-        .unwrap()
-    };
-    resume(&suite);
+    let resume = || bench(&["--resume"]).map_err(|f| f.message).unwrap();
+    resume();
     assert_eq!(modified(&results), flown, "the flight was flown again");
     assert_eq!(read("suite.md"), md);
     assert_eq!(read("ratios.csv"), ratios);
     // Other settings: the record does not match, the flight is flown again with them.
     std::fs::write(&suite, SUITE.replace("frames = 3", "frames = 2")).unwrap();
-    resume(&suite);
+    resume();
     assert_ne!(modified(&results), flown);
     let summary = table(&out.join("mixed-follow/summary.csv"));
     assert!(summary.iter().all(|r| r["frames"] == "2"), "{summary:?}");

@@ -121,6 +121,33 @@ impl Default for RendererDesc {
 }
 
 impl RendererDesc {
+    /// The frame plan's inputs for one camera drawn alone — no other channel, no overlay, this
+    /// description's selection, prefetch, skirts and staging budget (offsets aligned to
+    /// `alignment`): what the CPU-only flight (`fly --no-draw`) and the benchmarks plan.
+    pub fn solo_frame_inputs<'a>(
+        &'a self,
+        frame: u64,
+        camera: &'a aerie_terrain::camera::Camera,
+        viewport: (u32, u32),
+        tile_indices: (u32, u32),
+        alignment: u64,
+    ) -> crate::render::plan::FrameInputs<'a> {
+        crate::render::plan::FrameInputs {
+            frame,
+            camera,
+            viewport,
+            channels: &[],
+            channels_generation: 0,
+            select: &self.select,
+            prefetch_frames: self.prefetch_frames,
+            skirt_factor: self.skirt_factor,
+            skirt_min_m: self.skirt_min_m,
+            overlay_bytes: None,
+            tile_indices,
+            staging: crate::render::jobs::StagingBudget::new(self.staging_budget, alignment),
+        }
+    }
+
     /// The clipmap this renderer lays over `grid`.
     pub fn clipmap(&self, grid: &aerie_terrain::source::SourceGrid) -> ClipmapDesc {
         ClipmapDesc {

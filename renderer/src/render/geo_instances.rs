@@ -24,6 +24,7 @@
 
 use glam::{DMat3, DVec2, DVec3, Mat3, Vec3};
 
+use aerie_terrain::fast_hash::FastHash;
 use aerie_terrain::geodesy::projected::ProjectedGrid;
 use aerie_terrain::geodesy::wgs84::{WGS84_A, WGS84_E2};
 use aerie_terrain::geodesy::{GeoGrid, Geodetic};
@@ -193,8 +194,8 @@ const GEO_CACHE_CAPACITY: usize = 1 << 16;
 
 /// Each drawn node's [`NodeFrame`] kept across frames (a frame's nodes are mostly the last
 /// frame's): the latitude and longitude trigonometry, and a UTM node's polynomial fit, are done
-/// once per node instead of once per frame. Keyed by (south-west sample, step, quads); starts
-/// afresh when the grid changes or it holds [`GEO_CACHE_CAPACITY`] nodes.
+/// once per node instead of once per frame. It starts afresh when the grid changes or it holds
+/// [`GEO_CACHE_CAPACITY`] nodes.
 #[derive(Debug, Default)]
 pub struct GeoNodeCache {
     grid: Option<GeoGrid>,
@@ -202,28 +203,6 @@ pub struct GeoNodeCache {
     /// rounds (sample indices of a grid at most 2^32 wide, steps and quads far below 2^16).
     nodes: std::collections::HashMap<(u64, u64), NodeFrame, FastHash>,
 }
-
-/// A multiply–rotate hasher for the cache's small integer keys (std's SipHash cost as much as
-/// the trigonometry the cache saves); the high half folded onto the low one, where the table
-/// picks its bucket.
-#[derive(Debug, Default, Clone, Copy)]
-struct FastHasher(u64);
-
-impl std::hash::Hasher for FastHasher {
-    fn finish(&self) -> u64 {
-        self.0 ^ (self.0 >> 32)
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
-        }
-    }
-    fn write_u64(&mut self, v: u64) {
-        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-}
-
-type FastHash = std::hash::BuildHasherDefault<FastHasher>;
 
 impl GeoNodeCache {
     /// Starts a frame on `grid`: forgets every node when the grid changed or the cache is full.

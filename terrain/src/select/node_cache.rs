@@ -6,11 +6,11 @@
 //! lookup here: that path computes them each time (16385², τ = 1, 720p: 229 → 194 µs).
 
 use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 
 use glam::DVec2;
 
 use crate::bake::ErrorBake;
+use crate::fast_hash::FastHash;
 use crate::geodesy::{GeoGrid, NodeGeometry};
 
 /// The camera-independent part of a node (level, tx, ty).
@@ -64,27 +64,6 @@ impl CacheKey {
     }
 }
 
-/// A multiplicative hash of the packed node key (the std SipHash costs more than the lookup).
-#[derive(Default, Clone, Copy)]
-pub(super) struct NodeHasher(u64);
-
-impl Hasher for NodeHasher {
-    /// The high half folded onto the low one: a product's low bits depend only on the key's
-    /// low bits (here the tile row), and the table picks its bucket from the low bits — without
-    /// the fold every node of a row shared a bucket chain.
-    fn finish(&self) -> u64 {
-        self.0 ^ (self.0 >> 32)
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
-        }
-    }
-    fn write_u64(&mut self, v: u64) {
-        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x517c_c1b7_2722_0a95);
-    }
-}
-
 /// Nodes kept at most; beyond it the cache starts afresh (a flight across a continent would
 /// otherwise keep every node it ever saw: ~150 bytes each, so this is ~40 MB).
 const CAPACITY: usize = 1 << 18;
@@ -97,7 +76,7 @@ const CAPACITY: usize = 1 << 18;
 #[derive(Debug, Default)]
 pub struct NodeCache {
     key: Option<CacheKey>,
-    nodes: HashMap<u64, NodeFixed, BuildHasherDefault<NodeHasher>>,
+    nodes: HashMap<u64, NodeFixed, FastHash>,
 }
 
 impl Clone for NodeCache {

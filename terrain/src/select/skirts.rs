@@ -1,5 +1,7 @@
 //! How far each drawn node's skirt must reach: the roughest of its edge neighbours.
 
+use crate::fast_hash::FastHash;
+
 /// For each drawn node (level, tx, ty, ε), the largest ε among itself and the nodes sharing
 /// an edge with it — what its skirt must reach. Along an edge between nodes A and B both
 /// surfaces are within their ε of the true one, so the edges differ by up to ε_A + ε_B, and
@@ -9,8 +11,8 @@
 /// across its edge to the first drawn node (a same-level neighbour or a coarser ancestor) and
 /// updates both.
 pub fn neighbour_eps(nodes: &[(u32, u32, u32, f32)]) -> Vec<f32> {
-    let mut index: std::collections::HashMap<(u32, u32, u32), usize, NodeHash> =
-        std::collections::HashMap::with_capacity_and_hasher(nodes.len(), NodeHash::default());
+    let mut index: std::collections::HashMap<(u32, u32, u32), usize, FastHash> =
+        std::collections::HashMap::with_capacity_and_hasher(nodes.len(), FastHash::default());
     for (i, &(l, x, y, _)) in nodes.iter().enumerate() {
         index.insert((l, x, y), i);
     }
@@ -36,26 +38,3 @@ pub fn neighbour_eps(nodes: &[(u32, u32, u32, f32)]) -> Vec<f32> {
     }
     out
 }
-
-/// A fast hasher for small integer keys (node lookups run thousands of times per frame).
-#[derive(Default, Clone, Copy)]
-struct NodeHasher(u64);
-
-impl std::hash::Hasher for NodeHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
-        }
-    }
-    fn write_u32(&mut self, v: u32) {
-        self.write_u64(v as u64);
-    }
-    fn write_u64(&mut self, v: u64) {
-        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-}
-
-type NodeHash = std::hash::BuildHasherDefault<NodeHasher>;

@@ -19,10 +19,7 @@ use crate::app::prepare::Terrain;
 use crate::app::progress::count_bar;
 use crate::app::renderer_setup::Setup;
 use crate::render::frame::FrameStats;
-use crate::render::jobs::StagingBudget;
-use crate::render::plan::{
-    plan_frame, select_frame, FrameInputs, FramePlan, LateReason, PlanState,
-};
+use crate::render::plan::{plan_frame, select_frame, FramePlan, LateReason, PlanState};
 use crate::tools::percentile::percentile;
 use aerie_terrain::camera::Camera;
 use aerie_terrain::mesh::skirted_tile_indices;
@@ -140,20 +137,7 @@ pub fn fly_no_draw(
         }
         let (pos, att) = flight.pose_at(t);
         let camera = Camera::new(pos, att, s.view.frustum);
-        let inputs = FrameInputs {
-            frame: f as u64,
-            camera: &camera,
-            viewport: (width, height),
-            channels: &[],
-            channels_generation: 0,
-            select: &desc.select,
-            prefetch_frames: desc.prefetch_frames,
-            skirt_factor: desc.skirt_factor,
-            skirt_min_m: desc.skirt_min_m,
-            overlay_bytes: None,
-            tile_indices: indices,
-            staging: StagingBudget::new(desc.staging_budget, ALIGNMENT),
-        };
+        let inputs = desc.solo_frame_inputs(f as u64, &camera, (width, height), indices, ALIGNMENT);
         let t0 = Instant::now();
         let strips = select_frame(&mut st, &inputs, &mut sel);
         let t1 = Instant::now();
