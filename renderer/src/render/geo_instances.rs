@@ -189,8 +189,9 @@ struct NodeFrame {
     fields: GeoFields,
 }
 
-/// Nodes held before the cache starts afresh (a frame draws a few thousand).
-const GEO_CACHE_CAPACITY: usize = 1 << 16;
+/// Nodes held before the cache starts afresh: a frame draws one to two thousand, a record is
+/// ~400 bytes, so at most ~7 MB; starting afresh costs one frame its trigonometry again.
+const GEO_CACHE_CAPACITY: usize = 1 << 14;
 
 /// Each drawn node's [`NodeFrame`] kept across frames (a frame's nodes are mostly the last
 /// frame's): the latitude and longitude trigonometry, and a UTM node's polynomial fit, are done
