@@ -475,13 +475,14 @@ pub fn select_tiles_multi_ready(
         let eyes: Vec<DVec3> = views.iter().map(|v| v.camera.position).collect();
         horizon.build(bake, params.earth.as_ref(), params.curvature, &eyes);
     }
+    let grid = Grid::of(bake);
     let frame = Frame {
         split_prev: distance.then_some(&split_prev),
         split_now: distance.then_some(&split_now),
         bake,
-        grid: Grid::of(bake),
+        grid,
         diagonals: (0..=bake.levels.len() as u32)
-            .map(|l| Grid::of(bake).cell_diagonal(l))
+            .map(|l| grid.cell_diagonal(l))
             .collect(),
         views,
         params,
