@@ -5,7 +5,7 @@ use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use crate::dataset::Dataset;
 use crate::mesh::{quad_surface, Diagonal, TILE_DIAGONAL};
 
-use super::table::{build_tables, level_geoms, BakeParams, ErrorBake, LevelGeom};
+use super::table::{build_tables, level_geoms, BakeParams, ErrorBake, LevelGeom, MeasuredEps};
 
 /// Rows per work item: small enough to share out evenly, large enough that the level-L vertex
 /// rows a chunk needs stay in cache across its rows.
@@ -126,13 +126,18 @@ fn cell_max_dyn(h: &[f32], c: &Corners, v: f64, s: usize) -> f64 {
 }
 
 /// For one full-resolution row and one level `L ≥ 1`: the max |h − ĥ_L| over each tile's
-/// part of the row (both edge samples included) into `out[tx]`.
+/// west and east halves of the row (each half's edge samples included; the middle sample is
+/// in both) into `out[2·tx]` and `out[2·tx + 1]`. A half tile row is a row of one of the
+/// tile's quadrants, the level-(L−1) tiles it covers, so these maxima give ε of the level-L
+/// surface over each level-(L−1) tile, and their maximum the tile's own ε.
 ///
 /// ĥ_L is [`quad_surface`] over the level-L cell holding the sample. The loops assume the
 /// cell row bends where the SW–NE diagonal crosses it, which `quad_surface` decides per sample
-/// anyway; the match below makes a new [`Diagonal`] a compile error here.
+/// anyway; the match below makes a new [`Diagonal`] a compile error here. A half's east edge
+/// is evaluated at u = 1 in its last cell, which equals u = 0 in the next cell bit for bit
+/// (`sw + (se − sw)` is `se` exactly for f32 heights widened to f64).
 #[inline(always)]
-fn level_row_tile_max<const S: usize>(
+fn level_row_half_max<const S: usize>(
     row: &[f32],
     hs: &[f32],
     hn: &[f32],
@@ -145,11 +150,12 @@ fn level_row_tile_max<const S: usize>(
         Diagonal::SouthWestToNorthEast => {}
     }
     let s = if S > 0 { S } else { s };
-    for (tx, o) in out.iter_mut().enumerate() {
-        let first = tx * cells_per_tile;
+    let half = cells_per_tile / 2;
+    for (k, o) in out.iter_mut().enumerate() {
+        let first = k * half;
         // Four running maxima, one per cell modulo 4, merged at the end.
         let mut ms = [0f64; 4];
-        for (k, cx) in (first..first + cells_per_tile).enumerate() {
+        for (k, cx) in (first..first + half).enumerate() {
             let c0 = cx * s;
             let c = Corners::at(hs, hn, c0, s);
             let e = if S > 0 {
@@ -160,16 +166,17 @@ fn level_row_tile_max<const S: usize>(
             ms[k & 3] = gt_max(e, ms[k & 3]);
         }
         let m = gt_max(gt_max(ms[0], ms[1]), gt_max(ms[2], ms[3]));
-        // The tile's east edge: u = 1 in its last cell.
-        let c0 = (first + cells_per_tile - 1) * s;
+        // The half's east edge: u = 1 in its last cell.
+        let c0 = (first + half - 1) * s;
         let c = Corners::at(hs, hn, c0, s);
         *o = gt_max(sample_err(row[c0 + s], &c, 1.0, v), m);
     }
 }
 
-/// One worker's running maxima: ε per level (f64, level 0 unused) and level-0 min/max.
+/// One worker's running maxima: per level L ≥ 1, ε of the level-L surface over each
+/// level-(L−1) tile (f64, indexed as level L−1's tiles; level 0 unused), and level-0 min/max.
 struct Acc {
-    eps: Vec<Vec<f64>>,
+    quads: Vec<Vec<f64>>,
     min0: Vec<f32>,
     max0: Vec<f32>,
 }
@@ -178,14 +185,14 @@ impl Acc {
     fn new(geo: &[LevelGeom]) -> Self {
         let n0 = geo[0].tiles_x * geo[0].tiles_y;
         Acc {
-            eps: geo
+            quads: geo
                 .iter()
                 .enumerate()
                 .map(|(l, g)| {
                     if l == 0 {
                         Vec::new()
                     } else {
-                        vec![0.0; g.tiles_x * g.tiles_y]
+                        vec![0.0; 4 * g.tiles_x * g.tiles_y]
                     }
                 })
                 .collect(),
@@ -195,7 +202,7 @@ impl Acc {
     }
 
     fn merge(&mut self, o: &Acc) {
-        for (a, b) in self.eps.iter_mut().zip(&o.eps) {
+        for (a, b) in self.quads.iter_mut().zip(&o.quads) {
             for (x, y) in a.iter_mut().zip(b) {
                 *x = x.max(*y);
             }
@@ -316,7 +323,7 @@ fn process_rows_impl<R: BakeRows>(
         // Levels ≥ 1: errors against the level surface, for tiles holding real samples only
         // (a tile is real when its south-west sample is; all-padding tiles keep ε = 0).
         for (l, g) in geo.iter().enumerate().skip(1) {
-            let (lo, hi) = tile_rows_of(r, g.t, g.tiles_y);
+            let (lo, _) = tile_rows_of(r, g.t, g.tiles_y);
             if lo * g.t >= valid_height {
                 continue;
             }
@@ -327,19 +334,22 @@ fn process_rows_impl<R: BakeRows>(
             let north = if j == 0 { south } else { south + s };
             let (hs, hn) = (ds.row(south), ds.row(north));
             let v = j as f64 / s as f64;
-            let out = &mut tile_max[..real_tiles_x];
+            let out = &mut tile_max[..2 * real_tiles_x];
             match s {
-                2 => level_row_tile_max::<2>(row, hs, hn, s, v, q, out),
-                4 => level_row_tile_max::<4>(row, hs, hn, s, v, q, out),
-                8 => level_row_tile_max::<8>(row, hs, hn, s, v, q, out),
-                16 => level_row_tile_max::<16>(row, hs, hn, s, v, q, out),
-                32 => level_row_tile_max::<32>(row, hs, hn, s, v, q, out),
-                _ => level_row_tile_max::<0>(row, hs, hn, s, v, q, out),
+                2 => level_row_half_max::<2>(row, hs, hn, s, v, q, out),
+                4 => level_row_half_max::<4>(row, hs, hn, s, v, q, out),
+                8 => level_row_half_max::<8>(row, hs, hn, s, v, q, out),
+                16 => level_row_half_max::<16>(row, hs, hn, s, v, q, out),
+                32 => level_row_half_max::<32>(row, hs, hn, s, v, q, out),
+                _ => level_row_half_max::<0>(row, hs, hn, s, v, q, out),
             }
-            let a = &mut acc.eps[l];
-            for (tx, &m) in out.iter().enumerate() {
-                for ty in [lo, hi] {
-                    let i = ty * g.tiles_x + tx;
+            // The quadrant rows (level L−1's tile rows) this row belongs to.
+            let (qlo, qhi) = tile_rows_of(r, g.t / 2, 2 * g.tiles_y);
+            let qx = 2 * g.tiles_x;
+            let a = &mut acc.quads[l];
+            for (k, &m) in out.iter().enumerate() {
+                for qy in [qlo, qhi] {
+                    let i = qy * qx + k;
                     a[i] = gt_max(m, a[i]);
                 }
             }
@@ -462,8 +472,8 @@ impl BakeAccumulator {
         for o in accs {
             acc.merge(&o);
         }
-        let eps: Vec<Vec<f32>> = acc
-            .eps
+        let quads: Vec<Vec<f32>> = acc
+            .quads
             .iter()
             .map(|e| e.iter().map(|&e| round_up_f32(e)).collect())
             .collect();
@@ -471,7 +481,7 @@ impl BakeAccumulator {
             &self.geo,
             std::mem::take(&mut acc.min0),
             std::mem::take(&mut acc.max0),
-            eps,
+            MeasuredEps::Quadrants(quads),
             self.valid.0,
             self.valid.1,
         );

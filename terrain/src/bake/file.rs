@@ -12,7 +12,7 @@ use super::exact::bake;
 use super::format::{
     file_layout, section_size, BAKE_EXTENSION, BAKE_MAGIC, BAKE_VERSION, HEADER_SIZE,
 };
-use super::table::{BakeParams, ErrorBake, MeasuredBake};
+use super::table::{BakeParams, ErrorBake, MeasuredBake, MeasuredEps};
 
 /// Where the bake of a dataset lives: `<name>.aerie-bake` next to the file (the full file
 /// name is kept: `N47E011.hgt.zip` → `N47E011.hgt.zip.aerie-bake`); for a folder of tiles,
@@ -74,7 +74,10 @@ fn encode(b: &ErrorBake, buf: &mut [u8]) {
             put_f32s(buf, o + 16, &t.min);
             put_f32s(buf, o + 16 + 4 * n, &t.max);
         } else {
-            put_f32s(buf, o + 16, &t.eps);
+            // ε of this level's surface over the next finer level's tiles.
+            let quads = &b.levels[t.level as usize - 1].coarse_eps;
+            assert_eq!(quads.len(), 4 * n);
+            put_f32s(buf, o + 16, quads);
         }
     }
     let end = buf.len() - 4;
@@ -240,7 +243,7 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
                     (o + 16 + 4 * n, "max array"),
                 ]
             } else {
-                &[(o, "section header"), (o + 16, "ε array")]
+                &[(o, "section header"), (o + 16, "quadrant ε array")]
             };
             let end = o + section_size(l as u32, n as usize) as u64;
             if len < end {
@@ -310,7 +313,15 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
             max0 = get_f32s(bytes, o + 16 + 4 * n, n);
             eps.push(Vec::new());
         } else {
-            eps.push(get_f32s(bytes, o + 16, n));
+            let quads = get_f32s(bytes, o + 16, 4 * n);
+            if let Some(k) = quads.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+                return Err(corrupt(
+                    "quadrant ε",
+                    (o + 16 + 4 * k) as u64,
+                    format!("level {l}: {} is not a finite number ≥ 0", quads[k]),
+                ));
+            }
+            eps.push(quads);
         }
     }
     Ok(ErrorBake::from_measured(MeasuredBake {
@@ -324,7 +335,7 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
         source_checksum: get_u32(bytes, 56),
         min0,
         max0,
-        eps,
+        eps: MeasuredEps::Quadrants(eps),
     }))
 }
 

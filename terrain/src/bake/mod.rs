@@ -11,7 +11,10 @@
 //! every `2^L` samples, each level-`L` cell (`2^L × 2^L` samples) is split by
 //! [`mesh::TILE_DIAGONAL`](super::mesh::TILE_DIAGONAL) and evaluated with
 //! [`mesh::quad_surface`](super::mesh::quad_surface) — the same function that defines the GPU
-//! mesh's triangles — at `u = i / 2^L`, `v = j / 2^L` (exact binary fractions). It also stores
+//! mesh's triangles — at `u = i / 2^L`, `v = j / 2^L` (exact binary fractions). It measures ε
+//! over each of the tile's four quadrants (the level-(L−1) tiles it covers, edges included):
+//! a quadrant drawn at its parent's resolution has that error
+//! ([`LevelTable::coarse_eps`]), and the tile's ε is the largest of the four. It also stores
 //! the min/max full-resolution height per tile (for culling boxes) and whether the tile holds
 //! any real (non-padding) sample.
 //!
@@ -39,7 +42,7 @@
 //! ```text
 //! offset size  field
 //!      0    8  magic "AERIEBAK"
-//!      8    4  u32 format version (1)
+//!      8    4  u32 format version (2; version 1 kept one ε per tile)
 //!     12    4  u32 header size in bytes (96)
 //!     16    4  u32 m, tile side in vertices (2^j + 1)
 //!     20    4  u32 number of levels
@@ -58,13 +61,15 @@
 //!              (index ty · tiles_x + tx):
 //!              +0 u32 level (= L)     +4 u32 tiles_x     +8 u32 tiles_y     +12 u32 0
 //!              level 0:  +16 f32[n] min height    +16+4n f32[n] max height
-//!              level ≥1: +16 f32[n] ε
+//!              level ≥1: +16 f32[4n] ε of the level-L surface over each level-(L−1) tile,
+//!                        row-major over level L−1's tiles (each tile's quadrants)
 //! size−4    4  u32 CRC-32 of bytes 0..size−4
 //! ```
 //!
-//! Only what is measured is stored: level-0 ε is 0, a level-L tile's min/max is that of its
+//! Only what is measured is stored: level-0 ε is 0, a level-L tile's ε is the largest of its
+//! quadrants', its min/max is that of its
 //! 2×2 level-(L−1) children, and the terrain flag follows from the real size, so the reader
-//! derives those. At m = 17 the file is ≈ 0.9 % of the (padded) dataset's f32 size.
+//! derives those. At m = 17 the file is ≈ 1.3 % of the (padded) dataset's f32 size.
 //! Reading checks magic, version, sizes, both CRCs, then the dataset (sizes, spacing, checksum):
 //! every failure names the file, the field or byte offset and the reason, and says to re-run
 //! `aerie bake`.
@@ -83,7 +88,8 @@ pub use file::{
 };
 pub use format::{BAKE_EXTENSION, BAKE_MAGIC, BAKE_VERSION, HEADER_SIZE};
 pub use table::{
-    report_csv, BakeParams, ErrorBake, LevelStats, LevelTable, MeasuredBake, REPORT_CSV_HEADER,
+    report_csv, BakeParams, ErrorBake, LevelStats, LevelTable, MeasuredBake, MeasuredEps,
+    REPORT_CSV_HEADER,
 };
 
 #[cfg(test)]

@@ -91,6 +91,11 @@ pub struct LevelTable {
     /// Maximum absolute vertical error of the level surface over the tile, metres (rounded
     /// up); 0 for tiles that are all padding.
     pub eps: Vec<f32>,
+    /// ε of the next coarser level's surface over this tile (metres, rounded up): the tile
+    /// drawn as a quadrant of its parent at the parent's resolution. Measured by the bake
+    /// (≤ the parent's ε, the largest of the four is the parent's); from a file that keeps
+    /// only the parents' ε, the parent's ε (a bound, looser). Empty on the coarsest level.
+    pub coarse_eps: Vec<f32>,
     /// Smallest / largest full-resolution height in the tile (edges included), metres.
     pub min: Vec<f32>,
     pub max: Vec<f32>,
@@ -136,9 +141,20 @@ pub struct ErrorBake {
     pub levels: Vec<LevelTable>,
 }
 
+/// The errors a bake measures, as a file keeps them (index: level; entry 0 is ignored).
+#[derive(Debug, Clone, PartialEq)]
+pub enum MeasuredEps {
+    /// ε of each level-L surface (L ≥ 1) over each of its tiles' four quadrants, indexed by
+    /// level L−1's tiles: the tiles' ε and the quadrants' [`LevelTable::coarse_eps`] follow.
+    Quadrants(Vec<Vec<f32>>),
+    /// ε of each level-L tile (L ≥ 1) only (older files): a quadrant's ε at its parent's
+    /// resolution is taken as the parent's.
+    Tiles(Vec<Vec<f32>>),
+}
+
 /// What a bake measures, as a file keeps it: the grid it was made for, level-0 min/max per
-/// tile and ε per tile of every level ≥ 1 (`eps[0]` is ignored). [`ErrorBake::from_measured`]
-/// derives the rest exactly as [`bake`](super::bake) does.
+/// tile and the errors of every level ≥ 1. [`ErrorBake::from_measured`] derives the rest
+/// exactly as [`bake`](super::bake) does.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeasuredBake {
     pub params: BakeParams,
@@ -151,7 +167,7 @@ pub struct MeasuredBake {
     pub source_checksum: u32,
     pub min0: Vec<f32>,
     pub max0: Vec<f32>,
-    pub eps: Vec<Vec<f32>>,
+    pub eps: MeasuredEps,
 }
 
 impl ErrorBake {
@@ -191,6 +207,14 @@ impl ErrorBake {
     pub fn eps(&self, level: u32, tx: u32, ty: u32) -> f32 {
         let t = self.level(level);
         t.eps[t.index(tx, ty)]
+    }
+
+    /// ε of level `level + 1`'s surface over level-`level` tile (tx, ty), metres: the tile
+    /// drawn as a quadrant at its parent's resolution ([`LevelTable::coarse_eps`]). Panics on
+    /// the coarsest level, which has no parent.
+    pub fn coarse_eps(&self, level: u32, tx: u32, ty: u32) -> f32 {
+        let t = self.level(level);
+        t.coarse_eps[t.index(tx, ty)]
     }
 
     /// (min, max) full-resolution height of the tile, metres.
@@ -336,72 +360,118 @@ pub(super) fn level_geoms(q: usize, width: usize, height: usize, levels: u32) ->
         .collect()
 }
 
-/// The level tables from what is measured (level-0 min/max, ε of levels ≥ 1; `eps[0]` is
-/// ignored) and what follows from it: level-0 ε = 0; a level-L tile is exactly its 2×2
-/// level-(L−1) children (edges included), so its min/max is theirs; a tile is terrain when its
-/// south-west sample is real; all-padding tiles have ε = 0. The file stores the measured part.
+/// The level tables from what is measured (level-0 min/max, the errors of levels ≥ 1) and
+/// what follows from it: level-0 ε = 0; a level-L tile is exactly its 2×2 level-(L−1)
+/// children (edges included), so its min/max is theirs and, with quadrants measured, its ε is
+/// the largest of theirs at its resolution; a tile is terrain when its south-west sample is
+/// real; all-padding tiles have ε = 0. The file stores the measured part.
 pub(super) fn build_tables(
     geo: &[LevelGeom],
     min0: Vec<f32>,
     max0: Vec<f32>,
-    mut eps: Vec<Vec<f32>>,
+    eps: MeasuredEps,
     valid_width: usize,
     valid_height: usize,
 ) -> Vec<LevelTable> {
     let mut tables: Vec<LevelTable> = Vec::with_capacity(geo.len());
+    let terrain_of = |g: &LevelGeom| -> Vec<bool> {
+        (0..g.tiles_x * g.tiles_y)
+            .map(|i| {
+                let (tx, ty) = (i % g.tiles_x, i / g.tiles_x);
+                tx * g.t < valid_width && ty * g.t < valid_height
+            })
+            .collect()
+    };
     for (l, g) in geo.iter().enumerate() {
         let n = g.tiles_x * g.tiles_y;
         let (min, max) = if l == 0 {
             (min0.clone(), max0.clone())
         } else {
-            let f: &LevelTable = &tables[l - 1];
-            let fx = f.tiles_x as usize;
-            let mut mn = Vec::with_capacity(n);
-            let mut mx = Vec::with_capacity(n);
-            for ty in 0..g.tiles_y {
-                for tx in 0..g.tiles_x {
-                    let kids = [
-                        (2 * ty) * fx + 2 * tx,
-                        (2 * ty) * fx + 2 * tx + 1,
-                        (2 * ty + 1) * fx + 2 * tx,
-                        (2 * ty + 1) * fx + 2 * tx + 1,
-                    ];
-                    mn.push(kids.iter().map(|&k| f.min[k]).fold(f32::INFINITY, f32::min));
-                    mx.push(
-                        kids.iter()
-                            .map(|&k| f.max[k])
-                            .fold(f32::NEG_INFINITY, f32::max),
-                    );
-                }
-            }
+            let f = &tables[l - 1];
+            let (mn, mx) = children_fold(g, f.tiles_x as usize, &f.min, &f.max);
             (mn, mx)
         };
-        let terrain: Vec<bool> = (0..n)
-            .map(|i| {
-                let (tx, ty) = (i % g.tiles_x, i / g.tiles_x);
-                tx * g.t < valid_width && ty * g.t < valid_height
-            })
-            .collect();
-        let e = if l == 0 {
+        let terrain = terrain_of(g);
+        let mut e = if l == 0 {
             vec![0.0; n]
         } else {
-            let mut e = std::mem::take(&mut eps[l]);
-            for (e, &t) in e.iter_mut().zip(&terrain) {
-                if !t {
-                    *e = 0.0;
+            match &eps {
+                MeasuredEps::Tiles(e) => e[l].clone(),
+                MeasuredEps::Quadrants(q) => {
+                    let fx = 2 * g.tiles_x;
+                    children_fold(g, fx, &q[l], &q[l]).1
                 }
             }
-            e
         };
+        for (e, &t) in e.iter_mut().zip(&terrain) {
+            if !t {
+                *e = 0.0;
+            }
+        }
         tables.push(LevelTable {
             level: l as u32,
             tiles_x: g.tiles_x as u32,
             tiles_y: g.tiles_y as u32,
             eps: e,
+            coarse_eps: Vec::new(),
             min,
             max,
             terrain,
         });
     }
+    // Each tile at its parent's resolution.
+    for l in 1..tables.len() {
+        let coarse = match &eps {
+            MeasuredEps::Quadrants(q) => {
+                let mut c = q[l].clone();
+                let parent = &tables[l];
+                for (i, c) in c.iter_mut().enumerate() {
+                    let (cx, cy) = (
+                        i % (2 * parent.tiles_x as usize),
+                        i / (2 * parent.tiles_x as usize),
+                    );
+                    if !parent.terrain[(cy / 2) * parent.tiles_x as usize + cx / 2] {
+                        *c = 0.0;
+                    }
+                }
+                c
+            }
+            MeasuredEps::Tiles(_) => {
+                let (parent, child) = (&tables[l], &tables[l - 1]);
+                let px = parent.tiles_x as usize;
+                (0..child.len())
+                    .map(|i| {
+                        let (cx, cy) = (i % (2 * px), i / (2 * px));
+                        parent.eps[(cy / 2) * px + cx / 2]
+                    })
+                    .collect()
+            }
+        };
+        tables[l - 1].coarse_eps = coarse;
+    }
     tables
+}
+
+/// Per level-`g` tile, the min of `lo` and the max of `hi` over its 2×2 children in a table
+/// `fx` children wide.
+fn children_fold(g: &LevelGeom, fx: usize, lo: &[f32], hi: &[f32]) -> (Vec<f32>, Vec<f32>) {
+    let n = g.tiles_x * g.tiles_y;
+    let (mut mn, mut mx) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    for ty in 0..g.tiles_y {
+        for tx in 0..g.tiles_x {
+            let kids = [
+                (2 * ty) * fx + 2 * tx,
+                (2 * ty) * fx + 2 * tx + 1,
+                (2 * ty + 1) * fx + 2 * tx,
+                (2 * ty + 1) * fx + 2 * tx + 1,
+            ];
+            mn.push(kids.iter().map(|&k| lo[k]).fold(f32::INFINITY, f32::min));
+            mx.push(
+                kids.iter()
+                    .map(|&k| hi[k])
+                    .fold(f32::NEG_INFINITY, f32::max),
+            );
+        }
+    }
+    (mn, mx)
 }

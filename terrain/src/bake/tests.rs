@@ -116,38 +116,66 @@ fn kernels_equal_per_sample_quad_surface() {
         let q = (m - 1) as usize;
         for t in &fast.levels {
             let l = t.level;
-            let s = 1usize << l;
             let side = q << l;
             for ty in 0..t.tiles_y as usize {
                 for tx in 0..t.tiles_x as usize {
-                    let mut e = 0f64;
-                    for r in ty * side..=(ty + 1) * side {
-                        for c in tx * side..=(tx + 1) * side {
-                            if l == 0 {
-                                continue;
-                            }
-                            let cx = (c / s).min((d.hf.width - 1) / s - 1);
-                            let cy = (r / s).min((d.hf.height - 1) / s - 1);
-                            let h = |c, r| f64::from(d.hf.at(c, r));
-                            let (c0, r0) = (cx * s, cy * s);
-                            let surf = quad_surface(
-                                h(c0, r0),
-                                h(c0 + s, r0),
-                                h(c0, r0 + s),
-                                h(c0 + s, r0 + s),
-                                (c - c0) as f64 / s as f64,
-                                (r - r0) as f64 / s as f64,
-                            );
-                            e = e.max((h(c, r) - surf).abs());
-                        }
-                    }
+                    let e = if l == 0 {
+                        0.0
+                    } else {
+                        brute_eps(&d, 1 << l, side, tx, ty)
+                    };
                     let i = ty * t.tiles_x as usize + tx;
                     let want = if t.terrain[i] { round_up_f32(e) } else { 0.0 };
                     assert_eq!(t.eps[i].to_bits(), want.to_bits(), "L{l} ({tx},{ty})");
+                    // The tile at its parent's resolution: the level-(L+1) surface over it.
+                    let Some(parent) = fast.levels.get(l as usize + 1) else {
+                        assert!(t.coarse_eps.is_empty());
+                        continue;
+                    };
+                    let e = brute_eps(&d, 2 << l, side, tx, ty);
+                    let p = (ty / 2) * parent.tiles_x as usize + tx / 2;
+                    let want = if parent.terrain[p] {
+                        round_up_f32(e)
+                    } else {
+                        0.0
+                    };
+                    let got = t.coarse_eps[i];
+                    assert_eq!(
+                        got.to_bits(),
+                        want.to_bits(),
+                        "L{l} ({tx},{ty}) at L{}",
+                        l + 1
+                    );
+                    assert!(got <= parent.eps[p]);
                 }
             }
         }
     }
+}
+
+/// max |h − ĥ| over the samples of the `side`-sample tile (tx, ty), edges included, ĥ being
+/// the surface of the level whose cells are `s` samples wide, each sample evaluated with
+/// `quad_surface` in the cell east and north of it (the last cell at the grid's edge).
+fn brute_eps(d: &Dataset, s: usize, side: usize, tx: usize, ty: usize) -> f64 {
+    let mut e = 0f64;
+    for r in ty * side..=(ty + 1) * side {
+        for c in tx * side..=(tx + 1) * side {
+            let cx = (c / s).min((d.hf.width - 1) / s - 1);
+            let cy = (r / s).min((d.hf.height - 1) / s - 1);
+            let h = |c, r| f64::from(d.hf.at(c, r));
+            let (c0, r0) = (cx * s, cy * s);
+            let surf = quad_surface(
+                h(c0, r0),
+                h(c0 + s, r0),
+                h(c0, r0 + s),
+                h(c0 + s, r0 + s),
+                (c - c0) as f64 / s as f64,
+                (r - r0) as f64 / s as f64,
+            );
+            e = e.max((h(c, r) - surf).abs());
+        }
+    }
+    e
 }
 
 #[test]

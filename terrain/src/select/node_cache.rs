@@ -21,6 +21,11 @@ pub(super) struct NodeFixed {
     /// On the ellipsoid: the normals' turn plus the cell slack relative to ε (the gain's
     /// `slack`); 0 on the plane.
     pub slack: f64,
+    /// What ε holds beyond the bake's: the curvature slack (metres; the drawn cell's sag on
+    /// the ellipsoid, the curvature interpolation on the plane).
+    pub sag: f64,
+    /// On the ellipsoid: the normals' turn over the node (radians); 0 on the plane.
+    pub spread: f64,
     /// The node on the ellipsoid; `None` on the flat plane.
     pub geo: Option<NodeGeometry>,
     /// Horizontal rectangle (metres, clipped to the valid data) and baked height range: the

@@ -147,21 +147,21 @@ impl Frame<'_> {
         let (lo, hi) = self.grid.rect(level, tx, ty);
         let (min_h, max_h) = self.bake.bounds(level, tx, ty);
         let raw = self.bake.eps_refined(level, tx, ty, 0) as f64;
-        let (mut eps, mut geo) = (raw, None);
+        let (mut sag, mut geo) = (0.0, None);
         if let Some(g) = &self.params.earth {
-            eps += g.cell_sag_m(lo, hi, 1 << level, min_h, max_h);
+            sag = g.cell_sag_m(lo, hi, 1 << level, min_h, max_h);
             geo = Some(g.node_geometry(lo, hi, min_h, max_h));
         } else if self.params.curvature {
-            eps += curvature_interpolation_error(self.cell_diagonal(level));
+            sag = curvature_interpolation_error(self.cell_diagonal(level));
         }
+        let eps = raw + sag;
         // On the ellipsoid: the normals' turn and the cell slack, in any direction.
-        let slack = geo.map_or(0.0, |n| {
-            let sag = eps - raw;
-            n.spread + if eps > 0.0 { sag / eps } else { 0.0 }
-        });
+        let slack = geo.map_or(0.0, |n| n.spread + if eps > 0.0 { sag / eps } else { 0.0 });
         NodeFixed {
             eps,
             slack,
+            sag,
+            spread: geo.map_or(0.0, |n| n.spread),
             geo,
             lo,
             hi,
@@ -199,8 +199,9 @@ impl Frame<'_> {
     }
 
     /// The quadrant (level, tx, ty) of its parent drawn at the parent's resolution — the
-    /// parent's ε and slack (its surface over the quadrant is the parent's there, and the
-    /// quadrant's normals turn less than the parent's) over the quadrant's own box — and the
+    /// bake's ε of the parent's surface over the quadrant with the parent's curvature slack
+    /// and normal spread (the quadrant's normals turn less than the parent's, its cells are
+    /// the parent's) over the quadrant's own box — and the
     /// same node at its own resolution, from one pass over the box (with the parent's cell
     /// slack in it, the larger); `None` when no view sees the quadrant. `parent`: the parent's
     /// fixed values, formed once for its four quadrants.
@@ -215,15 +216,34 @@ impl Frame<'_> {
         if self.reference {
             let parent = self.compute_fixed(level + 1, tx / 2, ty / 2);
             let node = self.compute_fixed(level, tx, ty);
-            let (p, own) = ((parent.eps, parent.slack), (node.eps, node.slack));
+            let (p, own) = (
+                self.as_quadrant(&parent, level, tx, ty),
+                (node.eps, node.slack),
+            );
             let q = self.evaluate_reference_as(level + 1, &node, p.0, p.1, true)?;
             let o = self.evaluate_reference_as(level + 1, &node, own.0, own.1, true)?;
             return Some((q, o));
         }
         let node = self.fixed(level, tx, ty);
-        let (p, own) = ((parent.eps, parent.slack), (node.eps, node.slack));
+        let (p, own) = (
+            self.as_quadrant(parent, level, tx, ty),
+            (node.eps, node.slack),
+        );
         let (q, o) = self.evaluate_as(level + 1, &node, p, Some(own), true)?;
         Some((q, o.unwrap_or(q)))
+    }
+
+    /// (ε, slack) of node (level, tx, ty) drawn at its parent's resolution, `parent` being
+    /// its parent's fixed values: the bake's [`ErrorBake::coarse_eps`] plus the parent's sag,
+    /// and on the ellipsoid the parent's spread plus that sag relative to this ε (as
+    /// [`Self::compute_fixed`] forms a node's own).
+    fn as_quadrant(&self, parent: &NodeFixed, level: u32, tx: u32, ty: u32) -> (f64, f64) {
+        let eps = self.bake.coarse_eps(level, tx, ty) as f64 + parent.sag;
+        let slack = match parent.geo {
+            Some(_) => parent.spread + if eps > 0.0 { parent.sag / eps } else { 0.0 },
+            None => 0.0,
+        };
+        (eps, slack)
     }
 
     /// [`Self::evaluate`] of the node `node` drawn at level `drawn`'s resolution (its own, or

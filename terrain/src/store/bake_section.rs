@@ -1,15 +1,19 @@
-//! The bake section (format version 2): the measured part of the store's error bake — ε per
-//! tile of every level ≥ 1 and level 0's min/max per tile — in one zstd frame between the
-//! pages and the index, located by the trailer, so a reader has the whole [`ErrorBake`] the
-//! selection needs after reading ≈ 1 % of the file, without touching a page.
+//! The bake section: the measured part of the store's error bake — per level ≥ 1 the ε of its
+//! surface over each of its tiles' quadrants (format version 3; version 2 kept one ε per tile,
+//! still read: its quadrants are then taken at their parent's ε) and level 0's min/max per
+//! tile — in one zstd frame between the pages and the index, located by the trailer, so a
+//! reader has the whole [`ErrorBake`] the selection needs after reading ≈ 1 % of the file,
+//! without touching a page.
 //!
-//! Payload before compression: the arrays ε(level 1), …, ε(level L−1), min0, max0, each as
+//! Payload before compression: the arrays ε(level 1), …, ε(level L−1) (version 3: each
+//! indexed by level L−1's tiles, ε of the level-L surface over that tile; version 2: by level
+//! L's tiles), min0, max0, each as
 //! f32 bits XOR the previous value of the same array (0 before the first), split into 4
 //! byte planes (neighbouring tiles have close values, so the high planes are nearly
 //! constant: zstd compresses them to almost nothing). The lengths follow from the layout.
 //! Pure: tables in, bytes out, and back.
 
-use crate::bake::{BakeParams, ErrorBake, MeasuredBake};
+use crate::bake::{BakeParams, ErrorBake, MeasuredBake, MeasuredEps};
 
 use super::format::{Layout, StoreHeader};
 
@@ -19,9 +23,20 @@ fn tiles(layout: &Layout, l: usize) -> usize {
     g.tiles_x as usize * g.tiles_y as usize
 }
 
-/// Bytes of the payload before compression.
-pub fn raw_len(layout: &Layout) -> usize {
-    let eps: usize = (1..layout.levels.len()).map(|l| tiles(layout, l)).sum();
+/// Entries of level `l`'s ε array in a store of format `version`.
+fn eps_len(layout: &Layout, l: usize, version: u32) -> usize {
+    if version >= 3 {
+        tiles(layout, l - 1)
+    } else {
+        tiles(layout, l)
+    }
+}
+
+/// Bytes of the payload before compression in a store of format `version`.
+pub fn raw_len(layout: &Layout, version: u32) -> usize {
+    let eps: usize = (1..layout.levels.len())
+        .map(|l| eps_len(layout, l, version))
+        .sum();
     4 * (eps + 2 * tiles(layout, 0))
 }
 
@@ -51,11 +66,12 @@ fn get_planes(b: &[u8]) -> Vec<f32> {
         .collect()
 }
 
-/// The payload of `bake` (made for `layout`), before compression.
+/// The payload of `bake` (made for `layout`), before compression, in the format this build
+/// writes ([`STORE_VERSION`](super::STORE_VERSION)).
 pub fn encode(bake: &ErrorBake) -> Vec<u8> {
     let mut out = Vec::new();
-    for t in bake.levels.iter().skip(1) {
-        put_planes(&t.eps, &mut out);
+    for l in 1..bake.levels.len() {
+        put_planes(&bake.levels[l - 1].coarse_eps, &mut out);
     }
     put_planes(&bake.levels[0].min, &mut out);
     put_planes(&bake.levels[0].max, &mut out);
@@ -65,7 +81,7 @@ pub fn encode(bake: &ErrorBake) -> Vec<u8> {
 /// The bake back from its decompressed payload; `Err` says what disagrees with the header's
 /// layout or is not a bake number (ε negative or not finite, min > max), naming the tile.
 pub fn decode(b: &[u8], h: &StoreHeader, layout: &Layout) -> Result<ErrorBake, String> {
-    let want = raw_len(layout);
+    let want = raw_len(layout, h.version);
     if b.len() != want {
         return Err(format!(
             "decompressed to {} bytes, the layout says {want}",
@@ -79,12 +95,19 @@ pub fn decode(b: &[u8], h: &StoreHeader, layout: &Layout) -> Result<ErrorBake, S
         v
     };
     let mut eps = vec![Vec::new()];
+    let quadrants = h.version >= 3;
     for l in 1..layout.levels.len() {
-        let e = take(tiles(layout, l));
+        let e = take(eps_len(layout, l, h.version));
         if let Some(k) = e.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
-            let tx = layout.levels[l].tiles_x as usize;
+            let (of, what) = match quadrants {
+                true => (l - 1, "quadrant ε of level {l} over level {of}'s"),
+                false => (l, "ε of level {l}'s"),
+            };
+            let tx = layout.levels[of].tiles_x as usize;
             return Err(format!(
-                "level {l} tile ({}, {}): ε {} is not a finite number ≥ 0",
+                "{} tile ({}, {}): {} is not a finite number ≥ 0",
+                what.replace("{l}", &l.to_string())
+                    .replace("{of}", &of.to_string()),
                 k % tx,
                 k / tx,
                 e[k]
@@ -120,7 +143,10 @@ pub fn decode(b: &[u8], h: &StoreHeader, layout: &Layout) -> Result<ErrorBake, S
         source_checksum: h.source_checksum,
         min0,
         max0,
-        eps,
+        eps: match quadrants {
+            true => MeasuredEps::Quadrants(eps),
+            false => MeasuredEps::Tiles(eps),
+        },
     }))
 }
 

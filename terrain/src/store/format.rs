@@ -6,9 +6,13 @@ use crate::GeoReference;
 
 /// First 8 bytes of every store.
 pub const STORE_MAGIC: &[u8; 8] = b"AERIESTO";
-/// The format version this code writes and the only one it reads (version 1 had no bake
-/// section: opening it needed every page).
-pub const STORE_VERSION: u32 = 2;
+/// The format version this code writes (version 1 had no bake section: opening it needed
+/// every page; version 2 kept one ε per tile in it).
+pub const STORE_VERSION: u32 = 3;
+/// The oldest format this build reads: version 2 stores keep one ε per tile (their quadrants'
+/// ε at the parent's resolution is taken as the parent's, a looser bound; re-import for the
+/// measured one).
+pub const OLDEST_STORE_VERSION: u32 = 2;
 /// File name extension of a store.
 pub const STORE_EXTENSION: &str = "aerie";
 /// Bytes of the fixed part of the header (its own CRC included).
@@ -443,11 +447,11 @@ pub fn check_fixed(b: &[u8]) -> Result<u32, FieldError> {
             "version 0 is not a store version",
         ));
     }
-    if version < STORE_VERSION {
+    if version < OLDEST_STORE_VERSION {
         return Err(field_err(
             8,
             "format version",
-            format!("version {version} is older than this aerie reads ({STORE_VERSION}: the error bake in its own section, so a store opens without reading its pages); re-import it with `aerie import`"),
+            format!("version {version} is older than this aerie reads ({OLDEST_STORE_VERSION}..={STORE_VERSION}: the error bake in its own section, so a store opens without reading its pages); re-import it with `aerie import`"),
         ));
     }
     let want = u32::from_le_bytes(b[FIXED_HEADER - 4..FIXED_HEADER].try_into().expect("4"));

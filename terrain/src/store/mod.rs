@@ -16,8 +16,9 @@
 //! ```text
 //! offset size  field
 //!      0    8  magic "AERIESTO"
-//!      8    4  u32 format version (2; any other is refused — version 1 had no bake
-//!              section, and is refused with a message to re-import)
+//!      8    4  u32 format version (3; 2 is read too, its bake section holding one ε per
+//!              tile; version 1 had no bake section and is refused with a message to
+//!              re-import; a newer one is refused)
 //!     12    4  u32 header size H (= the first page's offset)
 //!     16   32  u32 tile size m, page tiles P, levels, width, height (padded), valid width,
 //!              valid height, page count
@@ -42,9 +43,10 @@
 //!              u32 k and k × (u32 index, u32 f32 bits) restoring the exact value of each
 //!              sample that is not an exact i16 (chosen when k ≤ samples / 8); coding 1 = f32
 //!              bits XOR the west neighbour's (south for column 0), as 4 byte planes.
-//!      B       bake section, one zstd frame: f32 ε per tile of levels 1 … L−1, then level
-//!              0's min and max per tile (row-major), each array as bits XOR the previous
-//!              value, in 4 byte planes (`bake_section`)
+//!      B       bake section, one zstd frame: per level L = 1 … L−1 the f32 ε of the
+//!              level-L surface over each level-(L−1) tile (its tiles' quadrants; version 2:
+//!              ε per level-L tile), then level 0's min and max per tile (row-major), each
+//!              array as bits XOR the previous value, in 4 byte planes (`bake_section`)
 //!      I       index, one 32-byte entry per page, level 0 first, pages row-major:
 //!              u32 level, px, py, coding; u64 offset; u32 stored length; u32 CRC-32 of
 //!              the stored bytes

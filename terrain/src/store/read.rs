@@ -180,8 +180,11 @@ impl Store {
                 t.bake_len, t.bake_crc
             )));
         }
-        let raw = zstd::bulk::decompress(&buf, bake_section::raw_len(&self.layout))
-            .map_err(|e| fmt(format!("cannot decompress: {e}")))?;
+        let raw = zstd::bulk::decompress(
+            &buf,
+            bake_section::raw_len(&self.layout, self.header.version),
+        )
+        .map_err(|e| fmt(format!("cannot decompress: {e}")))?;
         bake_section::decode(&raw, &self.header, &self.layout).map_err(fmt)
     }
 

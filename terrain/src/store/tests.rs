@@ -463,3 +463,45 @@ fn a_page_whose_tables_differ_from_the_bake_section_is_named() {
         );
     }
 }
+
+/// A version-2 bake section (one ε per tile) still decodes: the tiles' ε as stored, each
+/// quadrant at its parent's ε — a bound on the measured quadrant ε that version 3 keeps.
+#[test]
+fn a_version_2_bake_section_reads_with_quadrants_at_their_parents_eps() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = dataset(150, 70, srtm_like);
+    let b = baked(&ds, 9);
+    let (p, _) = import(dir.path(), &ds, &b, 2);
+    let store = Store::open(&p).unwrap();
+    let mut h = store.header().clone();
+    // The version-2 payload: ε of levels ≥ 1 per tile, then level 0's min and max, as planes.
+    h.version = 2;
+    // `encode` writes level l's array from level l−1's `coarse_eps`: put each level's tile ε
+    // there, and the bytes are a version-2 payload.
+    let mut shifted = b.clone();
+    for l in 1..shifted.levels.len() {
+        shifted.levels[l - 1].coarse_eps = b.levels[l].eps.clone();
+    }
+    let payload = bake_section::encode(&shifted);
+    assert_eq!(payload.len(), bake_section::raw_len(store.layout(), 2));
+    let old = bake_section::decode(&payload, &h, store.layout()).unwrap();
+    let now = store.read_bake().unwrap();
+    assert_eq!(now, b, "version 3 keeps the measured quadrants");
+    for l in 1..b.levels.len() {
+        let (parent, child) = (&b.levels[l], &old.levels[l - 1]);
+        assert_eq!(
+            old.levels[l].eps, parent.eps,
+            "level {l}: tiles' ε as stored"
+        );
+        for (i, &c) in child.coarse_eps.iter().enumerate() {
+            let (cx, cy) = (i as u32 % child.tiles_x, i as u32 / child.tiles_x);
+            assert_eq!(c, parent.eps[((cy / 2) * parent.tiles_x + cx / 2) as usize]);
+            assert!(
+                c >= b.levels[l - 1].coarse_eps[i],
+                "a bound on the measured one"
+            );
+        }
+    }
+    // Measured quadrants are tighter somewhere on rough terrain, or the format would not pay.
+    assert!((0..b.levels.len() - 1).any(|l| b.levels[l].coarse_eps != old.levels[l].coarse_eps));
+}
