@@ -193,7 +193,7 @@ fn import_and_info_on_the_demo_dem() {
     assert_eq!(eps, want);
     let o = aerie(&["info", out_s]);
     assert!(
-        o.status.success() && text(&o).contains("format version 2"),
+        o.status.success() && text(&o).contains("format version 3"),
         "{}",
         text(&o)
     );

@@ -5,7 +5,7 @@
 
 use glam::DVec3;
 
-use super::quadtree::reference::with_reference;
+use super::walk::reference::with_reference;
 use super::*;
 use crate::bake::{bake, BakeParams, ErrorBake};
 use crate::camera::{Attitude, Camera, Frustum};
@@ -214,4 +214,39 @@ fn a_copied_selection_keeps_its_own_node_cache() {
     target.clone_from(&warm);
     assert_same(&target, &warm, "clone_from");
     assert_eq!(target.node_cache.len(), kept);
+}
+
+/// A split node whose children holding terrain all meet τ as quadrants at its resolution is
+/// drawn whole (one instance of the same triangles), so no selection draws all four children
+/// of a node as quadrants; quadrants are drawn where only some of them meet τ so.
+#[test]
+fn a_node_whose_every_quadrant_meets_tau_is_drawn_whole() {
+    let scenes = [scene(false), scene(true)];
+    let mut rng = Rng(0x15_05);
+    let mut sel = Selection::default();
+    let mut quadrants = 0;
+    for k in 0..120 {
+        let s = &scenes[k % 2];
+        let params = SelectParams {
+            coarsen: k % 4 < 2,
+            tau_px: [0.5, 1.0, 3.0][k % 3],
+            max_refinement: 5,
+            earth: s.earth,
+            ..SelectParams::default()
+        };
+        select(s, &[random_camera(&mut rng, s)], &params, &mut sel);
+        let mut siblings = std::collections::HashMap::new();
+        for i in sel.items.iter().filter(|i| i.morph.quadrant) {
+            let parent = (i.node_level + 1, i.node_tx / 2, i.node_ty / 2);
+            *siblings.entry(parent).or_insert(0) += 1;
+            quadrants += 1;
+        }
+        for (parent, n) in siblings {
+            assert!(
+                n < 4,
+                "camera {k}: all four quadrants of {parent:?} drawn apart"
+            );
+        }
+    }
+    assert!(quadrants > 100, "too few quadrants to tell: {quadrants}");
 }

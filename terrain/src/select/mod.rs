@@ -14,6 +14,7 @@ mod selection;
 mod skirts;
 mod tess_density;
 mod tessellation;
+mod walk;
 
 pub use bound::{
     box_vertical_gain, curvature_interpolation_error, frustum_vertical_gain, min_view_depth,

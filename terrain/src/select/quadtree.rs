@@ -1,412 +1,19 @@
 //! The selection itself: each level's ring tiles, culled and refined until the bound holds,
 //! or (coarsening) a quadtree over the levels from the coarsest down.
 
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 
 use crate::bake::ErrorBake;
 use crate::camera::Camera;
 use crate::clipmap::{ring_tiles, ClipmapDesc, LevelPlacement};
-use crate::tiles::Aabb;
 
-use super::bound::{
-    curvature_interpolation_error, frustum_spread_gain, frustum_vertical_gain, projected_error_px,
-    tile_aabb, view_corners, CornerPass,
-};
+use super::bound::frustum_vertical_gain;
 use super::cdlod_morph::Morph;
-use super::node_cache::{NodeCache, NodeFixed};
 use super::selection::{
     AllReady, DrawItem, LevelStats, LodMode, SelectParams, Selection, TileReadiness, View,
     MAX_REFINEMENT,
 };
-
-#[cfg(test)]
-#[path = "quadtree_reference.rs"]
-pub(super) mod reference;
-
-/// Geometry of a dataset the selection needs (from the bake).
-#[derive(Debug, Clone, Copy)]
-struct Grid {
-    q: u32,
-    spacing: DVec2,
-    valid_max: DVec2,
-}
-
-impl Grid {
-    fn of(bake: &ErrorBake) -> Self {
-        Self {
-            q: bake.params.tile_size - 1,
-            spacing: DVec2::new(bake.spacing_x, bake.spacing_y),
-            valid_max: DVec2::new(
-                (bake.valid_width - 1) as f64 * bake.spacing_x,
-                (bake.valid_height - 1) as f64 * bake.spacing_y,
-            ),
-        }
-    }
-
-    /// Diagonal of a cell of level `level_drawn` in metres.
-    fn cell_diagonal(&self, level_drawn: u32) -> f64 {
-        (self.spacing * (1u64 << level_drawn) as f64).length()
-    }
-
-    /// Horizontal rectangle of a level tile in metres, clipped to the valid data.
-    fn rect(&self, level: u32, tx: u32, ty: u32) -> (DVec2, DVec2) {
-        let side = (self.q as u64) << level;
-        let lo = DVec2::new((tx as u64 * side) as f64, (ty as u64 * side) as f64) * self.spacing;
-        let hi = lo + DVec2::splat(side as f64) * self.spacing;
-        (lo.min(self.valid_max), hi.min(self.valid_max))
-    }
-}
-
-/// Nodes (level, tx, ty).
-type NodeSet = std::collections::HashSet<(u32, u32, u32)>;
-
-/// Whether level-L tile (tx, ty) exists and holds any real (non-padding) sample.
-fn has_terrain(bake: &ErrorBake, level: u32, tx: u32, ty: u32) -> bool {
-    let t = &bake.levels[level as usize];
-    tx < t.tiles_x && ty < t.tiles_y && t.terrain[(ty * t.tiles_x + tx) as usize]
-}
-
-/// Context shared by every tile of a frame.
-struct Frame<'a> {
-    /// Distance mode: nodes split last frame, and the set being filled this frame.
-    split_prev: Option<&'a NodeSet>,
-    split_now: Option<&'a std::cell::RefCell<NodeSet>>,
-    bake: &'a ErrorBake,
-    grid: Grid,
-    views: Vec<ViewCtx<'a>>,
-    params: &'a SelectParams,
-    ready: &'a dyn TileReadiness,
-    /// The nodes' camera-independent values, kept across frames.
-    cache: std::cell::RefCell<&'a mut NodeCache>,
-    /// Tests: take the reference evaluation (`quadtree_reference.rs`).
-    #[cfg(test)]
-    reference: bool,
-    /// Horizon culling: the eyes' horizons and the nodes it hid.
-    horizon: Option<&'a super::horizon::HorizonSet>,
-    hidden: std::cell::Cell<u32>,
-    /// [`Grid::cell_diagonal`] of every level of the bake, formed once a frame (a square root
-    /// per node evaluation otherwise).
-    diagonals: Vec<f64>,
-    /// The ring tile being refined: which of its nodes are quadrants drawn at their parent's
-    /// resolution ([`SelectParams::parent_quadrants`]), by index in its node list.
-    quadrants: std::cell::RefCell<Vec<usize>>,
-}
-
-/// One channel's camera with what the bound needs from it.
-struct ViewCtx<'a> {
-    camera: &'a Camera,
-    /// World → view, computed once per frame (not per node: the attitude's trigonometry).
-    to_view: glam::DMat4,
-    /// Its rotation (for the ellipsoid's normals).
-    rotation: glam::DMat3,
-    /// The world vertical in view space.
-    up: DVec3,
-    focal: f64,
-    /// [`frustum_vertical_gain`].
-    vertical_gain: f64,
-    tau: f64,
-}
-
-/// A node as the views see it.
-#[derive(Clone, Copy)]
-struct NodeEval {
-    eps: f64,
-    /// Largest ρ (px) among the views that see the node.
-    rho_px: f64,
-    /// Largest ρ/τ among them: the node meets every channel's bound when ≤ 1.
-    rho_norm: f64,
-}
-
-impl Frame<'_> {
-    fn cell_diagonal(&self, level_drawn: u32) -> f64 {
-        match self.diagonals.get(level_drawn as usize) {
-            Some(&d) => d,
-            None => self.grid.cell_diagonal(level_drawn),
-        }
-    }
-
-    /// The node's camera-independent values (from the cache after the first time on the
-    /// ellipsoid; on the plane they are two table reads, cheaper than the cache's lookup).
-    fn fixed(&self, level: u32, tx: u32, ty: u32) -> NodeFixed {
-        #[cfg(test)]
-        if self.reference {
-            return self.compute_fixed(level, tx, ty);
-        }
-        if self.params.earth.is_none() {
-            return self.compute_fixed(level, tx, ty);
-        }
-        self.cache
-            .borrow_mut()
-            .get(level, tx, ty, || self.compute_fixed(level, tx, ty))
-    }
-
-    /// [`Self::fixed`] computed: ε of the level-ℓ surface over the level-ℓ tile (tx, ty) with
-    /// the curvature interpolation (on the ellipsoid: the drawn cell's slack,
-    /// `GeoGrid::cell_sag_m`), and the node on the ellipsoid (geographic data).
-    fn compute_fixed(&self, level: u32, tx: u32, ty: u32) -> NodeFixed {
-        let (lo, hi) = self.grid.rect(level, tx, ty);
-        let (min_h, max_h) = self.bake.bounds(level, tx, ty);
-        let raw = self.bake.eps_refined(level, tx, ty, 0) as f64;
-        let (mut sag, mut geo) = (0.0, None);
-        if let Some(g) = &self.params.earth {
-            sag = g.cell_sag_m(lo, hi, 1 << level, min_h, max_h);
-            geo = Some(g.node_geometry(lo, hi, min_h, max_h));
-        } else if self.params.curvature {
-            sag = curvature_interpolation_error(self.cell_diagonal(level));
-        }
-        let eps = raw + sag;
-        // On the ellipsoid: the normals' turn and the cell slack, in any direction.
-        let slack = geo.map_or(0.0, |n| n.spread + if eps > 0.0 { sag / eps } else { 0.0 });
-        NodeFixed {
-            eps,
-            slack,
-            sag,
-            spread: geo.map_or(0.0, |n| n.spread),
-            geo,
-            lo,
-            hi,
-            min_h,
-            max_h,
-        }
-    }
-
-    /// The node's box as seen from `eye` (the curvature drop depends on the eye).
-    fn aabb(&self, level: u32, node: &NodeFixed, eye: DVec3) -> Aabb {
-        if let Some(n) = &node.geo {
-            return n.aabb;
-        }
-        tile_aabb(
-            node.lo,
-            node.hi,
-            node.min_h,
-            node.max_h,
-            eye,
-            self.params.curvature,
-            self.cell_diagonal(level),
-        )
-    }
-
-    /// ε and the projected error in every view that sees the node; `None` when no view does.
-    /// With `cull` false, views that do not see it count too (for level skipping).
-    fn evaluate(&self, level: u32, tx: u32, ty: u32, cull: bool) -> Option<NodeEval> {
-        #[cfg(test)]
-        if self.reference {
-            return self.evaluate_reference(level, tx, ty, cull);
-        }
-        let node = self.fixed(level, tx, ty);
-        let own = (node.eps, node.slack);
-        self.evaluate_as(level, &node, own, None, cull).map(|e| e.0)
-    }
-
-    /// The quadrant (level, tx, ty) of its parent drawn at the parent's resolution — the
-    /// bake's ε of the parent's surface over the quadrant with the parent's curvature slack
-    /// and normal spread (the quadrant's normals turn less than the parent's, its cells are
-    /// the parent's) over the quadrant's own box — and the
-    /// same node at its own resolution, from one pass over the box (with the parent's cell
-    /// slack in it, the larger); `None` when no view sees the quadrant. `parent`: the parent's
-    /// fixed values, formed once for its four quadrants.
-    fn evaluate_quadrant(
-        &self,
-        parent: &NodeFixed,
-        level: u32,
-        tx: u32,
-        ty: u32,
-    ) -> Option<(NodeEval, NodeEval)> {
-        #[cfg(test)]
-        if self.reference {
-            let parent = self.compute_fixed(level + 1, tx / 2, ty / 2);
-            let node = self.compute_fixed(level, tx, ty);
-            let (p, own) = (
-                self.as_quadrant(&parent, level, tx, ty),
-                (node.eps, node.slack),
-            );
-            let q = self.evaluate_reference_as(level + 1, &node, p.0, p.1, true)?;
-            let o = self.evaluate_reference_as(level + 1, &node, own.0, own.1, true)?;
-            return Some((q, o));
-        }
-        let node = self.fixed(level, tx, ty);
-        let (p, own) = (
-            self.as_quadrant(parent, level, tx, ty),
-            (node.eps, node.slack),
-        );
-        let (q, o) = self.evaluate_as(level + 1, &node, p, Some(own), true)?;
-        Some((q, o.unwrap_or(q)))
-    }
-
-    /// (ε, slack) of node (level, tx, ty) drawn at its parent's resolution, `parent` being
-    /// its parent's fixed values: the bake's [`ErrorBake::coarse_eps`] plus the parent's sag,
-    /// and on the ellipsoid the parent's spread plus that sag relative to this ε (as
-    /// [`Self::compute_fixed`] forms a node's own).
-    fn as_quadrant(&self, parent: &NodeFixed, level: u32, tx: u32, ty: u32) -> (f64, f64) {
-        let eps = self.bake.coarse_eps(level, tx, ty) as f64 + parent.sag;
-        let slack = match parent.geo {
-            Some(_) => parent.spread + if eps > 0.0 { parent.sag / eps } else { 0.0 },
-            None => 0.0,
-        };
-        (eps, slack)
-    }
-
-    /// [`Self::evaluate`] of the node `node` drawn at level `drawn`'s resolution (its own, or
-    /// its parent's for a quadrant) for an error and gain slack `first`, and `second` from the
-    /// same corners.
-    fn evaluate_as(
-        &self,
-        drawn: u32,
-        node: &NodeFixed,
-        first: (f64, f64),
-        second: Option<(f64, f64)>,
-        cull: bool,
-    ) -> Option<(NodeEval, Option<NodeEval>)> {
-        let geo = node.geo;
-        let (mut seen, mut hidden) = (false, false);
-        let mut rho = [(0.0f64, 0.0f64); 2];
-        for (vi, v) in self.views.iter().enumerate() {
-            let aabb = match &geo {
-                Some(n) => n.aabb,
-                None => self.aabb(drawn, node, v.camera.position),
-            };
-            let corners = view_corners(&v.to_view, &aabb);
-            let f = &v.camera.frustum;
-            let pass = CornerPass::of(&corners, f, v.camera.near);
-            // The one culling point: a node no view keeps is not drawn.
-            if cull && pass.outside {
-                continue;
-            }
-            if cull && self.horizon.is_some_and(|h| h.hides(vi, &aabb)) {
-                hidden = true;
-                continue;
-            }
-            seen = true;
-            let z_min = pass.z_min.max(v.camera.near);
-            // On the plane the gain does not depend on the slack: formed once for both errors.
-            let flat_gain = match (&geo, cull) {
-                (Some(_), _) => 0.0,
-                (None, true) => pass.vertical_gain(f, v.up),
-                (None, false) => v.vertical_gain,
-            };
-            let gain = |slack: f64| match (&geo, cull) {
-                (Some(n), true) => pass.spread_gain(f, v.rotation * n.up, slack),
-                (Some(n), false) => frustum_spread_gain(f, v.rotation * n.up, slack),
-                (None, _) => flat_gain,
-            };
-            let errors = [Some(first), second];
-            for (k, e) in errors.iter().enumerate() {
-                let Some((eps, slack)) = *e else { continue };
-                let r = projected_error_px(eps, z_min, v.focal, gain(slack));
-                rho[k] = (rho[k].0.max(r), rho[k].1.max(r / v.tau));
-            }
-        }
-        if hidden && !seen {
-            self.hidden.set(self.hidden.get() + 1);
-        }
-        let eval = |eps: f64, (rho_px, rho_norm): (f64, f64)| NodeEval {
-            eps,
-            rho_px,
-            rho_norm,
-        };
-        seen.then(|| (eval(first.0, rho[0]), second.map(|e| eval(e.0, rho[1]))))
-    }
-
-    /// Distance LOD: split while the eye is within `distance_factor` node sides of the node's
-    /// box; a node split last frame stays split until 10 % beyond, an unsplit one splits only
-    /// 10 % inside (hysteresis).
-    fn wants_distance_split(&self, level: u32, tx: u32, ty: u32, was_split: bool) -> bool {
-        let side = (self.grid.q as f64) * (1u64 << level) as f64 * self.grid.spacing.max_element();
-        let node = self.fixed(level, tx, ty);
-        let d = self
-            .views
-            .iter()
-            .map(|v| {
-                let p = v.camera.position;
-                let aabb = self.aabb(level, &node, p);
-                (p.clamp(aabb.min, aabb.max) - p).length()
-            })
-            .fold(f64::INFINITY, f64::min);
-        let threshold = self.params.distance_factor * side;
-        if was_split {
-            d < threshold * 1.1
-        } else {
-            d < threshold * 0.9
-        }
-    }
-
-    /// Splits node (ℓ, tx, ty) of a ring tile until every part meets τ or reaches `finest`;
-    /// culled parts are dropped. Appends (ℓ, tx, ty, ε, ρ) and returns how many nodes miss τ.
-    fn subdivide(
-        &self,
-        level: u32,
-        tx: u32,
-        ty: u32,
-        finest: u32,
-        out: &mut Vec<(u32, u32, u32, f32, f32)>,
-    ) -> u32 {
-        match self.evaluate(level, tx, ty, true) {
-            Some(eval) => self.subdivide_seen(level, tx, ty, eval, finest, out),
-            None => 0,
-        }
-    }
-
-    /// [`Self::subdivide`] of a node some view sees, already evaluated (`eval`).
-    fn subdivide_seen(
-        &self,
-        level: u32,
-        tx: u32,
-        ty: u32,
-        eval: NodeEval,
-        finest: u32,
-        out: &mut Vec<(u32, u32, u32, f32, f32)>,
-    ) -> u32 {
-        let NodeEval {
-            eps: e,
-            rho_px: rho,
-            rho_norm,
-        } = eval;
-        let split = match self.params.mode {
-            LodMode::Full => true,
-            LodMode::Distance => {
-                let key = (level, tx, ty);
-                let was_split = self.split_prev.is_some_and(|s| s.contains(&key));
-                let want = self.wants_distance_split(level, tx, ty, was_split);
-                if want && level > finest {
-                    if let Some(s) = self.split_now {
-                        s.borrow_mut().insert(key);
-                    }
-                }
-                want
-            }
-            _ => rho_norm > 1.0,
-        };
-        if !split || level == finest {
-            out.push((level, tx, ty, e as f32, rho as f32));
-            return (rho_norm > 1.0 && self.params.mode == LodMode::Bounded) as u32;
-        }
-        let mut missed = 0;
-        let quadrants = self.params.parent_quadrants && self.params.mode == LodMode::Bounded;
-        let parent = quadrants.then(|| self.fixed(level, tx, ty));
-        for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-            let (cx, cy) = (2 * tx + dx, 2 * ty + dy);
-            if !has_terrain(self.bake, level - 1, cx, cy) {
-                continue;
-            }
-            if let Some(parent) = &parent {
-                // The quadrant at this node's resolution first: its box is the child's, so
-                // unseen here is unseen at any resolution.
-                let Some((q, own)) = self.evaluate_quadrant(parent, level - 1, cx, cy) else {
-                    continue;
-                };
-                if q.rho_norm <= 1.0 {
-                    out.push((level - 1, cx, cy, q.eps as f32, q.rho_px as f32));
-                    self.quadrants.borrow_mut().push(out.len() - 1);
-                } else {
-                    missed += self.subdivide_seen(level - 1, cx, cy, own, finest, out);
-                }
-                continue;
-            }
-            missed += self.subdivide(level - 1, cx, cy, finest, out);
-        }
-        missed
-    }
-}
+use super::walk::{has_terrain, whole_from_quadrants, Frame, Grid, NodeEval, Quadrant, ViewCtx};
 
 /// Selects the tiles to draw for one camera. `placements` come from `clipmap::place_levels`
 /// (finest first). Reuses `out`'s allocations.
@@ -509,7 +116,7 @@ pub fn select_tiles_multi_ready(
         ready,
         cache: std::cell::RefCell::new(&mut cache),
         #[cfg(test)]
-        reference: reference::active(),
+        reference: super::walk::reference::active(),
         horizon: cull_hidden.then_some(&horizon),
         hidden: std::cell::Cell::new(0),
         quadrants: std::cell::RefCell::new(Vec::new()),
@@ -674,51 +281,57 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                     && !frame.ready.is_ready(child_level, cx, cy)
             };
             if !children.iter().any(missing) {
-                let parent = frame
-                    .params
-                    .parent_quadrants
-                    .then(|| frame.fixed(level, tx, ty));
-                for (cx, cy) in children {
-                    if let Some(parent) = parent
-                        .as_ref()
-                        .filter(|_| has_terrain(frame.bake, child_level, cx, cy))
-                    {
-                        // The quadrant at this node's resolution, when it meets τ so (the
-                        // child tile fully morphed onto this node's grid).
-                        match frame.evaluate_quadrant(parent, child_level, cx, cy) {
-                            None => {
-                                out.levels[i - 1].considered += 1;
-                                out.levels[i - 1].culled += 1;
-                                continue;
-                            }
-                            Some((q, _)) if q.rho_norm <= 1.0 => {
-                                let stats = &mut out.levels[i - 1];
-                                stats.considered += 1;
-                                stats.drawn += 1;
-                                stats.refined[0] += 1;
-                                stats.nodes += 1;
-                                out.items.push(DrawItem {
-                                    morph: Morph {
-                                        quadrant: true,
-                                        ..Morph::NONE
-                                    },
-                                    ..DrawItem::whole(
-                                        child_level,
-                                        cx,
-                                        cy,
-                                        q.eps as f32,
-                                        q.rho_px as f32,
-                                    )
-                                });
-                                continue;
-                            }
-                            Some((_, own)) => {
-                                stack.push((i - 1, cx, cy, Some(own)));
-                                continue;
-                            }
-                        }
+                if !frame.params.parent_quadrants {
+                    for (cx, cy) in children {
+                        stack.push((i - 1, cx, cy, None));
                     }
-                    stack.push((i - 1, cx, cy, None));
+                    continue;
+                }
+                // Each child as a quadrant at this node's resolution first (the child tile
+                // fully morphed onto this node's grid); all of them meeting τ so, this node.
+                let parent = frame.fixed(level, tx, ty);
+                let quads = frame.quadrants(&parent, level, tx, ty);
+                if let Some((rho_px, _)) = whole_from_quadrants(&quads) {
+                    let stats = &mut out.levels[i];
+                    stats.considered += 1;
+                    stats.drawn += 1;
+                    stats.refined[0] += 1;
+                    stats.nodes += 1;
+                    out.items
+                        .push(DrawItem::whole(level, tx, ty, eps as f32, rho_px as f32));
+                    continue;
+                }
+                // North-east first, so that the stack pops them south-west first.
+                for (k, quad) in quads.iter().enumerate().rev() {
+                    let (cx, cy) = (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1));
+                    match *quad {
+                        Quadrant::NoTerrain => {}
+                        Quadrant::Unseen => {
+                            out.levels[i - 1].considered += 1;
+                            out.levels[i - 1].culled += 1;
+                        }
+                        Quadrant::Seen { q, .. } if q.rho_norm <= 1.0 => {
+                            let stats = &mut out.levels[i - 1];
+                            stats.considered += 1;
+                            stats.drawn += 1;
+                            stats.refined[0] += 1;
+                            stats.nodes += 1;
+                            out.items.push(DrawItem {
+                                morph: Morph {
+                                    quadrant: true,
+                                    ..Morph::NONE
+                                },
+                                ..DrawItem::whole(
+                                    child_level,
+                                    cx,
+                                    cy,
+                                    q.eps as f32,
+                                    q.rho_px as f32,
+                                )
+                            });
+                        }
+                        Quadrant::Seen { own, .. } => stack.push((i - 1, cx, cy, Some(own))),
+                    }
                 }
                 continue;
             }

@@ -15,7 +15,7 @@ thread_local! {
 }
 
 /// Whether selections on this thread take the reference path now.
-pub(super) fn active() -> bool {
+pub(in crate::select) fn active() -> bool {
     REFERENCE.with(|r| r.get())
 }
 

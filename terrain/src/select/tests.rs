@@ -299,3 +299,37 @@ fn neighbour_eps_is_the_brute_force_edge_maximum() {
         }
     }
 }
+
+/// The rule that draws a split node whole: every child holding terrain seen and meeting τ at
+/// the parent's resolution, at least one of them; the largest ρ is the node's.
+#[test]
+fn whole_from_quadrants_needs_every_terrain_child_seen_within_tau() {
+    use super::walk::{whole_from_quadrants, NodeEval, Quadrant};
+    let eval = |rho_px: f64| NodeEval {
+        eps: 1.0,
+        rho_px,
+        rho_norm: rho_px / 2.0,
+    };
+    let seen = |rho: f64| Quadrant::Seen {
+        q: eval(rho),
+        own: eval(rho / 4.0),
+    };
+    let none = Quadrant::NoTerrain;
+    assert_eq!(
+        whole_from_quadrants(&[seen(1.0), seen(2.0), seen(0.5), seen(1.5)]),
+        Some((2.0, 1.0))
+    );
+    assert_eq!(
+        whole_from_quadrants(&[seen(1.0), none, none, seen(0.5)]),
+        Some((1.0, 0.5))
+    );
+    assert_eq!(
+        whole_from_quadrants(&[seen(1.0), seen(2.1), none, none]),
+        None
+    );
+    assert_eq!(
+        whole_from_quadrants(&[seen(1.0), Quadrant::Unseen, seen(1.0), seen(1.0)]),
+        None
+    );
+    assert_eq!(whole_from_quadrants(&[none, none, none, none]), None);
+}

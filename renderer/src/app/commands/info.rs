@@ -19,6 +19,9 @@ use aerie_terrain::store::{
 };
 use aerie_terrain::GeoReference;
 
+/// What `info` says of a version-2 store, whose bake section has one ε per tile.
+const OLD_BAKE_SECTION: &str = "format 2: one ε per tile, so a quadrant drawn at its parent's resolution is bounded by the parent's ε (it draws more than it needs); re-import the store with `aerie import` for the measured quadrant ε";
+
 #[derive(Debug, Args)]
 pub struct InfoArgs {
     /// The store (`<name>.aerie`).
@@ -277,6 +280,7 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
         let v = serde_json::json!({
             "store": a.store.display().to_string(),
             "format_version": h.version,
+            "quadrant_eps": h.version >= aerie_terrain::store::STORE_VERSION,
             "width": h.width,
             "height": h.height,
             "valid_width": h.valid_width,
@@ -318,6 +322,9 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
         a.store.display(),
         h.version
     );
+    if h.version < aerie_terrain::store::STORE_VERSION {
+        println!("  {}", OLD_BAKE_SECTION);
+    }
     println!(
         "  grid {}×{} samples ({}×{} real), spacing {} m × {} m ({})",
         h.width, h.height, h.valid_width, h.valid_height, h.spacing_x, h.spacing_y, h.spacing_note
