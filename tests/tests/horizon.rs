@@ -363,11 +363,22 @@ fn the_selection_drops_only_hidden_nodes() {
         let mut set = HorizonSet::default();
         set.build(&s.bake, None, true, &[eye]);
         for &(l, tx, ty) in drawn_off.difference(&drawn_on) {
-            // A dropped node or an ancestor of it was hidden.
-            let hidden = (l..s.bake.levels.len() as u32).any(|a| {
-                let (ax, ay) = (tx >> (a - l), ty >> (a - l));
+            // A dropped node or an ancestor of it was hidden, or — a node drawn whole because
+            // each of its quadrants met τ at its resolution — each of its quadrants holding
+            // terrain was.
+            let hidden_box = |a: u32, ax: u32, ay: u32| {
                 node_boxes_one(&s, eye, a, ax, ay).is_some_and(|b| set.hides(0, &b))
-            });
+            };
+            let hidden = (l..s.bake.levels.len() as u32)
+                .any(|a| hidden_box(a, tx >> (a - l), ty >> (a - l)))
+                || (l > 0
+                    && [(0, 0), (1, 0), (0, 1), (1, 1)].iter().all(|&(dx, dy)| {
+                        let (cx, cy) = (2 * tx + dx, 2 * ty + dy);
+                        let t = &s.bake.levels[l as usize - 1];
+                        let terrain =
+                            cx < t.tiles_x && cy < t.tiles_y && s.bake.is_terrain(l - 1, cx, cy);
+                        !terrain || hidden_box(l - 1, cx, cy)
+                    }));
             assert!(hidden, "node ({l}, {tx}, {ty}) dropped but not hidden");
             dropped_total += 1;
         }
