@@ -10,8 +10,7 @@ use std::hint::black_box;
 use std::sync::Arc;
 
 use aerie::render::desc::RendererDesc;
-use aerie::render::plan::{plan_frame, select_frame, PlanState};
-use aerie::terrain::mesh::skirted_tile_indices;
+use aerie::render::plan::{plan_frame, select_frame, PlanState, TileMeshes};
 use aerie::terrain::select::Selection;
 use aerie::terrain::source::{InMemoryTerrain, TerrainSource};
 use aerie_bench::{selection_size, thread_cpu_us, TargetScene};
@@ -41,7 +40,7 @@ fn plan_stages(c: &mut Criterion) {
         let ds = Arc::new(scene.ds);
         let source: Arc<dyn TerrainSource> = Arc::new(InMemoryTerrain::new(Arc::clone(&ds)));
         let clipmap = desc.clipmap(source.grid());
-        let indices = (0, skirted_tile_indices(desc.tile_size).len() as u32);
+        let indices = TileMeshes::indices(desc.tile_size).1;
         let mut state = PlanState::new(
             Arc::new(scene.bake),
             Arc::clone(&source),

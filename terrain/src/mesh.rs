@@ -136,6 +136,44 @@ pub fn skirted_tile_indices(side: u32) -> Vec<u32> {
     out
 }
 
+/// The same vertices drawn at half the tile's resolution: the triangles of a tile of
+/// `(side + 1) / 2` vertices a side over the tile's even vertices (every other one, the same
+/// diagonal), and skirts under its even perimeter vertices (index `side² + k`, k even) — what a
+/// tile drawn as a quadrant at its parent's resolution shows (the vertex shader's full morph
+/// folds each odd vertex onto an even one, so the odd vertices are not needed). Indices of
+/// the tile's own vertex layout ([`skirted_vertex_count`]), so both draw from one vertex
+/// stream; `side − 1` must be even.
+pub fn skirted_coarse_tile_indices(side: u32) -> Vec<u32> {
+    assert!(
+        (3..=4097).contains(&side) && (side - 1).is_multiple_of(2),
+        "tile side {side} is not 2k + 1 in 3..=4097"
+    );
+    let n = side - 1;
+    let mut out = Vec::with_capacity((n * n * 3 / 2 + 12 * n) as usize);
+    for j in (0..n).step_by(2) {
+        for i in (0..n).step_by(2) {
+            let sw = j * side + i;
+            let se = sw + 2;
+            let nw = sw + 2 * side;
+            let ne = nw + 2;
+            match TILE_DIAGONAL {
+                Diagonal::SouthWestToNorthEast => out.extend_from_slice(&[sw, se, ne, sw, ne, nw]),
+            }
+        }
+    }
+    let grid = |k: u32| {
+        let (i, j) = perimeter_vertex(side, k % (4 * n));
+        j * side + i
+    };
+    let skirt = |k: u32| side * side + k % (4 * n);
+    for k in (0..4 * n).step_by(2) {
+        let (a, b) = (grid(k), grid(k + 2));
+        let (sa, sb) = (skirt(k), skirt(k + 2));
+        out.extend_from_slice(&[a, sa, sb, a, sb, b]);
+    }
+    out
+}
+
 #[cfg(test)]
 mod skirt_tests {
     use super::*;
@@ -156,6 +194,36 @@ mod skirt_tests {
                 let d = a.0.abs_diff(b.0) + a.1.abs_diff(b.1);
                 assert_eq!(d, 1, "side {side} step {k}: {a:?} → {b:?}");
             }
+        }
+    }
+
+    /// The coarse indices are the half-resolution tile's, vertex for vertex: mapping each of
+    /// the tile's even vertices (and the skirts under them) to the small tile's gives exactly
+    /// `skirted_tile_indices` of the small tile; no odd vertex is used.
+    #[test]
+    fn coarse_indices_are_the_half_resolution_tile_on_the_even_vertices() {
+        for side in [3u32, 5, 9, 17, 33] {
+            let (n, small) = (side - 1, (side - 1) / 2 + 1);
+            let coarse = skirted_coarse_tile_indices(side);
+            let to_small = |v: u32| -> u32 {
+                if v < side * side {
+                    let (i, j) = (v % side, v / side);
+                    assert!(
+                        i.is_multiple_of(2) && j.is_multiple_of(2),
+                        "odd vertex {v} used"
+                    );
+                    (j / 2) * small + i / 2
+                } else {
+                    let k = v - side * side;
+                    assert!(
+                        k.is_multiple_of(2) && k < 4 * n,
+                        "skirt {k} of an odd vertex"
+                    );
+                    small * small + k / 2
+                }
+            };
+            let mapped: Vec<u32> = coarse.iter().map(|&v| to_small(v)).collect();
+            assert_eq!(mapped, skirted_tile_indices(small), "side {side}");
         }
     }
 

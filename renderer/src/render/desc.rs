@@ -129,7 +129,7 @@ impl RendererDesc {
         frame: u64,
         camera: &'a aerie_terrain::camera::Camera,
         viewport: (u32, u32),
-        tile_indices: (u32, u32),
+        tile_meshes: crate::render::plan::TileMeshes,
         alignment: u64,
     ) -> crate::render::plan::FrameInputs<'a> {
         crate::render::plan::FrameInputs {
@@ -143,7 +143,7 @@ impl RendererDesc {
             skirt_factor: self.skirt_factor,
             skirt_min_m: self.skirt_min_m,
             overlay_bytes: None,
-            tile_indices,
+            tile_meshes,
             staging: crate::render::jobs::StagingBudget::new(self.staging_budget, alignment),
         }
     }

@@ -14,7 +14,6 @@ use aerie_terrain::camera::Camera;
 use aerie_terrain::clipmap::CacheRegion;
 use aerie_terrain::dataset::Dataset;
 use aerie_terrain::geodesy::GeoGrid;
-use aerie_terrain::mesh::skirted_tile_indices;
 use aerie_terrain::select::{LodMode, SelectParams, Selection};
 use aerie_terrain::source::{InMemoryTerrain, StreamStats, TerrainSource};
 
@@ -31,7 +30,7 @@ use crate::render::models::{Model, ModelLibrary};
 use crate::render::normal_map::NormalTexel;
 use crate::render::normal_pass::{read_texture_layer, NormalBatch, NormalPass};
 use crate::render::overlay_pass::Panel;
-use crate::render::plan::{plan_frame, select_frame, FrameInputs};
+use crate::render::plan::{plan_frame, select_frame, FrameInputs, TileMeshes};
 use crate::render::resources::{reserve_instances, GpuTerrain};
 use crate::render::terrain_pass::{descriptor_pool_sizes, DESCRIPTOR_SETS};
 use crate::render::tess_pass::TessTerrain;
@@ -61,7 +60,7 @@ pub struct TerrainRenderer {
     target: OffscreenTarget,
     tile_index_buffer: Buffer,
     /// Indices of one skirted tile in `tile_index_buffer`: (first, count).
-    tile_indices: (u32, u32),
+    tile_meshes: TileMeshes,
     terrain: Option<GpuTerrain>,
     /// `--normals gpu`: the compute pass making the normal texels (made at load).
     gpu_normals: Option<NormalPass>,
@@ -124,8 +123,9 @@ impl TerrainRenderer {
                 return Err(e);
             }
         };
-        // Every instance is one m×m node with its skirt: one shared index list.
-        let indices = skirted_tile_indices(desc.tile_size);
+        // Every instance is one m×m node with its skirt: one shared vertex layout, indexed
+        // whole or (quadrants drawn at their parent's resolution) coarse.
+        let (indices, tile_meshes) = TileMeshes::indices(desc.tile_size);
         let (ring, pipeline, target, tile_index_buffer) =
             match Self::create_parts(&device, desc, indices.len() as u64 * 4) {
                 Ok(p) => p,
@@ -142,7 +142,7 @@ impl TerrainRenderer {
             pipeline,
             target,
             tile_index_buffer,
-            tile_indices: (0, indices.len() as u32),
+            tile_meshes,
             terrain: None,
             gpu_normals: None,
             tess: None,
@@ -524,7 +524,7 @@ impl TerrainRenderer {
             skirt_factor: self.desc.skirt_factor,
             skirt_min_m: self.desc.skirt_min_m,
             overlay_bytes: self.overlay.as_ref().map(Panel::bytes),
-            tile_indices: self.tile_indices,
+            tile_meshes: self.tile_meshes,
             staging: StagingBudget::new(self.ring.staging_budget(), self.ring.staging_alignment()),
         };
 

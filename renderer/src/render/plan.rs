@@ -55,9 +55,9 @@ use crate::render::jobs::{
     StagingBudget, TEXEL_BYTES,
 };
 use crate::render::normal_map::normal_bytes;
-use crate::render::stats::{FrameStats, RESOLUTIONS};
-use crate::render::tile_instances::{build_instances, quarter_mesh_saving, InstanceFrame};
-pub use crate::render::tile_instances::{indirect_draws, slot_placement};
+use crate::render::stats::FrameStats;
+use crate::render::tile_instances::{build_instances, InstanceFrame};
+pub use crate::render::tile_instances::{indirect_draws, slot_placement, TileMeshes, DRAW_GROUPS};
 
 /// Largest number of m×m instances one frame may draw (48 bytes each per frame in flight): the
 /// instance buffers grow on demand up to this — `full` on a large dataset draws every visible
@@ -227,8 +227,8 @@ pub struct FrameInputs<'a> {
     pub skirt_min_m: f32,
     /// Bytes of the overlay panel staged with the frame (None: no overlay set).
     pub overlay_bytes: Option<u64>,
-    /// Indices of one skirted tile in the shared index buffer: (first, count).
-    pub tile_indices: (u32, u32),
+    /// Where the tile's whole and coarse meshes lie in the shared index buffer.
+    pub tile_meshes: TileMeshes,
     /// The frame's staging region, empty.
     pub staging: StagingBudget,
 }
@@ -274,10 +274,10 @@ pub struct FramePlan {
     pub late: Vec<LateTile>,
     /// What is drawn: selected nodes (late tiles coarsened) with their pool slot.
     pub draw_list: Vec<(DrawItem, u32)>,
-    /// Instance records, grouped by refinement (r = 0 first).
+    /// Instance records, grouped by refinement (r = 0 first), whole nodes before quadrants.
     pub instances: Vec<TileInstance>,
-    /// One indexed indirect command per refinement group.
-    pub draws: [DrawIndexedIndirect; RESOLUTIONS],
+    /// One indexed indirect command per group ([`DRAW_GROUPS`]).
+    pub draws: [DrawIndexedIndirect; DRAW_GROUPS],
     /// Commands the multi-draw issues: every group, or none when nothing is drawn.
     pub draw_count: u32,
     /// Whether every strip (spilled or not) is staged with its normal texels after its heights.
@@ -292,7 +292,7 @@ pub struct FramePlan {
 pub fn fixed_reserve(selected_nodes: usize, overlay_bytes: Option<u64>) -> u64 {
     let overlay = overlay_bytes.map_or(0, |b| b + OVERLAY_SLACK_BYTES);
     FIXED_SLACK_BYTES
-        + (std::mem::size_of::<DrawIndexedIndirect>() * RESOLUTIONS) as u64
+        + (std::mem::size_of::<DrawIndexedIndirect>() * DRAW_GROUPS) as u64
         + (selected_nodes * std::mem::size_of::<TileInstance>()) as u64
         + overlay
 }
@@ -425,23 +425,16 @@ pub fn plan_frame(
         &plan.draw_list,
         &mut state.geo_cache,
     );
-    let (draws, mut triangles) = indirect_draws(&groups, inputs.tile_indices);
-    // CDLOD's quadrants drawn for their parents count as the parent's quarter mesh they show.
-    let quadrants = plan
-        .draw_list
-        .iter()
-        .filter(|(i, _)| i.morph.quadrant)
-        .count() as u64;
-    if inputs.tile_indices.1 > 0 {
-        triangles -= quadrants * quarter_mesh_saving(state.clipmap.tile_quads);
-    }
+    // Quadrants drawn for their parents (bounded's and CDLOD's) draw the coarse mesh: the
+    // parent's quarter mesh they show.
+    let (draws, triangles) = indirect_draws(&groups, inputs.tile_meshes);
     let total = instances.len();
     if total > MAX_INSTANCES {
         return Err(PlanError::Other(format!(
             "selection of {total} tiles exceeds the largest instance buffer ({MAX_INSTANCES})"
         )));
     }
-    plan.draw_count = if total > 0 { RESOLUTIONS as u32 } else { 0 };
+    plan.draw_count = if total > 0 { DRAW_GROUPS as u32 } else { 0 };
     plan.stats.instances = total as u32;
     plan.stats.triangles = triangles;
     plan.stats.draw_calls = (plan.draw_count > 0) as u32;

@@ -351,7 +351,7 @@ fn frame(
         skirt_factor: 2.0,
         skirt_min_m: 1.0,
         overlay_bytes: None,
-        tile_indices: (0, 1734),
+        tile_meshes: TileMeshes::indices(17).1,
         staging: StagingBudget::new(0, 64),
     };
     inp.staging = StagingBudget::new(64 << 20, 64);

@@ -15,11 +15,17 @@ use aerie_terrain::Heightfield;
 
 use super::*;
 use crate::render::jobs::{split_into_submissions, ImageUpload, StagingBudget};
+use crate::render::stats::RESOLUTIONS;
 
 const N: usize = 257;
 const Q: u32 = 16;
-/// Indices of one skirted 17×17 tile (any multiple of 3 does for the arithmetic).
+/// Indices of one skirted 17×17 tile (any multiple of 3 does for the arithmetic), and of its
+/// coarse mesh after it.
 const INDICES: (u32, u32) = (0, 1734);
+const MESHES: TileMeshes = TileMeshes {
+    whole: INDICES,
+    coarse: (1734, 528),
+};
 const ALIGN: u64 = 64;
 
 fn rough_dataset() -> Arc<Dataset> {
@@ -87,7 +93,7 @@ fn inputs<'a>(
         skirt_factor: 2.0,
         skirt_min_m: 1.0,
         overlay_bytes: None,
-        tile_indices: INDICES,
+        tile_meshes: MESHES,
         staging: StagingBudget::new(capacity, ALIGN),
     }
 }
@@ -122,7 +128,7 @@ fn fixed_pushes(used: u64, instances: usize) -> u64 {
     let mut b = StagingBudget::new(u64::MAX / 2, ALIGN);
     b.take(used).unwrap();
     b.take(std::mem::size_of::<FrameUniforms>() as u64).unwrap();
-    b.take((std::mem::size_of::<DrawIndexedIndirect>() * RESOLUTIONS) as u64)
+    b.take((std::mem::size_of::<DrawIndexedIndirect>() * DRAW_GROUPS) as u64)
         .unwrap();
     if instances > 0 {
         b.take((instances * std::mem::size_of::<TileInstance>()) as u64)
@@ -416,7 +422,8 @@ fn instances_are_grouped_by_refinement_and_commands_follow_each_other() {
     sorted.sort();
     assert_eq!(r, sorted, "grouped by refinement");
     assert_eq!(r.len(), 1 + 16 + 1 + 4);
-    let counts = [2u32, 4, 16, 0, 0, 0, 0];
+    let mut counts = [0u32; DRAW_GROUPS];
+    counts[..3].copy_from_slice(&[2, 4, 16]);
     let mut first = 0;
     for (k, d) in plan.draws.iter().enumerate() {
         assert_eq!(
@@ -424,7 +431,12 @@ fn instances_are_grouped_by_refinement_and_commands_follow_each_other() {
             (counts[k], first),
             "command {k}"
         );
-        assert_eq!((d.first_index, d.index_count), INDICES);
+        let mesh = if k < RESOLUTIONS {
+            INDICES
+        } else {
+            MESHES.coarse
+        };
+        assert_eq!((d.first_index, d.index_count), mesh);
         first += counts[k];
     }
     // Selection order inside a group: the two unrefined tiles, west first.
@@ -437,7 +449,7 @@ fn instances_are_grouped_by_refinement_and_commands_follow_each_other() {
     assert_eq!(plan.stats.triangles, 22 * (INDICES.1 as u64 / 3));
     assert_eq!(
         (plan.draw_count, plan.stats.draw_calls),
-        (RESOLUTIONS as u32, 1)
+        (DRAW_GROUPS as u32, 1)
     );
     // Nothing selected: no commands issued, no instances staged.
     let empty = plan_frame(
@@ -450,7 +462,9 @@ fn instances_are_grouped_by_refinement_and_commands_follow_each_other() {
     assert_eq!((empty.draw_count, empty.stats.draw_calls), (0, 0));
     assert_eq!(empty.staged_bytes, fixed_pushes(0, 0));
     // A tile without indices draws nothing, whatever the instances.
-    let (draws, tris) = indirect_draws(&[3, 1, 0, 0, 0, 0, 0], (0, 0));
+    let mut sizes = [0u32; DRAW_GROUPS];
+    (sizes[0], sizes[1], sizes[RESOLUTIONS]) = (3, 1, 2);
+    let (draws, tris) = indirect_draws(&sizes, TileMeshes::default());
     assert!(draws.iter().all(|d| d.instance_count == 0) && tris == 0);
     assert_eq!(draws[1].first_instance, 3);
 }

@@ -1,6 +1,8 @@
 //! The frame plan's draw records (pure): where a node lies in its pool slot, one
-//! `TileInstance` per drawn node (relative to the eye, grouped by refinement) and one indexed
-//! indirect command per group.
+//! `TileInstance` per drawn node (relative to the eye, grouped by refinement, whole nodes
+//! first, then quadrants drawn at their parent's resolution) and one indexed indirect command
+//! per group: whole nodes with the tile's mesh, quadrants with its coarse mesh (the parent's
+//! quarter mesh: `mesh::skirted_coarse_tile_indices`).
 
 use bytemuck::Zeroable;
 use glam::DVec3;
@@ -11,6 +13,36 @@ use aerie_terrain::select::{neighbour_eps, DrawItem};
 use crate::render::geo_instances::{GeoEye, GeoNodeCache};
 use crate::render::gpu::{DrawIndexedIndirect, TileInstance};
 use crate::render::stats::RESOLUTIONS;
+
+/// Instance groups, each one indirect command: per refinement the whole nodes, then per
+/// refinement the quadrants drawn at their parent's resolution.
+pub const DRAW_GROUPS: usize = 2 * RESOLUTIONS;
+
+/// Where a tile's two meshes lie in the shared index buffer, (first index, index count) each:
+/// the whole tile, and its coarse mesh for quadrants drawn at their parent's resolution. One
+/// vertex layout serves both (`mesh::skirted_vertex_count`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct TileMeshes {
+    pub whole: (u32, u32),
+    pub coarse: (u32, u32),
+}
+
+impl TileMeshes {
+    /// The index buffer of a tile of `side` vertices a side — the whole mesh, then the coarse
+    /// one — and where each lies in it.
+    pub fn indices(side: u32) -> (Vec<u32>, TileMeshes) {
+        let mut v = aerie_terrain::mesh::skirted_tile_indices(side);
+        let whole = (0, v.len() as u32);
+        v.extend(aerie_terrain::mesh::skirted_coarse_tile_indices(side));
+        let coarse = (whole.1, v.len() as u32 - whole.1);
+        (v, TileMeshes { whole, coarse })
+    }
+}
+
+/// A draw item's group: its refinement, offset by [`RESOLUTIONS`] for a quadrant.
+fn group_of(item: &DrawItem) -> usize {
+    item.refinement as usize + if item.morph.quadrant { RESOLUTIONS } else { 0 }
+}
 
 /// What the instance records need from the frame: the clipmap's tile size, the grid spacing,
 /// the ellipsoid placement of a geographic or UTM grid, the eye and the skirt rule.
@@ -43,14 +75,15 @@ pub fn slot_placement(item: &DrawItem, tile_quads: u32) -> (u32, u32, u32) {
     )
 }
 
-/// Per-instance data grouped by refinement (unrefined first, then r = 1..): node origin
-/// relative to the eye (f64 → f32), sample origin, vertex step, level, pool slot and the node's
-/// place in it, skirt depth. Returns the concatenated records and each group's size.
+/// Per-instance data grouped as [`DRAW_GROUPS`] says (unrefined whole nodes first, then r =
+/// 1.., then the quadrants likewise): node origin relative to the eye (f64 → f32), sample
+/// origin, vertex step, level, pool slot and the node's place in it, skirt depth. Returns the
+/// concatenated records and each group's size.
 pub fn build_instances(
     f: &InstanceFrame,
     draw_list: &[(DrawItem, u32)],
     geo_cache: &mut GeoNodeCache,
-) -> (Vec<TileInstance>, [u32; RESOLUTIONS]) {
+) -> (Vec<TileInstance>, [u32; DRAW_GROUPS]) {
     let q = f.tile_quads;
     let eye = f.eye;
     let nodes: Vec<(u32, u32, u32, f32)> = draw_list
@@ -66,17 +99,17 @@ pub fn build_instances(
     // refinement (stable, so each group keeps the list's order) into one vector of the exact
     // size (records are ~450 bytes: growing and concatenating per-group vectors copied each
     // several times).
-    let mut sizes = [0u32; RESOLUTIONS];
+    let mut sizes = [0u32; DRAW_GROUPS];
     for (item, _) in draw_list {
-        sizes[item.refinement as usize] += 1;
+        sizes[group_of(item)] += 1;
     }
-    let mut next = [0usize; RESOLUTIONS];
-    for r in 1..RESOLUTIONS {
-        next[r] = next[r - 1] + sizes[r - 1] as usize;
+    let mut next = [0usize; DRAW_GROUPS];
+    for g in 1..DRAW_GROUPS {
+        next[g] = next[g - 1] + sizes[g - 1] as usize;
     }
     let mut order = vec![0u32; draw_list.len()];
     for (k, (item, _)) in draw_list.iter().enumerate() {
-        let at = &mut next[item.refinement as usize];
+        let at = &mut next[group_of(item)];
         order[*at] = k as u32;
         *at += 1;
     }
@@ -125,22 +158,29 @@ pub fn skirted_tile_triangles(q: u32) -> u64 {
     2 * q * q + 8 * q
 }
 
-/// What one CDLOD quadrant drawn for its parent saves on the count: it is drawn as a whole
-/// tile of `q` quads fully morphed, and shows the parent's quarter mesh of q/2 quads a side.
+/// What one quadrant drawn at its parent's resolution draws fewer than a whole tile of `q`
+/// quads: it is drawn with the tile's coarse mesh, the parent's quarter mesh of q/2 quads a
+/// side.
 pub fn quarter_mesh_saving(q: u32) -> u64 {
     skirted_tile_triangles(q) - skirted_tile_triangles(q / 2)
 }
 
-/// One indexed indirect command per refinement group, each starting where the previous ended,
-/// and the triangles they draw. A tile without indices draws nothing.
+/// One indexed indirect command per group ([`DRAW_GROUPS`]), each starting where the previous
+/// ended, and the triangles they draw: whole nodes with the tile's mesh, quadrants with its
+/// coarse one. A mesh without indices draws nothing.
 pub fn indirect_draws(
-    group_sizes: &[u32; RESOLUTIONS],
-    (first_index, index_count): (u32, u32),
-) -> ([DrawIndexedIndirect; RESOLUTIONS], u64) {
-    let mut draws = [DrawIndexedIndirect::default(); RESOLUTIONS];
+    group_sizes: &[u32; DRAW_GROUPS],
+    meshes: TileMeshes,
+) -> ([DrawIndexedIndirect; DRAW_GROUPS], u64) {
+    let mut draws = [DrawIndexedIndirect::default(); DRAW_GROUPS];
     let mut first_instance = 0u32;
     let mut triangles = 0u64;
-    for (draw, &n) in draws.iter_mut().zip(group_sizes) {
+    for (g, (draw, &n)) in draws.iter_mut().zip(group_sizes).enumerate() {
+        let (first_index, index_count) = if g < RESOLUTIONS {
+            meshes.whole
+        } else {
+            meshes.coarse
+        };
         *draw = DrawIndexedIndirect {
             index_count,
             instance_count: if index_count == 0 { 0 } else { n },
@@ -158,20 +198,34 @@ pub fn indirect_draws(
 mod tests {
     use super::*;
 
-    /// The records come grouped by refinement, unrefined first, each group in the draw list's
-    /// order, and the sizes count the groups.
+    /// The records come grouped by refinement, unrefined first, whole nodes before the
+    /// quadrants drawn at their parent's resolution, each group in the draw list's order, and
+    /// the sizes count the groups.
     #[test]
-    fn instances_are_grouped_by_refinement_in_list_order() {
-        let refined = |r: u32, k: u32| DrawItem {
+    fn instances_are_grouped_by_refinement_then_quadrants_in_list_order() {
+        let refined = |r: u32, k: u32, quadrant: bool| DrawItem {
             refinement: r,
             node_level: 4 - r,
             node_tx: k << r,
+            morph: aerie_terrain::select::cdlod_morph::Morph {
+                quadrant,
+                ..aerie_terrain::select::cdlod_morph::Morph::NONE
+            },
             ..DrawItem::whole(4, k, 0, 1.0, 0.5)
         };
-        let list: Vec<(DrawItem, u32)> = [(2, 0), (0, 1), (1, 2), (2, 3), (0, 4), (2, 5)]
-            .iter()
-            .map(|&(r, k)| (refined(r, k), k))
-            .collect();
+        let list: Vec<(DrawItem, u32)> = [
+            (2, 0, false),
+            (0, 1, true),
+            (0, 2, false),
+            (1, 3, false),
+            (2, 4, true),
+            (2, 5, false),
+            (0, 6, false),
+            (0, 7, true),
+        ]
+        .iter()
+        .map(|&(r, k, q)| (refined(r, k, q), k))
+        .collect();
         let f = InstanceFrame {
             tile_quads: 16,
             spacing: [10.0, 10.0],
@@ -181,12 +235,54 @@ mod tests {
             skirt_min_m: 0.0,
         };
         let (instances, sizes) = build_instances(&f, &list, &mut GeoNodeCache::default());
-        assert_eq!(&sizes[..3], &[2, 1, 3]);
-        assert!(sizes[3..].iter().all(|&n| n == 0));
+        let mut want = [0u32; DRAW_GROUPS];
+        want[..3].copy_from_slice(&[2, 1, 2]);
+        want[RESOLUTIONS] = 2;
+        want[RESOLUTIONS + 2] = 1;
+        assert_eq!(sizes, want);
         let slots: Vec<u32> = instances.iter().map(|i| i.slot).collect();
-        assert_eq!(slots, [1, 4, 2, 0, 3, 5]);
-        let refinements: Vec<u32> = instances.iter().map(|i| i.refinement).collect();
-        assert_eq!(refinements, [0, 0, 1, 2, 2, 2]);
+        assert_eq!(slots, [2, 6, 3, 0, 5, 1, 7, 4]);
+        let quadrant: Vec<bool> = instances.iter().map(|i| i.morph[0] < 0.0).collect();
+        assert_eq!(
+            quadrant,
+            [false, false, false, false, false, true, true, true]
+        );
+    }
+
+    /// Whole nodes draw the tile's range, quadrants the coarse one, each group's instances
+    /// after the previous group's; the triangles are the ranges' per instance.
+    #[test]
+    fn quadrant_groups_draw_the_coarse_range() {
+        use aerie_terrain::mesh::{skirted_coarse_tile_indices, skirted_tile_indices};
+        let (buffer, meshes) = TileMeshes::indices(17);
+        let whole = skirted_tile_indices(17).len() as u32;
+        let coarse = skirted_coarse_tile_indices(17).len() as u32;
+        assert_eq!(
+            meshes,
+            TileMeshes {
+                whole: (0, whole),
+                coarse: (whole, coarse)
+            }
+        );
+        assert_eq!(buffer.len() as u32, whole + coarse);
+        let mut sizes = [0u32; DRAW_GROUPS];
+        sizes[0] = 3;
+        sizes[1] = 1;
+        sizes[RESOLUTIONS] = 2;
+        let (draws, tris) = indirect_draws(&sizes, meshes);
+        assert_eq!((draws[0].first_index, draws[0].index_count), (0, whole));
+        assert_eq!(draws[RESOLUTIONS].first_index, whole);
+        assert_eq!(draws[RESOLUTIONS].index_count, coarse);
+        assert_eq!(draws[RESOLUTIONS].first_instance, 4);
+        assert_eq!(draws[RESOLUTIONS].instance_count, 2);
+        assert_eq!(
+            tris,
+            4 * skirted_tile_triangles(16) + 2 * skirted_tile_triangles(8)
+        );
+        assert_eq!(
+            skirted_tile_triangles(16) - quarter_mesh_saving(16),
+            coarse as u64 / 3
+        );
     }
 
     #[test]

@@ -19,10 +19,9 @@ use crate::app::prepare::Terrain;
 use crate::app::progress::count_bar;
 use crate::app::renderer_setup::Setup;
 use crate::render::frame::FrameStats;
-use crate::render::plan::{plan_frame, select_frame, FramePlan, LateReason, PlanState};
+use crate::render::plan::{plan_frame, select_frame, FramePlan, LateReason, PlanState, TileMeshes};
 use crate::tools::percentile::percentile;
 use aerie_terrain::camera::Camera;
-use aerie_terrain::mesh::skirted_tile_indices;
 use aerie_terrain::select::{Selection, MAX_REFINEMENT};
 
 /// Staging offsets are aligned to at most this on the devices we run on (the plan's budget
@@ -112,7 +111,7 @@ pub fn fly_no_draw(
     let start_up = Instant::now();
     st.strips_around(flight.pose_at(0.0).0);
     let first_fill_s = start_up.elapsed().as_secs_f64();
-    let indices = (0, skirted_tile_indices(desc.tile_size).len() as u32);
+    let indices = TileMeshes::indices(desc.tile_size).1;
     let (width, height) = (s.view.width, s.view.height);
     let mut sel = Selection::default();
     let mut csv = frames_csv_header();
