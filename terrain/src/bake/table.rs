@@ -204,6 +204,7 @@ impl ErrorBake {
     }
 
     /// ε of level-`level` tile (tx, ty), metres.
+    #[inline]
     pub fn eps(&self, level: u32, tx: u32, ty: u32) -> f32 {
         let t = self.level(level);
         t.eps[t.index(tx, ty)]
@@ -212,12 +213,14 @@ impl ErrorBake {
     /// ε of level `level + 1`'s surface over level-`level` tile (tx, ty), metres: the tile
     /// drawn as a quadrant at its parent's resolution ([`LevelTable::coarse_eps`]). Panics on
     /// the coarsest level, which has no parent.
+    #[inline]
     pub fn coarse_eps(&self, level: u32, tx: u32, ty: u32) -> f32 {
         let t = self.level(level);
         t.coarse_eps[t.index(tx, ty)]
     }
 
     /// (min, max) full-resolution height of the tile, metres.
+    #[inline]
     pub fn bounds(&self, level: u32, tx: u32, ty: u32) -> (f32, f32) {
         let t = self.level(level);
         let i = t.index(tx, ty);
@@ -225,6 +228,7 @@ impl ErrorBake {
     }
 
     /// False when the tile is all padding.
+    #[inline]
     pub fn is_terrain(&self, level: u32, tx: u32, ty: u32) -> bool {
         let t = self.level(level);
         t.terrain[t.index(tx, ty)]

@@ -264,6 +264,7 @@ impl Frame<'_> {
     /// its parent's fixed values: the bake's [`ErrorBake::coarse_eps`] plus the parent's sag,
     /// and on the ellipsoid the parent's spread plus that sag relative to this ε (as
     /// [`Self::compute_fixed`] forms a node's own).
+    #[inline]
     pub(super) fn as_quadrant(
         &self,
         parent: &NodeFixed,
@@ -349,16 +350,17 @@ impl Frame<'_> {
         tx: u32,
         ty: u32,
     ) -> [Quadrant; 4] {
-        [(0, 0), (1, 0), (0, 1), (1, 1)].map(|(dx, dy)| {
-            let (cx, cy) = (2 * tx + dx, 2 * ty + dy);
-            if !has_terrain(self.bake, level - 1, cx, cy) {
-                return Quadrant::NoTerrain;
+        let mut out = [Quadrant::NoTerrain; 4];
+        for (k, q) in out.iter_mut().enumerate() {
+            let (cx, cy) = (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1));
+            if has_terrain(self.bake, level - 1, cx, cy) {
+                *q = match self.evaluate_quadrant(parent, level - 1, cx, cy) {
+                    None => Quadrant::Unseen,
+                    Some((q, own)) => Quadrant::Seen { q, own },
+                };
             }
-            match self.evaluate_quadrant(parent, level - 1, cx, cy) {
-                None => Quadrant::Unseen,
-                Some((q, own)) => Quadrant::Seen { q, own },
-            }
-        })
+        }
+        out
     }
 
     /// Distance LOD: split while the eye is within `distance_factor` node sides of the node's
