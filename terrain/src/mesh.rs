@@ -110,30 +110,7 @@ pub fn skirted_tile_indices(side: u32) -> Vec<u32> {
         (2..=4097).contains(&side),
         "tile side {side} outside 2..=4097"
     );
-    let n = side - 1;
-    let mut out = Vec::with_capacity((n * n * 6 + 4 * n * 6) as usize);
-    for j in 0..n {
-        for i in 0..n {
-            let sw = j * side + i;
-            let se = sw + 1;
-            let nw = sw + side;
-            let ne = nw + 1;
-            match TILE_DIAGONAL {
-                Diagonal::SouthWestToNorthEast => out.extend_from_slice(&[sw, se, ne, sw, ne, nw]),
-            }
-        }
-    }
-    let grid = |k: u32| {
-        let (i, j) = perimeter_vertex(side, k % (4 * n));
-        j * side + i
-    };
-    let skirt = |k: u32| side * side + k % (4 * n);
-    for k in 0..4 * n {
-        let (a, b) = (grid(k), grid(k + 1));
-        let (sa, sb) = (skirt(k), skirt(k + 1));
-        out.extend_from_slice(&[a, sa, sb, a, sb, b]);
-    }
-    out
+    strided_skirted_indices(side, 1)
 }
 
 /// The same vertices drawn at half the tile's resolution: the triangles of a tile of
@@ -148,14 +125,21 @@ pub fn skirted_coarse_tile_indices(side: u32) -> Vec<u32> {
         (3..=4097).contains(&side) && (side - 1).is_multiple_of(2),
         "tile side {side} is not 2k + 1 in 3..=4097"
     );
+    strided_skirted_indices(side, 2)
+}
+
+/// The skirted triangle list over every `stride`-th vertex of a tile of `side` vertices
+/// (`stride` divides `side − 1`), in the tile's own vertex layout.
+fn strided_skirted_indices(side: u32, stride: u32) -> Vec<u32> {
     let n = side - 1;
-    let mut out = Vec::with_capacity((n * n * 3 / 2 + 12 * n) as usize);
-    for j in (0..n).step_by(2) {
-        for i in (0..n).step_by(2) {
+    let cells = n / stride;
+    let mut out = Vec::with_capacity((cells * cells * 6 + 4 * cells * 6) as usize);
+    for j in (0..n).step_by(stride as usize) {
+        for i in (0..n).step_by(stride as usize) {
             let sw = j * side + i;
-            let se = sw + 2;
-            let nw = sw + 2 * side;
-            let ne = nw + 2;
+            let se = sw + stride;
+            let nw = sw + stride * side;
+            let ne = nw + stride;
             match TILE_DIAGONAL {
                 Diagonal::SouthWestToNorthEast => out.extend_from_slice(&[sw, se, ne, sw, ne, nw]),
             }
@@ -166,9 +150,9 @@ pub fn skirted_coarse_tile_indices(side: u32) -> Vec<u32> {
         j * side + i
     };
     let skirt = |k: u32| side * side + k % (4 * n);
-    for k in (0..4 * n).step_by(2) {
-        let (a, b) = (grid(k), grid(k + 2));
-        let (sa, sb) = (skirt(k), skirt(k + 2));
+    for k in (0..4 * n).step_by(stride as usize) {
+        let (a, b) = (grid(k), grid(k + stride));
+        let (sa, sb) = (skirt(k), skirt(k + stride));
         out.extend_from_slice(&[a, sa, sb, a, sb, b]);
     }
     out

@@ -260,13 +260,11 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
             rho_norm,
         } = eval;
         if rho_norm <= 1.0 {
-            let stats = &mut out.levels[i];
-            stats.considered += 1;
-            stats.drawn += 1;
-            stats.refined[0] += 1;
-            stats.nodes += 1;
-            out.items
-                .push(DrawItem::whole(level, tx, ty, eps as f32, rho as f32));
+            push_drawn(
+                out,
+                i,
+                DrawItem::whole(level, tx, ty, eps as f32, rho as f32),
+            );
             continue;
         }
         let mut waiting = false;
@@ -292,13 +290,8 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                 let parent = frame.fixed(level, tx, ty);
                 let quads = frame.quadrants(&parent, level, tx, ty);
                 if let Some((rho_px, _)) = whole_from_quadrants(&quads) {
-                    let stats = &mut out.levels[i];
-                    stats.considered += 1;
-                    stats.drawn += 1;
-                    stats.refined[0] += 1;
-                    stats.nodes += 1;
-                    out.items
-                        .push(DrawItem::whole(level, tx, ty, eps as f32, rho_px as f32));
+                    let item = DrawItem::whole(level, tx, ty, eps as f32, rho_px as f32);
+                    push_drawn(out, i, item);
                     continue;
                 }
                 // North-east first, so that the stack pops them south-west first.
@@ -311,24 +304,23 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                             out.levels[i - 1].culled += 1;
                         }
                         Quadrant::Seen { q, .. } if q.rho_norm <= 1.0 => {
-                            let stats = &mut out.levels[i - 1];
-                            stats.considered += 1;
-                            stats.drawn += 1;
-                            stats.refined[0] += 1;
-                            stats.nodes += 1;
-                            out.items.push(DrawItem {
-                                morph: Morph {
-                                    quadrant: true,
-                                    ..Morph::NONE
+                            push_drawn(
+                                out,
+                                i - 1,
+                                DrawItem {
+                                    morph: Morph {
+                                        quadrant: true,
+                                        ..Morph::NONE
+                                    },
+                                    ..DrawItem::whole(
+                                        child_level,
+                                        cx,
+                                        cy,
+                                        q.eps as f32,
+                                        q.rho_px as f32,
+                                    )
                                 },
-                                ..DrawItem::whole(
-                                    child_level,
-                                    cx,
-                                    cy,
-                                    q.eps as f32,
-                                    q.rho_px as f32,
-                                )
-                            });
+                            );
                         }
                         Quadrant::Seen { own, .. } => stack.push((i - 1, cx, cy, Some(own))),
                     }
@@ -359,6 +351,16 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
 }
 
 /// Whether level-ℓ tile (tx, ty) lies in `placement`'s patch (ℓ = placement.level).
+/// `item` drawn as a node of `out.levels[i]`: counted considered, drawn, unrefined.
+fn push_drawn(out: &mut Selection, i: usize, item: DrawItem) {
+    let stats = &mut out.levels[i];
+    stats.considered += 1;
+    stats.drawn += 1;
+    stats.refined[0] += 1;
+    stats.nodes += 1;
+    out.items.push(item);
+}
+
 fn inside_patch(placement: &LevelPlacement, tx: u32, ty: u32) -> bool {
     let n = placement.patch_tiles as i64;
     let [ox, oy] = placement.patch_origin;
