@@ -96,6 +96,11 @@ pub struct LevelTable {
     /// (≤ the parent's ε, the largest of the four is the parent's); from a file that keeps
     /// only the parents' ε, the parent's ε (a bound, looser). Empty on the coarsest level.
     pub coarse_eps: Vec<f32>,
+    /// ε of the surface two levels coarser (level L+2) over this tile (metres, rounded up):
+    /// the tile drawn as a sixteenth of its grandparent at the grandparent's resolution.
+    /// (≤ its parent's `coarse_eps`, which bounds it where it is not measured.) Empty on the
+    /// two coarsest levels.
+    pub fine_eps: Vec<f32>,
     /// Smallest / largest full-resolution height in the tile (edges included), metres.
     pub min: Vec<f32>,
     pub max: Vec<f32>,
@@ -217,6 +222,15 @@ impl ErrorBake {
     pub fn coarse_eps(&self, level: u32, tx: u32, ty: u32) -> f32 {
         let t = self.level(level);
         t.coarse_eps[t.index(tx, ty)]
+    }
+
+    /// ε of level `level + 2`'s surface over level-`level` tile (tx, ty), metres: the tile
+    /// drawn at its grandparent's resolution ([`LevelTable::fine_eps`]). Panics on the two
+    /// coarsest levels.
+    #[inline]
+    pub fn fine_eps(&self, level: u32, tx: u32, ty: u32) -> f32 {
+        let t = self.level(level);
+        t.fine_eps[t.index(tx, ty)]
     }
 
     /// (min, max) full-resolution height of the tile, metres.
@@ -418,6 +432,7 @@ pub(super) fn build_tables(
             tiles_y: g.tiles_y as u32,
             eps: e,
             coarse_eps: Vec::new(),
+            fine_eps: Vec::new(),
             min,
             max,
             terrain,
@@ -452,6 +467,18 @@ pub(super) fn build_tables(
             }
         };
         tables[l - 1].coarse_eps = coarse;
+    }
+    // Each tile at its grandparent's resolution: bounded by its parent's at the same one.
+    for l in 2..tables.len() {
+        let (parent, child) = (&tables[l - 1], &tables[l - 2]);
+        let px = parent.tiles_x as usize;
+        let fine = (0..child.len())
+            .map(|i| {
+                let (cx, cy) = (i % (2 * px), i / (2 * px));
+                parent.coarse_eps[(cy / 2) * px + cx / 2]
+            })
+            .collect();
+        tables[l - 2].fine_eps = fine;
     }
     tables
 }
