@@ -128,6 +128,19 @@ pub fn skirted_coarse_tile_indices(side: u32) -> Vec<u32> {
     strided_skirted_indices(side, 2)
 }
 
+/// The same vertices drawn at a quarter of the tile's resolution: the triangles of a tile of
+/// `(side − 1) / 4 + 1` vertices a side over every fourth vertex, skirts under every fourth
+/// perimeter vertex — what a tile drawn as a sixteenth of its grandparent at the grandparent's
+/// resolution shows (those vertices lie on the grandparent's grid, where the full morph onto
+/// the parent's leaves them). `side − 1` must be a multiple of 4.
+pub fn skirted_sixteenth_tile_indices(side: u32) -> Vec<u32> {
+    assert!(
+        (5..=4097).contains(&side) && (side - 1).is_multiple_of(4),
+        "tile side {side} is not 4k + 1 in 5..=4097"
+    );
+    strided_skirted_indices(side, 4)
+}
+
 /// The skirted triangle list over every `stride`-th vertex of a tile of `side` vertices
 /// (`stride` divides `side − 1`), in the tile's own vertex layout.
 fn strided_skirted_indices(side: u32, stride: u32) -> Vec<u32> {
@@ -181,33 +194,44 @@ mod skirt_tests {
         }
     }
 
-    /// The coarse indices are the half-resolution tile's, vertex for vertex: mapping each of
-    /// the tile's even vertices (and the skirts under them) to the small tile's gives exactly
-    /// `skirted_tile_indices` of the small tile; no odd vertex is used.
+    /// The coarse (stride 2) and sixteenth (stride 4) indices are the half- and
+    /// quarter-resolution tile's, vertex for vertex: mapping each of the tile's every
+    /// `stride`-th vertices (and the skirts under them) to the small tile's gives exactly
+    /// `skirted_tile_indices` of the small tile; no other vertex is used.
     #[test]
-    fn coarse_indices_are_the_half_resolution_tile_on_the_even_vertices() {
-        for side in [3u32, 5, 9, 17, 33] {
-            let (n, small) = (side - 1, (side - 1) / 2 + 1);
-            let coarse = skirted_coarse_tile_indices(side);
-            let to_small = |v: u32| -> u32 {
-                if v < side * side {
-                    let (i, j) = (v % side, v / side);
-                    assert!(
-                        i.is_multiple_of(2) && j.is_multiple_of(2),
-                        "odd vertex {v} used"
-                    );
-                    (j / 2) * small + i / 2
-                } else {
-                    let k = v - side * side;
-                    assert!(
-                        k.is_multiple_of(2) && k < 4 * n,
-                        "skirt {k} of an odd vertex"
-                    );
-                    small * small + k / 2
-                }
-            };
-            let mapped: Vec<u32> = coarse.iter().map(|&v| to_small(v)).collect();
-            assert_eq!(mapped, skirted_tile_indices(small), "side {side}");
+    fn strided_indices_are_the_lower_resolution_tile_on_every_strided_vertex() {
+        type Indices = fn(u32) -> Vec<u32>;
+        let cases: [(u32, Indices, &[u32]); 2] = [
+            (2, skirted_coarse_tile_indices, &[3, 5, 9, 17, 33]),
+            (4, skirted_sixteenth_tile_indices, &[5, 9, 17, 33]),
+        ];
+        for (stride, indices, sides) in cases {
+            for &side in sides {
+                let (n, small) = (side - 1, (side - 1) / stride + 1);
+                let to_small = |v: u32| -> u32 {
+                    if v < side * side {
+                        let (i, j) = (v % side, v / side);
+                        assert!(
+                            i.is_multiple_of(stride) && j.is_multiple_of(stride),
+                            "stride {stride}: vertex {v} off the coarse grid used"
+                        );
+                        (j / stride) * small + i / stride
+                    } else {
+                        let k = v - side * side;
+                        assert!(
+                            k.is_multiple_of(stride) && k < 4 * n,
+                            "stride {stride}: skirt {k} of a vertex off the coarse grid"
+                        );
+                        small * small + k / stride
+                    }
+                };
+                let mapped: Vec<u32> = indices(side).iter().map(|&v| to_small(v)).collect();
+                assert_eq!(
+                    mapped,
+                    skirted_tile_indices(small),
+                    "stride {stride}, side {side}"
+                );
+            }
         }
     }
 

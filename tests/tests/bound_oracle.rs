@@ -217,6 +217,7 @@ fn every_drawn_tile_is_within_tau_for_a_thousand_random_cameras() {
     let mut rng = Rng(2026);
     let (mut tiles_checked, mut refined_checked) = (0u64, 0u64);
     let mut quadrants_checked = 0u64;
+    let mut sixteenths_checked = 0u64;
     let mut worst_ratio: f64 = 0.0;
     for k in 0..1002 {
         let s = &scenes[k % scenes.len()];
@@ -228,20 +229,28 @@ fn every_drawn_tile_is_within_tau_for_a_thousand_random_cameras() {
             s.name
         );
         // A sample of the drawn tiles per camera (all of them would take minutes in debug), and
-        // as many of the quadrants drawn at their parent's resolution.
+        // as many of the quadrants drawn at their parent's resolution and of the sixteenths
+        // drawn at their grandparent's.
         let n = sel.items.len();
-        let quads: Vec<_> = sel.items.iter().filter(|i| i.morph.quadrant).collect();
         let mut sample: Vec<_> = (0..n.min(6))
             .map(|_| sel.items[(rng.next() * n as f64) as usize % n])
             .collect();
-        for _ in 0..quads.len().min(6) {
-            sample.push(*quads[(rng.next() * quads.len() as f64) as usize % quads.len()]);
+        for up in [1, 2] {
+            let parts: Vec<_> = sel
+                .items
+                .iter()
+                .filter(|i| i.morph.levels_up() == up)
+                .collect();
+            for _ in 0..parts.len().min(6) {
+                sample.push(*parts[(rng.next() * parts.len() as f64) as usize % parts.len()]);
+            }
         }
         for item in sample {
             // The node is drawn as the level-`node_level` surface over its own tile, a quadrant
-            // as its parent's.
-            let drawn = item.node_level + item.morph.quadrant as u32;
-            quadrants_checked += item.morph.quadrant as u64;
+            // as its parent's, a sixteenth as its grandparent's.
+            let drawn = item.node_level + item.morph.levels_up();
+            quadrants_checked += (item.morph.levels_up() == 1) as u64;
+            sixteenths_checked += (item.morph.levels_up() == 2) as u64;
             let err = tile_error_px(
                 &s.ds.hf,
                 &cam,
@@ -276,11 +285,14 @@ fn every_drawn_tile_is_within_tau_for_a_thousand_random_cameras() {
         }
     }
     eprintln!(
-        "bound oracle: {tiles_checked} tiles ({refined_checked} refined, {quadrants_checked} quadrants at their parent's resolution) within τ; tightest measured/bound = {worst_ratio:.3}"
+        "bound oracle: {tiles_checked} tiles ({refined_checked} refined, {quadrants_checked} quadrants at their parent's resolution, {sixteenths_checked} sixteenths at their grandparent's) within τ; tightest measured/bound = {worst_ratio:.3}"
     );
     assert!(
-        tiles_checked > 3000 && refined_checked > 300 && quadrants_checked > 300,
-        "{tiles_checked} / {refined_checked} / {quadrants_checked}"
+        tiles_checked > 3000
+            && refined_checked > 300
+            && quadrants_checked > 300
+            && sixteenths_checked > 100,
+        "{tiles_checked} / {refined_checked} / {quadrants_checked} / {sixteenths_checked}"
     );
 }
 
@@ -531,6 +543,7 @@ fn geodetic_oracle(scenes: &[GeoScene], cameras: usize, seed: u64, what: &str) -
     let mut rng = Rng(seed);
     let (mut tiles_checked, mut refined_checked) = (0u64, 0u64);
     let mut quadrants_checked = 0u64;
+    let mut sixteenths_checked = 0u64;
     let mut worst_ratio: f64 = 0.0;
     for k in 0..cameras {
         let g = &scenes[k % scenes.len()];
@@ -542,17 +555,24 @@ fn geodetic_oracle(scenes: &[GeoScene], cameras: usize, seed: u64, what: &str) -
             g.s.name
         );
         let n = sel.items.len();
-        let quads: Vec<_> = sel.items.iter().filter(|i| i.morph.quadrant).collect();
         let mut sample: Vec<_> = (0..n.min(6))
             .map(|_| sel.items[(rng.next() * n as f64) as usize % n])
             .collect();
-        for _ in 0..quads.len().min(3) {
-            sample.push(*quads[(rng.next() * quads.len() as f64) as usize % quads.len()]);
+        for up in [1, 2] {
+            let parts: Vec<_> = sel
+                .items
+                .iter()
+                .filter(|i| i.morph.levels_up() == up)
+                .collect();
+            for _ in 0..parts.len().min(3) {
+                sample.push(*parts[(rng.next() * parts.len() as f64) as usize % parts.len()]);
+            }
         }
         for item in sample {
-            // A quadrant is drawn as its parent's surface.
-            let drawn = item.node_level + item.morph.quadrant as u32;
-            quadrants_checked += item.morph.quadrant as u64;
+            // A quadrant is drawn as its parent's surface, a sixteenth as its grandparent's.
+            let drawn = item.node_level + item.morph.levels_up();
+            quadrants_checked += (item.morph.levels_up() == 1) as u64;
+            sixteenths_checked += (item.morph.levels_up() == 2) as u64;
             let err =
                 geo_tile_error_px(g, &cam, item.node_level, item.node_tx, item.node_ty, drawn);
             assert!(
@@ -580,9 +600,10 @@ fn geodetic_oracle(scenes: &[GeoScene], cameras: usize, seed: u64, what: &str) -
         }
     }
     eprintln!(
-        "{what} bound oracle: {tiles_checked} tiles ({refined_checked} refined, {quadrants_checked} quadrants at their parent's resolution) within τ; tightest measured/bound = {worst_ratio:.3}"
+        "{what} bound oracle: {tiles_checked} tiles ({refined_checked} refined, {quadrants_checked} quadrants at their parent's resolution, {sixteenths_checked} sixteenths at their grandparent's) within τ; tightest measured/bound = {worst_ratio:.3}"
     );
     assert!(quadrants_checked > 0, "{what}: no quadrant checked");
+    assert!(sixteenths_checked > 0, "{what}: no sixteenth checked");
     (tiles_checked, refined_checked)
 }
 

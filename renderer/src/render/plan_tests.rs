@@ -20,11 +20,12 @@ use crate::render::stats::RESOLUTIONS;
 const N: usize = 257;
 const Q: u32 = 16;
 /// Indices of one skirted 17×17 tile (any multiple of 3 does for the arithmetic), and of its
-/// coarse mesh after it.
+/// coarse and sixteenth meshes after it.
 const INDICES: (u32, u32) = (0, 1734);
 const MESHES: TileMeshes = TileMeshes {
     whole: INDICES,
     coarse: (1734, 528),
+    sixteenth: (2262, 192),
 };
 const ALIGN: u64 = 64;
 

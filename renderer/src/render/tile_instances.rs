@@ -1,8 +1,10 @@
 //! The frame plan's draw records (pure): where a node lies in its pool slot, one
 //! `TileInstance` per drawn node (relative to the eye, grouped by refinement, whole nodes
-//! first, then quadrants drawn at their parent's resolution) and one indexed indirect command
-//! per group: whole nodes with the tile's mesh, quadrants with its coarse mesh (the parent's
-//! quarter mesh: `mesh::skirted_coarse_tile_indices`).
+//! first, then quadrants drawn at their parent's resolution, then sixteenths drawn at their
+//! grandparent's) and one indexed indirect command per group: whole nodes with the tile's
+//! mesh, quadrants with its coarse mesh (the parent's quarter mesh:
+//! `mesh::skirted_coarse_tile_indices`), sixteenths with every fourth vertex
+//! (`mesh::skirted_sixteenth_tile_indices`).
 
 use bytemuck::Zeroable;
 use glam::DVec3;
@@ -15,33 +17,62 @@ use crate::render::gpu::{DrawIndexedIndirect, TileInstance};
 use crate::render::stats::RESOLUTIONS;
 
 /// Instance groups, each one indirect command: per refinement the whole nodes, then per
-/// refinement the quadrants drawn at their parent's resolution.
-pub const DRAW_GROUPS: usize = 2 * RESOLUTIONS;
+/// refinement the quadrants drawn at their parent's resolution, then per refinement the
+/// sixteenths drawn at their grandparent's.
+pub const DRAW_GROUPS: usize = 3 * RESOLUTIONS;
 
-/// Where a tile's two meshes lie in the shared index buffer, (first index, index count) each:
-/// the whole tile, and its coarse mesh for quadrants drawn at their parent's resolution. One
-/// vertex layout serves both (`mesh::skirted_vertex_count`).
+/// Where a tile's three meshes lie in the shared index buffer, (first index, index count)
+/// each: the whole tile, its coarse mesh for quadrants drawn at their parent's resolution, and
+/// its sixteenth mesh for sixteenths drawn at their grandparent's (empty when the tile's
+/// quads a side are not a multiple of 4). One vertex layout serves all three
+/// (`mesh::skirted_vertex_count`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct TileMeshes {
     pub whole: (u32, u32),
     pub coarse: (u32, u32),
+    pub sixteenth: (u32, u32),
 }
 
 impl TileMeshes {
-    /// The index buffer of a tile of `side` vertices a side — the whole mesh, then the coarse
-    /// one — and where each lies in it.
+    /// The index buffer of a tile of `side` vertices a side — the whole mesh, the coarse one,
+    /// the sixteenth one — and where each lies in it.
     pub fn indices(side: u32) -> (Vec<u32>, TileMeshes) {
-        let mut v = aerie_terrain::mesh::skirted_tile_indices(side);
+        use aerie_terrain::mesh::{
+            skirted_coarse_tile_indices, skirted_sixteenth_tile_indices, skirted_tile_indices,
+        };
+        let mut v = skirted_tile_indices(side);
         let whole = (0, v.len() as u32);
-        v.extend(aerie_terrain::mesh::skirted_coarse_tile_indices(side));
+        v.extend(skirted_coarse_tile_indices(side));
         let coarse = (whole.1, v.len() as u32 - whole.1);
-        (v, TileMeshes { whole, coarse })
+        if side >= 5 && (side - 1).is_multiple_of(4) {
+            v.extend(skirted_sixteenth_tile_indices(side));
+        }
+        let end = coarse.0 + coarse.1;
+        let sixteenth = (end, v.len() as u32 - end);
+        (
+            v,
+            TileMeshes {
+                whole,
+                coarse,
+                sixteenth,
+            },
+        )
+    }
+
+    /// Group `g`'s mesh ([`DRAW_GROUPS`]).
+    fn of_group(&self, g: usize) -> (u32, u32) {
+        match g / RESOLUTIONS {
+            0 => self.whole,
+            1 => self.coarse,
+            _ => self.sixteenth,
+        }
     }
 }
 
-/// A draw item's group: its refinement, offset by [`RESOLUTIONS`] for a quadrant.
+/// A draw item's group: its refinement, offset by [`RESOLUTIONS`] for each level it is drawn
+/// coarser than its own (a quadrant, a sixteenth).
 fn group_of(item: &DrawItem) -> usize {
-    item.refinement as usize + if item.morph.quadrant { RESOLUTIONS } else { 0 }
+    item.refinement as usize + item.morph.levels_up() as usize * RESOLUTIONS
 }
 
 /// What the instance records need from the frame: the clipmap's tile size, the grid spacing,
@@ -76,7 +107,7 @@ pub fn slot_placement(item: &DrawItem, tile_quads: u32) -> (u32, u32, u32) {
 }
 
 /// Per-instance data grouped as [`DRAW_GROUPS`] says (unrefined whole nodes first, then r =
-/// 1.., then the quadrants likewise): node origin relative to the eye (f64 → f32), sample
+/// 1.., then the quadrants likewise, then the sixteenths): node origin relative to the eye (f64 → f32), sample
 /// origin, vertex step, level, pool slot and the node's place in it, skirt depth. Returns the
 /// concatenated records and each group's size.
 pub fn build_instances(
@@ -167,7 +198,7 @@ pub fn quarter_mesh_saving(q: u32) -> u64 {
 
 /// One indexed indirect command per group ([`DRAW_GROUPS`]), each starting where the previous
 /// ended, and the triangles they draw: whole nodes with the tile's mesh, quadrants with its
-/// coarse one. A mesh without indices draws nothing.
+/// coarse one, sixteenths with the stride-4 one. A mesh without indices draws nothing.
 pub fn indirect_draws(
     group_sizes: &[u32; DRAW_GROUPS],
     meshes: TileMeshes,
@@ -176,11 +207,7 @@ pub fn indirect_draws(
     let mut first_instance = 0u32;
     let mut triangles = 0u64;
     for (g, (draw, &n)) in draws.iter_mut().zip(group_sizes).enumerate() {
-        let (first_index, index_count) = if g < RESOLUTIONS {
-            meshes.whole
-        } else {
-            meshes.coarse
-        };
+        let (first_index, index_count) = meshes.of_group(g);
         *draw = DrawIndexedIndirect {
             index_count,
             instance_count: if index_count == 0 { 0 } else { n },
@@ -199,29 +226,28 @@ mod tests {
     use super::*;
 
     /// The records come grouped by refinement, unrefined first, whole nodes before the
-    /// quadrants drawn at their parent's resolution, each group in the draw list's order, and
-    /// the sizes count the groups.
+    /// quadrants drawn at their parent's resolution and those before the sixteenths drawn at
+    /// their grandparent's, each group in the draw list's order, and the sizes count the groups.
     #[test]
     fn instances_are_grouped_by_refinement_then_quadrants_in_list_order() {
-        let refined = |r: u32, k: u32, quadrant: bool| DrawItem {
+        use aerie_terrain::select::cdlod_morph::Morph;
+        let refined = |r: u32, k: u32, up: u32| DrawItem {
             refinement: r,
             node_level: 4 - r,
             node_tx: k << r,
-            morph: aerie_terrain::select::cdlod_morph::Morph {
-                quadrant,
-                ..aerie_terrain::select::cdlod_morph::Morph::NONE
-            },
+            morph: [Morph::NONE, Morph::QUADRANT, Morph::SIXTEENTH][up as usize],
             ..DrawItem::whole(4, k, 0, 1.0, 0.5)
         };
         let list: Vec<(DrawItem, u32)> = [
-            (2, 0, false),
-            (0, 1, true),
-            (0, 2, false),
-            (1, 3, false),
-            (2, 4, true),
-            (2, 5, false),
-            (0, 6, false),
-            (0, 7, true),
+            (2, 0, 0),
+            (0, 1, 1),
+            (0, 2, 0),
+            (1, 3, 0),
+            (2, 4, 1),
+            (2, 5, 0),
+            (0, 6, 0),
+            (0, 7, 1),
+            (0, 8, 2),
         ]
         .iter()
         .map(|&(r, k, q)| (refined(r, k, q), k))
@@ -239,46 +265,61 @@ mod tests {
         want[..3].copy_from_slice(&[2, 1, 2]);
         want[RESOLUTIONS] = 2;
         want[RESOLUTIONS + 2] = 1;
+        want[2 * RESOLUTIONS] = 1;
         assert_eq!(sizes, want);
         let slots: Vec<u32> = instances.iter().map(|i| i.slot).collect();
-        assert_eq!(slots, [2, 6, 3, 0, 5, 1, 7, 4]);
+        assert_eq!(slots, [2, 6, 3, 0, 5, 1, 7, 4, 8]);
+        // Quadrants and sixteenths alike are fully morphed onto the parent's grid.
         let quadrant: Vec<bool> = instances.iter().map(|i| i.morph[0] < 0.0).collect();
         assert_eq!(
             quadrant,
-            [false, false, false, false, false, true, true, true]
+            [false, false, false, false, false, true, true, true, true]
         );
     }
 
-    /// Whole nodes draw the tile's range, quadrants the coarse one, each group's instances
-    /// after the previous group's; the triangles are the ranges' per instance.
+    /// Whole nodes draw the tile's range, quadrants the coarse one, sixteenths the stride-4
+    /// one, each group's instances after the previous group's; the triangles are the ranges'
+    /// per instance.
     #[test]
     fn quadrant_groups_draw_the_coarse_range() {
-        use aerie_terrain::mesh::{skirted_coarse_tile_indices, skirted_tile_indices};
+        use aerie_terrain::mesh::{
+            skirted_coarse_tile_indices, skirted_sixteenth_tile_indices, skirted_tile_indices,
+        };
         let (buffer, meshes) = TileMeshes::indices(17);
         let whole = skirted_tile_indices(17).len() as u32;
         let coarse = skirted_coarse_tile_indices(17).len() as u32;
+        let sixteenth = skirted_sixteenth_tile_indices(17).len() as u32;
         assert_eq!(
             meshes,
             TileMeshes {
                 whole: (0, whole),
-                coarse: (whole, coarse)
+                coarse: (whole, coarse),
+                sixteenth: (whole + coarse, sixteenth),
             }
         );
-        assert_eq!(buffer.len() as u32, whole + coarse);
+        assert_eq!(buffer.len() as u32, whole + coarse + sixteenth);
         let mut sizes = [0u32; DRAW_GROUPS];
         sizes[0] = 3;
         sizes[1] = 1;
         sizes[RESOLUTIONS] = 2;
+        sizes[2 * RESOLUTIONS] = 5;
         let (draws, tris) = indirect_draws(&sizes, meshes);
         assert_eq!((draws[0].first_index, draws[0].index_count), (0, whole));
         assert_eq!(draws[RESOLUTIONS].first_index, whole);
         assert_eq!(draws[RESOLUTIONS].index_count, coarse);
         assert_eq!(draws[RESOLUTIONS].first_instance, 4);
         assert_eq!(draws[RESOLUTIONS].instance_count, 2);
+        let s = &draws[2 * RESOLUTIONS];
+        assert_eq!((s.first_index, s.index_count), (whole + coarse, sixteenth));
+        assert_eq!((s.first_instance, s.instance_count), (6, 5));
         assert_eq!(
             tris,
-            4 * skirted_tile_triangles(16) + 2 * skirted_tile_triangles(8)
+            4 * skirted_tile_triangles(16)
+                + 2 * skirted_tile_triangles(8)
+                + 5 * skirted_tile_triangles(4)
         );
+        // A tile whose quads a side are not a multiple of 4 has no sixteenth mesh.
+        assert_eq!(TileMeshes::indices(7).1.sixteenth.1, 0);
         assert_eq!(
             skirted_tile_triangles(16) - quarter_mesh_saving(16),
             coarse as u64 / 3

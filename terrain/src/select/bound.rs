@@ -86,6 +86,17 @@ pub(super) fn view_corners(m: &DMat4, aabb: &Aabb) -> ViewCorners {
     c
 }
 
+/// Smallest view depth of `aabb`'s corners (`m`: world → view), unclamped: bit for bit the
+/// smallest `z` of [`view_corners`] — each product's smaller end summed in the same order, and
+/// rounding is monotonic — without forming the corners.
+pub(super) fn min_view_depth_of(m: &DMat4, aabb: &Aabb) -> f64 {
+    let (a, b) = (aabb.min, aabb.max);
+    let x = (m.x_axis.z * a.x).min(m.x_axis.z * b.x);
+    let y = (m.y_axis.z * a.y).min(m.y_axis.z * b.y);
+    let z = (m.z_axis.z * a.z).min(m.z_axis.z * b.z);
+    m.w_axis.z + (z + (y + x))
+}
+
 /// Smallest view depth of a box (view depth is linear, so a corner attains it), clamped to the
 /// near plane.
 pub fn min_view_depth(camera: &Camera, aabb: &Aabb) -> f64 {

@@ -34,6 +34,10 @@ pub struct Morph {
     /// `parent_zone` (end 0: the parent does not morph — the coarsest level).
     pub quadrant: bool,
     pub parent_zone: [f32; 2],
+    /// With `quadrant` (bounded only): a sixteenth of its grandparent drawn at the grandparent's
+    /// resolution — the tile's every fourth vertex (`mesh::skirted_sixteenth_tile_indices`),
+    /// which the full morph onto the parent's grid leaves where they are.
+    pub sixteenth: bool,
 }
 
 impl Morph {
@@ -41,7 +45,27 @@ impl Morph {
         zone: [0.0, 0.0],
         quadrant: false,
         parent_zone: [0.0, 0.0],
+        sixteenth: false,
     };
+
+    /// A quadrant drawn at its parent's resolution (no morph zone).
+    pub const QUADRANT: Morph = Morph {
+        quadrant: true,
+        ..Morph::NONE
+    };
+
+    /// A sixteenth drawn at its grandparent's resolution.
+    pub const SIXTEENTH: Morph = Morph {
+        quadrant: true,
+        sixteenth: true,
+        ..Morph::NONE
+    };
+
+    /// How many levels coarser than its own the node is drawn: 0, 1 (a quadrant) or 2 (a
+    /// sixteenth).
+    pub fn levels_up(&self) -> u32 {
+        self.quadrant as u32 + self.sixteenth as u32
+    }
 
     /// What the shader reads (`TileInstance.morph`): xy the node's zone, zw the parent's; a
     /// quadrant says so with x = −1, y = 0.

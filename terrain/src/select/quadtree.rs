@@ -13,7 +13,9 @@ use super::selection::{
     AllReady, DrawItem, LevelStats, LodMode, SelectParams, Selection, TileReadiness, View,
     MAX_REFINEMENT,
 };
-use super::walk::{has_terrain, whole_from_quadrants, Frame, Grid, NodeEval, Quadrant, ViewCtx};
+use super::walk::{
+    choose_parts, has_terrain, Frame, Grid, MeshCosts, NodeEval, Parts, Quadrant, ViewCtx,
+};
 
 /// Selects the tiles to draw for one camera. `placements` come from `clipmap::place_levels`
 /// (finest first). Reuses `out`'s allocations.
@@ -103,6 +105,7 @@ pub fn select_tiles_multi_ready(
         horizon.build(bake, params.earth.as_ref(), params.curvature, &eyes);
     }
     let grid = Grid::of(bake);
+    let tau_max = views.iter().map(|v| v.tau).fold(0.0, f64::max);
     let frame = Frame {
         split_prev: distance.then_some(&split_prev),
         split_now: distance.then_some(&split_now),
@@ -120,6 +123,8 @@ pub fn select_tiles_multi_ready(
         horizon: cull_hidden.then_some(&horizon),
         hidden: std::cell::Cell::new(0),
         quadrants: std::cell::RefCell::new(Vec::new()),
+        costs: MeshCosts::of(grid.q),
+        tau_max,
     };
 
     if params.mode == LodMode::Bounded && params.coarsen {
@@ -161,6 +166,7 @@ pub fn select_tiles_multi_ready(
                 eps,
                 rho_px: rho,
                 rho_norm,
+                ..
             } = eval;
             if !frame.ready.is_ready(level, tx, ty) {
                 // Not drawn rather than drawn stale (only the quadtree can fall back coarser).
@@ -205,14 +211,11 @@ fn refine_ring_tile(
     let cap = frame.params.max_refinement.min(level).min(MAX_REFINEMENT);
     nodes.clear();
     frame.quadrants.borrow_mut().clear();
-    let missed = frame.subdivide_seen(level, tx, ty, eval, level - cap, nodes);
+    let missed = frame.subdivide_seen(level, tx, ty, eval, level - cap, None, nodes);
     let first = out.items.len();
     out.push_refined(level_index, level, tx, ty, nodes);
-    for &k in frame.quadrants.borrow().iter() {
-        out.items[first + k].morph = Morph {
-            quadrant: true,
-            ..Morph::NONE
-        };
+    for &(k, morph) in frame.quadrants.borrow().iter() {
+        out.items[first + k].morph = morph;
     }
     missed
 }
@@ -258,8 +261,22 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
             eps,
             rho_px: rho,
             rho_norm,
+            ..
         } = eval;
-        if rho_norm <= 1.0 {
+        let children = [(1, 1), (0, 1), (1, 0), (0, 0)].map(|(dx, dy)| (2 * tx + dx, 2 * ty + dy));
+        let child_level = level.wrapping_sub(1);
+        let missing = |&(cx, cy): &(u32, u32)| {
+            has_terrain(frame.bake, child_level, cx, cy)
+                && !frame.ready.is_ready(child_level, cx, cy)
+        };
+        // Children in the finer patch, all of them in its texture.
+        let in_patch = i > 0 && inside_patch(&placements[i - 1], 2 * tx, 2 * ty);
+        let children_ready = in_patch && !children.iter().any(missing);
+        // A node that missed τ as a quadrant of its parent (`known`) may still be drawn in
+        // fewer triangles than whole: its children as sixteenths of that parent.
+        let grand = (known.is_some() && children_ready && frame.sixteenths_below(level))
+            .then(|| frame.fixed(level + 1, tx / 2, ty / 2));
+        if rho_norm <= 1.0 && grand.is_none() {
             push_drawn(
                 out,
                 i,
@@ -268,17 +285,10 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
             continue;
         }
         let mut waiting = false;
-        if i > 0 && inside_patch(&placements[i - 1], 2 * tx, 2 * ty) {
-            // Children in the finer patch: descend (pushed so that they pop south-west first),
-            // once all of them are in its texture; until then this node stands for them.
-            let children =
-                [(1, 1), (0, 1), (1, 0), (0, 0)].map(|(dx, dy)| (2 * tx + dx, 2 * ty + dy));
-            let child_level = level - 1;
-            let missing = |&(cx, cy): &(u32, u32)| {
-                has_terrain(frame.bake, child_level, cx, cy)
-                    && !frame.ready.is_ready(child_level, cx, cy)
-            };
-            if !children.iter().any(missing) {
+        if in_patch {
+            // Descend (pushed so that they pop south-west first) once all the children are in
+            // the finer texture; until then this node stands for them.
+            if children_ready {
                 if !frame.params.parent_quadrants {
                     for (cx, cy) in children {
                         stack.push((i - 1, cx, cy, None));
@@ -286,41 +296,72 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                     continue;
                 }
                 // Each child as a quadrant at this node's resolution first (the child tile
-                // fully morphed onto this node's grid); all of them meeting τ so, this node.
+                // fully morphed onto this node's grid), and as a sixteenth of the parent; then
+                // the fewest triangles that meet τ.
                 let parent = frame.fixed(level, tx, ty);
-                let quads = frame.quadrants(&parent, level, tx, ty);
-                if let Some((rho_px, _)) = whole_from_quadrants(&quads) {
-                    let item = DrawItem::whole(level, tx, ty, eps as f32, rho_px as f32);
-                    push_drawn(out, i, item);
-                    continue;
+                let quads = match &grand {
+                    // Meeting τ itself on the plane: its children bounded from its box alone.
+                    Some(g) if rho_norm <= 1.0 && parent.geo.is_none() => {
+                        frame.quadrants_within(&eval, &parent, g, level, tx, ty)
+                    }
+                    _ => {
+                        let mut quads = frame.quadrants(&parent, grand.as_ref(), level, tx, ty);
+                        let grandchildren_ready = |cx: u32, cy: u32| {
+                            i >= 2
+                                && inside_patch(&placements[i - 2], 2 * cx, 2 * cy)
+                                && (0..4).all(|k| {
+                                    let (gx, gy) = (2 * cx + (k & 1), 2 * cy + (k >> 1));
+                                    !has_terrain(frame.bake, level - 2, gx, gy)
+                                        || frame.ready.is_ready(level - 2, gx, gy)
+                                })
+                        };
+                        frame.upgrade_quadrants(
+                            &mut quads,
+                            &parent,
+                            level,
+                            tx,
+                            ty,
+                            grandchildren_ready,
+                        );
+                        quads
+                    }
+                };
+                match choose_parts(&quads, rho_norm <= 1.0, frame.costs) {
+                    Parts::Whole(rho_px) => {
+                        let rho_px = rho_px.unwrap_or(rho);
+                        let item = DrawItem::whole(level, tx, ty, eps as f32, rho_px as f32);
+                        push_drawn(out, i, item);
+                        continue;
+                    }
+                    Parts::AsQuadrant { rho_px, .. } => {
+                        let (peps, _) = frame.as_quadrant(grand.as_ref().unwrap(), level, tx, ty);
+                        let item = DrawItem {
+                            morph: Morph::QUADRANT,
+                            ..DrawItem::whole(level, tx, ty, peps as f32, rho_px as f32)
+                        };
+                        push_drawn(out, i, item);
+                        continue;
+                    }
+                    Parts::Children => {}
                 }
                 // North-east first, so that the stack pops them south-west first.
                 for (k, quad) in quads.iter().enumerate().rev() {
                     let (cx, cy) = (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1));
+                    let drawn = |q: NodeEval, morph: Morph| DrawItem {
+                        morph,
+                        ..DrawItem::whole(child_level, cx, cy, q.eps as f32, q.rho_px as f32)
+                    };
                     match *quad {
                         Quadrant::NoTerrain => {}
                         Quadrant::Unseen => {
                             out.levels[i - 1].considered += 1;
                             out.levels[i - 1].culled += 1;
                         }
+                        Quadrant::Seen { sub: Some(s), .. } if s.rho_norm <= 1.0 => {
+                            push_drawn(out, i - 1, drawn(s, Morph::SIXTEENTH));
+                        }
                         Quadrant::Seen { q, .. } if q.rho_norm <= 1.0 => {
-                            push_drawn(
-                                out,
-                                i - 1,
-                                DrawItem {
-                                    morph: Morph {
-                                        quadrant: true,
-                                        ..Morph::NONE
-                                    },
-                                    ..DrawItem::whole(
-                                        child_level,
-                                        cx,
-                                        cy,
-                                        q.eps as f32,
-                                        q.rho_px as f32,
-                                    )
-                                },
-                            );
+                            push_drawn(out, i - 1, drawn(q, Morph::QUADRANT));
                         }
                         Quadrant::Seen { own, .. } => stack.push((i - 1, cx, cy, Some(own))),
                     }

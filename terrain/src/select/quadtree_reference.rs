@@ -51,7 +51,7 @@ impl Frame<'_> {
     ) -> Option<NodeEval> {
         let geo = node.geo;
         let mut seen = false;
-        let (mut rho_px, mut rho_norm) = (0.0f64, 0.0f64);
+        let (mut rho_px, mut rho_norm, mut gain) = (0.0f64, 0.0f64, 0.0f64);
         for v in &self.views {
             let aabb = match &geo {
                 Some(n) => n.aabb,
@@ -70,6 +70,9 @@ impl Frame<'_> {
                 (None, true) => vertical_gain_of(&corners, f, v.up),
                 (None, false) => v.vertical_gain,
             };
+            if geo.is_none() {
+                gain = gain.max(v.focal * c / v.tau);
+            }
             let rho = projected_error_px(eps, z_min, v.focal, c);
             rho_px = rho_px.max(rho);
             rho_norm = rho_norm.max(rho / v.tau);
@@ -78,6 +81,7 @@ impl Frame<'_> {
             eps,
             rho_px,
             rho_norm,
+            gain,
         })
     }
 }

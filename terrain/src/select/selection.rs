@@ -68,6 +68,11 @@ pub struct SelectParams {
     /// fully morphed onto the node's grid (`cdlod_morph.rs`) — instead of splitting into a
     /// finer child there.
     pub parent_quadrants: bool,
+    /// With `parent_quadrants`, in the coarsest-first quadtree: a child that misses τ at its
+    /// parent's resolution is also tried in sixteenths — each of its children at the parent's
+    /// resolution, the bake's [`ErrorBake::fine_eps`](crate::bake::ErrorBake::fine_eps) — and
+    /// drawn in the fewest triangles that meet τ (`walk::choose_parts`).
+    pub sixteenths: bool,
 }
 
 impl Default for SelectParams {
@@ -84,6 +89,7 @@ impl Default for SelectParams {
             earth: None,
             horizon_cull: false,
             parent_quadrants: true,
+            sixteenths: true,
         }
     }
 }

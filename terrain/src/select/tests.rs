@@ -300,36 +300,104 @@ fn neighbour_eps_is_the_brute_force_edge_maximum() {
     }
 }
 
-/// The rule that draws a split node whole: every child holding terrain seen and meeting τ at
-/// the parent's resolution, at least one of them; the largest ρ is the node's.
+/// How a node with evaluated children is drawn: the fewest triangles meeting τ, an instance
+/// weighed as 64 — whole, as a quadrant of its parent when every seen child meets τ as a
+/// sixteenth, or child by child — ties to fewer instances; children walked when one needs
+/// more than the node's resolution and the node misses τ.
 #[test]
-fn whole_from_quadrants_needs_every_terrain_child_seen_within_tau() {
-    use super::walk::{whole_from_quadrants, NodeEval, Quadrant};
+fn choose_parts_draws_the_fewest_triangles_that_meet_tau() {
+    use super::walk::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant};
     let eval = |rho_px: f64| NodeEval {
         eps: 1.0,
         rho_px,
-        rho_norm: rho_px / 2.0,
+        rho_norm: rho_px,
+        gain: 0.0,
     };
-    let seen = |rho: f64| Quadrant::Seen {
-        q: eval(rho),
-        own: eval(rho / 4.0),
+    // ρ as a sixteenth (None: not measured), as a quadrant; own never read.
+    let seen = |sub: Option<f64>, q: f64| Quadrant::Seen {
+        q: eval(q),
+        own: eval(q / 4.0),
+        sub: sub.map(eval),
     };
-    let none = Quadrant::NoTerrain;
+    let (none, unseen) = (Quadrant::NoTerrain, Quadrant::Unseen);
+    let cost = MeshCosts::of(16);
     assert_eq!(
-        whole_from_quadrants(&[seen(1.0), seen(2.0), seen(0.5), seen(1.5)]),
-        Some((2.0, 1.0))
+        cost,
+        MeshCosts {
+            whole: 640,
+            quadrant: 192,
+            sixteenth: 64,
+            instance: 64,
+        }
+    );
+    let fine = seen(Some(0.9), 0.5);
+    let coarse_only = seen(Some(1.5), 0.8);
+    let deeper = seen(Some(3.0), 1.2);
+    // Every child a sixteenth: the node as its parent's quadrant, ρ the largest sixteenth's.
+    assert_eq!(
+        choose_parts(&[fine, fine, fine, seen(Some(0.7), 0.2)], false, cost),
+        Parts::AsQuadrant {
+            rho_px: 0.9,
+            rho_norm: 0.9
+        }
+    );
+    // Three sixteenths and an unseen child: still one quadrant (256 < 3 × 128).
+    assert_eq!(
+        choose_parts(&[fine, unseen, fine, fine], true, cost),
+        Parts::AsQuadrant {
+            rho_px: 0.9,
+            rho_norm: 0.9
+        }
+    );
+    // Three sixteenths, one quadrant: 640 < 704, child by child.
+    let three = [fine, coarse_only, fine, fine];
+    assert_eq!(choose_parts(&three, true, cost), Parts::Children);
+    assert_eq!(choose_parts(&three, false, cost), Parts::Children);
+    // Two sixteenths, two quadrants: 768 ≥ 704, drawn whole (its own ρ when it meets τ
+    // itself, else the largest child's at its resolution).
+    let two = [fine, coarse_only, fine, coarse_only];
+    assert_eq!(choose_parts(&two, true, cost), Parts::Whole(None));
+    assert_eq!(choose_parts(&two, false, cost), Parts::Whole(Some(0.8)));
+    // Without sixteenths: three quadrants (768) whole, two and no terrain (512) apart.
+    let q = seen(None, 0.8);
+    assert_eq!(
+        choose_parts(&[q, q, none, q], false, cost),
+        Parts::Whole(Some(0.8))
     );
     assert_eq!(
-        whole_from_quadrants(&[seen(1.0), none, none, seen(0.5)]),
-        Some((1.0, 0.5))
+        choose_parts(&[q, none, none, q], false, cost),
+        Parts::Children
+    );
+    // An unseen child is not drawn, and does not keep the node from being drawn whole: what
+    // is seen of the node meets τ.
+    assert_eq!(
+        choose_parts(&[q, q, unseen, q], false, cost),
+        Parts::Whole(Some(0.8))
     );
     assert_eq!(
-        whole_from_quadrants(&[seen(1.0), seen(2.1), none, none]),
-        None
+        choose_parts(&[q, unseen, unseen, q], true, cost),
+        Parts::Children
+    );
+    // A child needing more than the node's resolution: whole if the node meets τ, else walk.
+    assert_eq!(
+        choose_parts(&[fine, deeper, fine, fine], true, cost),
+        Parts::Whole(None)
     );
     assert_eq!(
-        whole_from_quadrants(&[seen(1.0), Quadrant::Unseen, seen(1.0), seen(1.0)]),
-        None
+        choose_parts(&[fine, deeper, fine, fine], false, cost),
+        Parts::Children
     );
-    assert_eq!(whole_from_quadrants(&[none, none, none, none]), None);
+    // A child meeting τ as a sixteenth but not at the node's resolution (the coarser surface
+    // closer there): the node is not drawn whole on its children's word.
+    let odd = seen(Some(0.9), 1.1);
+    assert_eq!(choose_parts(&[odd, q, q, q], false, cost), Parts::Children);
+    assert_eq!(
+        choose_parts(&[odd, q, q, q], true, cost),
+        Parts::Whole(None)
+    );
+    // Nothing seen: nothing to draw.
+    assert_eq!(
+        choose_parts(&[unseen, none, unseen, none], false, cost),
+        Parts::Children
+    );
 }
