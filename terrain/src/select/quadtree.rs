@@ -234,12 +234,17 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
     let roots = &frame.bake.levels[coarsest.level as usize];
     let mut nodes = Vec::new();
     let top = placements.len() - 1;
-    // Nodes to visit, with their evaluation when a quadrant test made it already.
-    let mut stack: Vec<(usize, u32, u32, Option<NodeEval>)> = (0..roots.tiles_y)
+    // Nodes to visit, with their evaluation when a quadrant test made it already, and whether
+    // they may still be tried in parts (see `Frame::upgrade_quadrants`).
+    let mut stack: Vec<(usize, u32, u32, Option<NodeEval>, bool)> = (0..roots.tiles_y)
         .rev()
-        .flat_map(|ty| (0..roots.tiles_x).rev().map(move |tx| (top, tx, ty, None)))
+        .flat_map(|ty| {
+            (0..roots.tiles_x)
+                .rev()
+                .map(move |tx| (top, tx, ty, None, true))
+        })
         .collect();
-    while let Some((i, tx, ty, known)) = stack.pop() {
+    while let Some((i, tx, ty, known, retry)) = stack.pop() {
         let level = placements[i].level;
         if !has_terrain(frame.bake, level, tx, ty) {
             continue;
@@ -274,7 +279,7 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
         let children_ready = in_patch && !children.iter().any(missing);
         // A node that missed τ as a quadrant of its parent (`known`) may still be drawn in
         // fewer triangles than whole: its children as sixteenths of that parent.
-        let grand = (known.is_some() && children_ready && frame.sixteenths_below(level))
+        let grand = (known.is_some() && retry && children_ready && frame.sixteenths_below(level))
             .then(|| frame.fixed(level + 1, tx / 2, ty / 2));
         if rho_norm <= 1.0 && grand.is_none() {
             push_drawn(
@@ -291,7 +296,7 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
             if children_ready {
                 if !frame.params.parent_quadrants {
                     for (cx, cy) in children {
-                        stack.push((i - 1, cx, cy, None));
+                        stack.push((i - 1, cx, cy, None, true));
                     }
                     continue;
                 }
@@ -299,10 +304,11 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                 // fully morphed onto this node's grid), and as a sixteenth of the parent; then
                 // the fewest triangles that meet τ.
                 let parent = frame.fixed(level, tx, ty);
+                let mut settled = [false; 4];
                 let quads = match &grand {
                     // Meeting τ itself on the plane: its children bounded from its box alone.
-                    Some(g) if rho_norm <= 1.0 && parent.geo.is_none() => {
-                        frame.quadrants_within(&eval, &parent, g, level, tx, ty)
+                    Some(_) if rho_norm <= 1.0 && parent.geo.is_none() => {
+                        frame.quadrants_within(&eval, level, tx, ty)
                     }
                     _ => {
                         let mut quads = frame.quadrants(&parent, grand.as_ref(), level, tx, ty);
@@ -315,7 +321,7 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                                         || frame.ready.is_ready(level - 2, gx, gy)
                                 })
                         };
-                        frame.upgrade_quadrants(
+                        settled = frame.upgrade_quadrants(
                             &mut quads,
                             &parent,
                             level,
@@ -363,7 +369,9 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                         Quadrant::Seen { q, .. } if q.rho_norm <= 1.0 => {
                             push_drawn(out, i - 1, drawn(q, Morph::QUADRANT));
                         }
-                        Quadrant::Seen { own, .. } => stack.push((i - 1, cx, cy, Some(own))),
+                        Quadrant::Seen { own, .. } => {
+                            stack.push((i - 1, cx, cy, Some(own), !settled[k]))
+                        }
                     }
                 }
                 continue;

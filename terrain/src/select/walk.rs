@@ -242,6 +242,16 @@ impl Frame<'_> {
         }
     }
 
+    /// On the plane, the curvature slack of a level-`level` cell (0 without curvature).
+    #[inline]
+    pub(super) fn flat_sag(&self, level: u32) -> f64 {
+        if self.params.curvature {
+            curvature_interpolation_error(self.cell_diagonal(level))
+        } else {
+            0.0
+        }
+    }
+
     /// The node's camera-independent values (from the cache after the first time on the
     /// ellipsoid; on the plane they are two table reads, cheaper than the cache's lookup).
     pub(super) fn fixed(&self, level: u32, tx: u32, ty: u32) -> NodeFixed {
@@ -263,14 +273,14 @@ impl Frame<'_> {
     pub(super) fn compute_fixed(&self, level: u32, tx: u32, ty: u32) -> NodeFixed {
         let (lo, hi) = self.grid.rect(level, tx, ty);
         let (min_h, max_h) = self.bake.bounds(level, tx, ty);
-        let raw = self.bake.eps_refined(level, tx, ty, 0) as f64;
-        let (mut sag, mut geo) = (0.0, None);
-        if let Some(g) = &self.params.earth {
-            sag = g.cell_sag_m(lo, hi, 1 << level, min_h, max_h);
-            geo = Some(g.node_geometry(lo, hi, min_h, max_h));
-        } else if self.params.curvature {
-            sag = curvature_interpolation_error(self.cell_diagonal(level));
-        }
+        let raw = self.bake.eps(level, tx, ty) as f64;
+        let (sag, geo) = match &self.params.earth {
+            Some(g) => (
+                g.cell_sag_m(lo, hi, 1 << level, min_h, max_h),
+                Some(g.node_geometry(lo, hi, min_h, max_h)),
+            ),
+            None => (self.flat_sag(level), None),
+        };
         let eps = raw + sag;
         // On the ellipsoid: the normals' turn and the cell slack, in any direction.
         let slack = geo.map_or(0.0, |n| n.spread + if eps > 0.0 { sag / eps } else { 0.0 });
@@ -487,8 +497,8 @@ impl Frame<'_> {
     }
 
     /// On the plane, the children of a node that meets τ itself (`eval`, at its resolution)
-    /// bounded from its box alone: as quadrants at its resolution (`node` its fixed values)
-    /// and as sixteenths at its parent's (`parent`). Each child's surface lies in the node's
+    /// bounded from its box alone: as quadrants at its resolution and as sixteenths at its
+    /// parent's. Each child's surface lies in the node's
     /// box, so the node's f·g/τ bounds the child's; only the child's own smallest depth (its
     /// box drawn at the parent's resolution, the larger) is formed — no corner pass, no cull
     /// (every child holding terrain counts as seen). A child drawn on this bound meets τ
@@ -496,25 +506,29 @@ impl Frame<'_> {
     pub(super) fn quadrants_within(
         &self,
         eval: &NodeEval,
-        node: &NodeFixed,
-        parent: &NodeFixed,
         level: u32,
         tx: u32,
         ty: u32,
     ) -> [Quadrant; 4] {
-        debug_assert!(node.geo.is_none());
+        debug_assert!(self.params.earth.is_none());
+        let (node_sag, parent_sag) = (self.flat_sag(level), self.flat_sag(level + 1));
         let mut out = [Quadrant::NoTerrain; 4];
         for (k, q) in out.iter_mut().enumerate() {
             let (cx, cy) = (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1));
             if !has_terrain(self.bake, level - 1, cx, cy) {
                 continue;
             }
-            let child = self.fixed(level - 1, cx, cy);
+            // The child's box drawn at the parent's resolution (`Self::aabb` on the plane),
+            // from the two table reads it needs.
+            let (lo, hi) = self.grid.rect(level - 1, cx, cy);
+            let (min_h, max_h) = self.bake.bounds(level - 1, cx, cy);
+            let diagonal = self.cell_diagonal(level + 1);
             let z = self
                 .views
                 .iter()
                 .map(|v| {
-                    let aabb = self.aabb(level + 1, &child, v.camera.position);
+                    let (eye, curvature) = (v.camera.position, self.params.curvature);
+                    let aabb = tile_aabb(lo, hi, min_h, max_h, eye, curvature, diagonal);
                     min_view_depth_of(&v.to_view, &aabb).max(v.camera.near)
                 })
                 .fold(f64::INFINITY, f64::min);
@@ -527,8 +541,15 @@ impl Frame<'_> {
                     gain: eval.gain,
                 }
             };
-            let quadrant = bounded(self.as_quadrant(node, level - 1, cx, cy));
-            let sub = bounded(self.as_sixteenth(parent, level - 1, cx, cy));
+            // As `as_quadrant` and `as_sixteenth` form them on the plane (no slack).
+            let quadrant = bounded((
+                self.bake.coarse_eps(level - 1, cx, cy) as f64 + node_sag,
+                0.0,
+            ));
+            let sub = bounded((
+                self.bake.fine_eps(level - 1, cx, cy) as f64 + parent_sag,
+                0.0,
+            ));
             *q = Quadrant::Seen {
                 q: quadrant,
                 own: quadrant,
@@ -544,7 +565,8 @@ impl Frame<'_> {
     /// bounded from its box ([`Self::quadrants_within`]), meets τ at this node's resolution
     /// after all — so [`choose_parts`] weighs this node whole against its children with it
     /// (decided later, when the child is walked, it would be drawn as a quadrant beside
-    /// siblings that add up to more than the node whole).
+    /// siblings that add up to more than the node whole). Returns which children were found
+    /// best drawn whole that way: walked, they need not be tried in parts again.
     pub(super) fn upgrade_quadrants(
         &self,
         quads: &mut [Quadrant; 4],
@@ -553,9 +575,10 @@ impl Frame<'_> {
         tx: u32,
         ty: u32,
         splittable: impl Fn(u32, u32) -> bool,
-    ) {
+    ) -> [bool; 4] {
+        let mut settled = [false; 4];
         if node.geo.is_some() || !self.sixteenths_below(level - 1) {
-            return;
+            return settled;
         }
         for (k, quad) in quads.iter_mut().enumerate() {
             let Quadrant::Seen { q, own, .. } = quad else {
@@ -565,12 +588,16 @@ impl Frame<'_> {
             if q.rho_norm <= 1.0 || own.rho_norm > 1.0 || !splittable(cx, cy) {
                 continue;
             }
-            let child = self.fixed(level - 1, cx, cy);
-            let kids = self.quadrants_within(own, &child, node, level - 1, cx, cy);
-            if let Parts::AsQuadrant { rho_px, rho_norm } = choose_parts(&kids, true, self.costs) {
-                (q.rho_px, q.rho_norm) = (rho_px, rho_norm);
+            let kids = self.quadrants_within(own, level - 1, cx, cy);
+            match choose_parts(&kids, true, self.costs) {
+                Parts::AsQuadrant { rho_px, rho_norm } => {
+                    (q.rho_px, q.rho_norm) = (rho_px, rho_norm)
+                }
+                Parts::Whole(_) => settled[k] = true,
+                Parts::Children => {}
             }
         }
+        settled
     }
 
     /// Distance LOD: split while the eye is within `distance_factor` node sides of the node's
@@ -662,13 +689,14 @@ impl Frame<'_> {
         let mut missed = 0;
         if quadrants {
             let node = self.fixed(level, tx, ty);
+            let mut settled = [false; 4];
             let quads = match &grand {
-                Some(g) if !split && node.geo.is_none() => {
-                    self.quadrants_within(&eval, &node, g, level, tx, ty)
+                Some(_) if !split && node.geo.is_none() => {
+                    self.quadrants_within(&eval, level, tx, ty)
                 }
                 _ => {
                     let mut quads = self.quadrants(&node, grand.as_ref(), level, tx, ty);
-                    self.upgrade_quadrants(&mut quads, &node, level, tx, ty, |_, _| {
+                    settled = self.upgrade_quadrants(&mut quads, &node, level, tx, ty, |_, _| {
                         level - 1 > finest
                     });
                     quads
@@ -704,7 +732,7 @@ impl Frame<'_> {
                     out.push((level - 1, cx, cy, d.eps as f32, d.rho_px as f32));
                     self.quadrants.borrow_mut().push((out.len() - 1, morph));
                 } else {
-                    let parent = Some(node);
+                    let parent = (!settled[k]).then_some(node);
                     missed += self.subdivide_seen(level - 1, cx, cy, own, finest, parent, out);
                 }
             }
