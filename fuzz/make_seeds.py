@@ -4,7 +4,10 @@
 file name (src/bodies.rs DEM_NAMES), one byte of sidecar length, the sidecar, then the file.
 The bake seed is a real bake of a 33 x 33 grid, made with `aerie bake`, the store seeds a
 store of the same grid made with `aerie import` (AERIE names the binary, default
-target/debug/aerie)."""
+target/debug/aerie). corpus/store/seed_v2_valid and seed_v3_valid are stores of the same grid
+written by builds of store format versions 2 and 3 (their bake sections hold one ε per tile,
+then the quadrants' ε); this script does not rewrite them: they keep the readers of older
+bake sections fuzzed, and `tests/tests/store.rs` runs `aerie info` on them."""
 import io, json, os, struct, subprocess, sys, tempfile, zipfile, zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))

@@ -193,9 +193,18 @@ fn import_and_info_on_the_demo_dem() {
     assert_eq!(eps, want);
     let o = aerie(&["info", out_s]);
     assert!(
-        o.status.success() && text(&o).contains("format version 3"),
+        o.status.success()
+            && text(&o).contains(&format!(
+                "format version {}",
+                aerie::terrain::store::STORE_VERSION
+            ))
+            && !text(&o).contains("re-import"),
         "{}",
         text(&o)
+    );
+    assert_eq!(
+        (i["quadrant_eps"].as_bool(), i["block_eps"].as_bool()),
+        (Some(true), Some(true))
     );
     // --verify reads every page; a flipped byte in one is found, named, and exits 2.
     let o = aerie(&["info", out_s, "--verify"]);
@@ -237,6 +246,66 @@ fn import_and_info_on_the_demo_dem() {
     let o = aerie(&["info", dem_s]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("byte 0 (magic)"), "{}", text(&o));
+}
+
+/// Stores of the same 33×33 grid written by builds of format versions 2, 3 and 4 (the store
+/// fuzz corpus's seeds): each opens; `info` says what an older bake section lacks, in text and
+/// JSON; an older section reads with the looser bounds (a tile at its grandparent's resolution
+/// at its parent's ε there), the measured ones as version 4 holds them.
+#[test]
+fn info_names_an_older_bake_section_and_older_stores_read_with_looser_bounds() {
+    let tmp = tempfile::tempdir().unwrap();
+    let corpus = aerie_tests::repo_root().join("fuzz/corpus/store");
+    let mut bakes = Vec::new();
+    for (seed, version, says) in [
+        ("seed_v2_valid", 2, Some("format 2: one ε per tile")),
+        (
+            "seed_v3_valid",
+            3,
+            Some("format 3: ε over each tile's quadrants but not its 16 blocks"),
+        ),
+        ("seed_valid", 4, None),
+    ] {
+        let p = tmp.path().join(format!("{seed}.aerie"));
+        std::fs::copy(corpus.join(seed), &p).unwrap();
+        let ps = p.to_str().unwrap();
+        let o = aerie(&["info", ps]);
+        let t = text(&o);
+        assert!(o.status.success(), "{t}");
+        assert!(t.contains(&format!("format version {version}")), "{t}");
+        match says {
+            Some(s) => assert!(t.contains(s) && t.contains("re-import"), "{t}"),
+            None => assert!(!t.contains("re-import"), "{t}"),
+        }
+        let o = aerie(&["info", ps, "--json"]);
+        assert!(o.status.success(), "{}", text(&o));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(j["format_version"], version);
+        assert_eq!(j["quadrant_eps"], version >= 3, "{j}");
+        assert_eq!(j["block_eps"], version >= 4, "{j}");
+        bakes.push(Store::open(&p).unwrap().read_bake().unwrap());
+    }
+    let [v2, v3, v4] = &bakes[..] else {
+        unreachable!()
+    };
+    assert!(v4.levels.len() >= 3, "{} levels", v4.levels.len());
+    for (l, t) in v4.levels.iter().enumerate() {
+        assert_eq!(v2.levels[l].eps, t.eps, "level {l}");
+        assert_eq!(v3.levels[l].eps, t.eps, "level {l}");
+        assert_eq!(v3.levels[l].coarse_eps, t.coarse_eps, "level {l}");
+        if l + 2 >= v4.levels.len() {
+            continue;
+        }
+        let parent = &v4.levels[l + 1];
+        for old in [v2, v3] {
+            for (i, (&f, &measured)) in old.levels[l].fine_eps.iter().zip(&t.fine_eps).enumerate() {
+                let (cx, cy) = (i as u32 % t.tiles_x, i as u32 / t.tiles_x);
+                let p = ((cy / 2) * parent.tiles_x + cx / 2) as usize;
+                assert_eq!(f, old.levels[l + 1].coarse_eps[p], "level {l} tile {i}");
+                assert!(measured <= f, "level {l} tile {i}: {measured} > {f}");
+            }
+        }
+    }
 }
 
 #[test]

@@ -18,7 +18,7 @@ pub enum BakeError {
     Write { path: String, reason: String },
     #[error("{path}: not an aerie bake file (bytes 0..8 are {found}, expected \"AERIEBAK\"); re-run `aerie bake` (with --force to overwrite this file)")]
     BadMagic { path: String, found: String },
-    #[error("{path}: format version {found} (byte offset 8) is not supported: this build reads version {BAKE_VERSION}; re-run `aerie bake` to rebuild it")]
+    #[error("{path}: format version {found} (byte offset 8) is not supported: this build reads version {BAKE_VERSION}{}; re-run `aerie bake` to rebuild it", older_note(*.found))]
     Version { path: String, found: u32 },
     #[error(
         "{path}: truncated at byte offset {offset}: {reason}; re-run `aerie bake` to rebuild it"
@@ -39,6 +39,15 @@ pub enum BakeError {
     Stale { path: String, reason: String },
     #[error("{path}: {reason}")]
     Refused { path: String, reason: String },
+}
+
+/// What an older format version lacks, for the message that replaces it.
+fn older_note(found: u32) -> &'static str {
+    match found {
+        1 => " (version 1 kept one ε per tile, not its quadrants' nor its blocks')",
+        2 => " (version 2 kept ε over each tile's quadrants, not over its 16 blocks: a tile drawn at its grandparent's resolution had only its parent's bound there)",
+        _ => "",
+    }
 }
 
 pub(super) fn show(p: &Path) -> String {

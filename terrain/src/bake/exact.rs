@@ -72,15 +72,17 @@ impl Corners {
 }
 
 /// Max |h − ĥ_L| over samples `i = 0 .. S` (west edge included, east edge excluded) of one
-/// cell row; `S = 2^L` known at compile time so the loop unrolls with constant `u`.
+/// cell row, and |h − ĥ_L| at its west edge (`i = 0`); `S = 2^L` known at compile time so the
+/// loop unrolls with constant `u`.
 #[inline(always)]
-fn cell_max_const<const S: usize>(h: &[f32], c: &Corners, v: f64) -> f64 {
+fn cell_max_const<const S: usize>(h: &[f32], c: &Corners, v: f64) -> (f64, f64) {
     let h = &h[..S];
     let mut e = [0f64; S];
     for (i, (e, &hi)) in e.iter_mut().zip(h).enumerate() {
         let u = i as f64 * (1.0 / S as f64);
         *e = sample_err(hi, c, u, v);
     }
+    let west = e[0];
     // Pairwise, so the maxima do not form one long dependency chain.
     let mut n = S;
     while n > 1 {
@@ -89,7 +91,7 @@ fn cell_max_const<const S: usize>(h: &[f32], c: &Corners, v: f64) -> f64 {
             e[i] = gt_max(e[i], e[i + n]);
         }
     }
-    e[0]
+    (e[0], west)
 }
 
 /// Max |h − ĥ| over `B` samples of a cell row starting at sample `i0` (u = (i0 + i) / s).
@@ -125,61 +127,158 @@ fn cell_max_dyn(h: &[f32], c: &Corners, v: f64, s: usize) -> f64 {
     gt_max(a, b)
 }
 
-/// For one full-resolution row and one level `L ≥ 1`: the max |h − ĥ_L| over each tile's
-/// west and east halves of the row (each half's edge samples included; the middle sample is
-/// in both) into `out[2·tx]` and `out[2·tx + 1]`. A half tile row is a row of one of the
-/// tile's quadrants, the level-(L−1) tiles it covers, so these maxima give ε of the level-L
-/// surface over each level-(L−1) tile, and their maximum the tile's own ε.
+/// The max |h − ĥ_L| over the samples of one cell row (`S = 2^L`, `S ≥ 2`; west edge included,
+/// east edge excluded) split at the middle sample: `(west, east)`, the middle sample (u = ½)
+/// in both. Parts of half a cell: tiles of 3 vertices at levels ≥ 2.
+#[inline(always)]
+fn cell_halves_const<const S: usize>(h: &[f32], c: &Corners, v: f64) -> (f64, f64) {
+    let h = &h[..S];
+    let mut e = [0f64; S];
+    for (i, (e, &hi)) in e.iter_mut().zip(h).enumerate() {
+        let u = i as f64 * (1.0 / S as f64);
+        *e = sample_err(hi, c, u, v);
+    }
+    let half = S / 2;
+    let (mut w, mut east) = (e[half], e[half]);
+    for &x in &e[..half] {
+        w = gt_max(x, w);
+    }
+    for &x in &e[half + 1..] {
+        east = gt_max(x, east);
+    }
+    (w, east)
+}
+
+/// The same as [`cell_halves_const`] for `s ≥ 64` known at run time.
+#[inline(always)]
+fn cell_halves_dyn(h: &[f32], c: &Corners, v: f64, s: usize) -> (f64, f64) {
+    debug_assert!(s >= 64 && s.is_multiple_of(64));
+    let inv = 1.0 / s as f64;
+    let half = s / 2;
+    let (mut w, mut east) = (0f64, 0f64);
+    for i0 in (0..half).step_by(32) {
+        w = gt_max(block_max::<32>(h, c, v, i0, inv), w);
+    }
+    for i0 in (half..s).step_by(32) {
+        east = gt_max(block_max::<32>(h, c, v, i0, inv), east);
+    }
+    // The middle sample (u = ½ exactly) is the west half's east edge too.
+    (gt_max(sample_err(h[half], c, 0.5, v), w), east)
+}
+
+/// For one full-resolution row and one level `L ≥ 1`: the max |h − ĥ_L| over each of `parts`
+/// equal parts of each tile's row (each part's edge samples included: a sample where two
+/// parts meet is in both) into `out[parts·tx + k]`, west to east. With 2 parts a part is a
+/// row of one of the tile's quadrants, the level-(L−1) tiles it covers; with 4 parts (levels
+/// ≥ 2) a row of one of its 16 blocks, the level-(L−2) tiles it covers. So these maxima give
+/// ε of the level-L surface over each level-(L−1) or level-(L−2) tile, and their maximum the
+/// tile's own ε.
 ///
 /// ĥ_L is [`quad_surface`] over the level-L cell holding the sample. The loops assume the
 /// cell row bends where the SW–NE diagonal crosses it, which `quad_surface` decides per sample
-/// anyway; the match below makes a new [`Diagonal`] a compile error here. A half's east edge
-/// is evaluated at u = 1 in its last cell, which equals u = 0 in the next cell bit for bit
-/// (`sw + (se − sw)` is `se` exactly for f32 heights widened to f64).
+/// anyway; the match below makes a new [`Diagonal`] a compile error here. A part's east edge
+/// is the next part's west edge, taken from there (u = 0 in its first cell), which equals
+/// u = 1 in the part's last cell bit for bit (`sw + (se − sw)` is `se` exactly for f32
+/// heights widened to f64); the row's last part evaluates its east edge at u = 1. A part of
+/// half a cell (`parts` = 2 × cells per tile: tiles of 3 vertices at levels ≥ 2) ends at
+/// u = ½, which both halves evaluate alike. Every sample's |h − ĥ| is the same IEEE value
+/// whichever part it lands in, and a maximum of non-negative non-NaN values does not depend
+/// on the order, so the parts' maxima merge into exactly the coarser parts' (a quadrant is
+/// the largest of its blocks).
 #[inline(always)]
-fn level_row_half_max<const S: usize>(
+#[allow(clippy::too_many_arguments)]
+fn level_row_part_max<const S: usize>(
     row: &[f32],
     hs: &[f32],
     hn: &[f32],
     s: usize,
     v: f64,
     cells_per_tile: usize,
+    parts: usize,
     out: &mut [f64],
 ) {
     match TILE_DIAGONAL {
         Diagonal::SouthWestToNorthEast => {}
     }
     let s = if S > 0 { S } else { s };
-    let half = cells_per_tile / 2;
-    for (k, o) in out.iter_mut().enumerate() {
-        let first = k * half;
-        // Four running maxima, one per cell modulo 4, merged at the end.
-        let mut ms = [0f64; 4];
-        for (k, cx) in (first..first + half).enumerate() {
+    if cells_per_tile < parts {
+        // Half a cell a part.
+        debug_assert_eq!(parts, 2 * cells_per_tile);
+        for (cx, o) in out.chunks_exact_mut(2).enumerate() {
             let c0 = cx * s;
             let c = Corners::at(hs, hn, c0, s);
-            let e = if S > 0 {
+            let (w, e) = if S > 0 {
+                cell_halves_const::<S>(&row[c0..], &c, v)
+            } else {
+                cell_halves_dyn(&row[c0..], &c, v, s)
+            };
+            o[0] = w;
+            // The east half's east edge: u = 1 in the cell.
+            o[1] = gt_max(sample_err(row[c0 + s], &c, 1.0, v), e);
+        }
+        return;
+    }
+    let part = cells_per_tile / parts;
+    for k in 0..out.len() {
+        let first = k * part;
+        // Four running maxima, one per cell modulo 4, merged at the end.
+        let mut ms = [0f64; 4];
+        let mut west = 0f64;
+        for (i, cx) in (first..first + part).enumerate() {
+            let c0 = cx * s;
+            let c = Corners::at(hs, hn, c0, s);
+            let (e, w) = if S > 0 {
                 cell_max_const::<S>(&row[c0..], &c, v)
             } else {
-                cell_max_dyn(&row[c0..], &c, v, s)
+                (cell_max_dyn(&row[c0..], &c, v, s), 0.0)
             };
-            ms[k & 3] = gt_max(e, ms[k & 3]);
+            // The part's west edge, u = 0 in its first cell.
+            if i == 0 {
+                west = if S > 0 {
+                    w
+                } else {
+                    sample_err(row[c0], &c, 0.0, v)
+                };
+            }
+            ms[i & 3] = gt_max(e, ms[i & 3]);
         }
-        let m = gt_max(gt_max(ms[0], ms[1]), gt_max(ms[2], ms[3]));
-        // The half's east edge: u = 1 in its last cell.
-        let c0 = (first + half - 1) * s;
+        out[k] = gt_max(gt_max(ms[0], ms[1]), gt_max(ms[2], ms[3]));
+        // The previous part's east edge is this part's west edge (u = 0 here, u = 1 there:
+        // the same value bit for bit).
+        if k > 0 {
+            out[k - 1] = gt_max(west, out[k - 1]);
+        }
+    }
+    // The last part's east edge: u = 1 in its last cell.
+    let cells = cells_per_tile * out.len() / parts;
+    if let Some(o) = out.last_mut() {
+        let c0 = (cells - 1) * s;
         let c = Corners::at(hs, hn, c0, s);
-        *o = gt_max(sample_err(row[c0 + s], &c, 1.0, v), m);
+        *o = gt_max(sample_err(row[c0 + s], &c, 1.0, v), *o);
     }
 }
 
-/// One worker's running maxima: per level L ≥ 1, ε of the level-L surface over each
-/// level-(L−1) tile (indexed as level L−1's tiles; level 0 unused), and level-0 min/max.
-/// Each row's maxima are rounded up to f32 before they are merged — the same result as
-/// rounding the f64 maximum, since rounding up is monotonic — so the quadrants take 4 bytes
-/// each per worker (a 32769² grid: 22 MB).
+/// Parts of a tile row the bake measures at level `l ≥ 1`: 2 at level 1 (its quadrants), 4
+/// above (its 16 blocks, the level-(L−2) tiles it covers).
+#[inline]
+fn row_parts(l: usize) -> usize {
+    if l == 1 {
+        2
+    } else {
+        4
+    }
+}
+
+/// One worker's running maxima: per level L ≥ 1, ε of the level-L surface over each part of
+/// its tiles — level 1 over each quadrant (indexed as level 0's tiles), each level L ≥ 2 over
+/// each of the 16 blocks (indexed as level L−2's tiles; a quadrant is the largest of its 2×2
+/// blocks) —, and level-0 min/max. Each row's maxima are rounded up to f32 before they are
+/// merged — the same result as rounding the f64 maximum, since rounding up is monotonic — so
+/// the parts take 4 bytes each per worker: 4 B per level-0 tile for level 1 and ≈ 16/3 B for
+/// the blocks of levels ≥ 2, besides 8 B of min/max (a 32769² grid at m = 17: 39 MB of parts
+/// and 34 MB of min/max a worker).
 struct Acc {
-    quads: Vec<Vec<f32>>,
+    parts: Vec<Vec<f32>>,
     min0: Vec<f32>,
     max0: Vec<f32>,
 }
@@ -188,14 +287,15 @@ impl Acc {
     fn new(geo: &[LevelGeom]) -> Self {
         let n0 = geo[0].tiles_x * geo[0].tiles_y;
         Acc {
-            quads: geo
+            parts: geo
                 .iter()
                 .enumerate()
                 .map(|(l, g)| {
                     if l == 0 {
                         Vec::new()
                     } else {
-                        vec![0f32; 4 * g.tiles_x * g.tiles_y]
+                        let p = row_parts(l);
+                        vec![0f32; p * p * g.tiles_x * g.tiles_y]
                     }
                 })
                 .collect(),
@@ -205,7 +305,7 @@ impl Acc {
     }
 
     fn merge(&mut self, o: &Acc) {
-        for (a, b) in self.quads.iter_mut().zip(&o.quads) {
+        for (a, b) in self.parts.iter_mut().zip(&o.parts) {
             for (x, y) in a.iter_mut().zip(b) {
                 *x = x.max(*y);
             }
@@ -337,24 +437,30 @@ fn process_rows_impl<R: BakeRows>(
             let north = if j == 0 { south } else { south + s };
             let (hs, hn) = (ds.row(south), ds.row(north));
             let v = j as f64 / s as f64;
-            let out = &mut tile_max[..2 * real_tiles_x];
+            let p = row_parts(l);
+            let out = &mut tile_max[..p * real_tiles_x];
             match s {
-                2 => level_row_half_max::<2>(row, hs, hn, s, v, q, out),
-                4 => level_row_half_max::<4>(row, hs, hn, s, v, q, out),
-                8 => level_row_half_max::<8>(row, hs, hn, s, v, q, out),
-                16 => level_row_half_max::<16>(row, hs, hn, s, v, q, out),
-                32 => level_row_half_max::<32>(row, hs, hn, s, v, q, out),
-                _ => level_row_half_max::<0>(row, hs, hn, s, v, q, out),
+                2 => level_row_part_max::<2>(row, hs, hn, s, v, q, p, out),
+                4 => level_row_part_max::<4>(row, hs, hn, s, v, q, p, out),
+                8 => level_row_part_max::<8>(row, hs, hn, s, v, q, p, out),
+                16 => level_row_part_max::<16>(row, hs, hn, s, v, q, p, out),
+                32 => level_row_part_max::<32>(row, hs, hn, s, v, q, p, out),
+                _ => level_row_part_max::<0>(row, hs, hn, s, v, q, p, out),
             }
-            // The quadrant rows (level L−1's tile rows) this row belongs to.
-            let (qlo, qhi) = tile_rows_of(r, g.t / 2, 2 * g.tiles_y);
-            let qx = 2 * g.tiles_x;
-            let a = &mut acc.quads[l];
-            for (k, &m) in out.iter().enumerate() {
+            // The part rows (level L−1's or L−2's tile rows) this row belongs to.
+            let (plo, phi) = tile_rows_of(r, g.t / p, p * g.tiles_y);
+            let px = p * g.tiles_x;
+            let a = &mut acc.parts[l];
+            let lo = &mut a[plo * px..][..out.len()];
+            for (x, &m) in lo.iter_mut().zip(out.iter()) {
                 let m = round_up_f32(m);
-                for qy in [qlo, qhi] {
-                    let i = qy * qx + k;
-                    a[i] = if m > a[i] { m } else { a[i] };
+                *x = if m > *x { m } else { *x };
+            }
+            if phi != plo {
+                let hi = &mut a[phi * px..][..out.len()];
+                for (x, &m) in hi.iter_mut().zip(out.iter()) {
+                    let m = round_up_f32(m);
+                    *x = if m > *x { m } else { *x };
                 }
             }
         }
@@ -476,12 +582,12 @@ impl BakeAccumulator {
         for o in accs {
             acc.merge(&o);
         }
-        let quads = std::mem::take(&mut acc.quads);
+        let parts = std::mem::take(&mut acc.parts);
         let tables = build_tables(
             &self.geo,
             std::mem::take(&mut acc.min0),
             std::mem::take(&mut acc.max0),
-            MeasuredEps::Quadrants(quads),
+            MeasuredEps::Blocks(parts),
             self.valid.0,
             self.valid.1,
         );

@@ -10,7 +10,8 @@ use crate::dataset::Dataset;
 use super::error::{show, BakeError};
 use super::exact::bake;
 use super::format::{
-    file_layout, section_size, BAKE_EXTENSION, BAKE_MAGIC, BAKE_VERSION, HEADER_SIZE,
+    file_layout, section_size, values_per_tile, BAKE_EXTENSION, BAKE_MAGIC, BAKE_VERSION,
+    HEADER_SIZE,
 };
 use super::table::{BakeParams, ErrorBake, MeasuredBake, MeasuredEps};
 
@@ -74,10 +75,14 @@ fn encode(b: &ErrorBake, buf: &mut [u8]) {
             put_f32s(buf, o + 16, &t.min);
             put_f32s(buf, o + 16 + 4 * n, &t.max);
         } else {
-            // ε of this level's surface over the next finer level's tiles.
-            let quads = &b.levels[t.level as usize - 1].coarse_eps;
-            assert_eq!(quads.len(), 4 * n);
-            put_f32s(buf, o + 16, quads);
+            // ε of this level's surface over level 0's tiles (level 1: the quadrants) or level
+            // L−2's (the blocks).
+            let parts = match t.level {
+                1 => &b.levels[0].coarse_eps,
+                l => &b.levels[l as usize - 2].fine_eps,
+            };
+            assert_eq!(parts.len(), values_per_tile(t.level) * n);
+            put_f32s(buf, o + 16, parts);
         }
     }
     let end = buf.len() - 4;
@@ -95,7 +100,7 @@ pub fn write_bake(path: &Path, b: &ErrorBake) -> Result<(), BakeError> {
 
 /// [`write_bake`] on the given file system (tests inject faults through it).
 pub fn write_bake_in(fs: Arc<dyn FileSystem>, path: &Path, b: &ErrorBake) -> Result<(), BakeError> {
-    // The bake is small next to its dataset (under 1 % of the f32 samples), so it is encoded
+    // The bake is small next to its dataset (under 2 % of the f32 samples), so it is encoded
     // on the heap and written in one checked pass.
     let mut buf = vec![0u8; b.file_size() as usize];
     encode(b, &mut buf);
@@ -242,8 +247,10 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
                     (o + 16, "min array"),
                     (o + 16 + 4 * n, "max array"),
                 ]
-            } else {
+            } else if l == 1 {
                 &[(o, "section header"), (o + 16, "quadrant ε array")]
+            } else {
+                &[(o, "section header"), (o + 16, "block ε array")]
             };
             let end = o + section_size(l as u32, n as usize) as u64;
             if len < end {
@@ -313,15 +320,26 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
             max0 = get_f32s(bytes, o + 16 + 4 * n, n);
             eps.push(Vec::new());
         } else {
-            let quads = get_f32s(bytes, o + 16, 4 * n);
-            if let Some(k) = quads.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+            let parts = get_f32s(bytes, o + 16, values_per_tile(l as u32) * n);
+            if let Some(k) = parts.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+                let (field, of) = if l == 1 {
+                    ("quadrant ε", 0)
+                } else {
+                    ("block ε", l - 2)
+                };
+                let tx = layout.sections[of].tiles_x as usize;
                 return Err(corrupt(
-                    "quadrant ε",
+                    field,
                     (o + 16 + 4 * k) as u64,
-                    format!("level {l}: {} is not a finite number ≥ 0", quads[k]),
+                    format!(
+                        "level {l} over level {of}'s tile ({}, {}) (index {k}): {} is not a finite number ≥ 0",
+                        k % tx,
+                        k / tx,
+                        parts[k]
+                    ),
                 ));
             }
-            eps.push(quads);
+            eps.push(parts);
         }
     }
     Ok(ErrorBake::from_measured(MeasuredBake {
@@ -335,7 +353,7 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<ErrorBake, BakeError> {
         source_checksum: get_u32(bytes, 56),
         min0,
         max0,
-        eps: MeasuredEps::Quadrants(eps),
+        eps: MeasuredEps::Blocks(eps),
     }))
 }
 

@@ -3,7 +3,7 @@
 /// First 8 bytes of every bake file.
 pub const BAKE_MAGIC: [u8; 8] = *b"AERIEBAK";
 /// The format version this build writes and reads.
-pub const BAKE_VERSION: u32 = 2;
+pub const BAKE_VERSION: u32 = 3;
 /// Header bytes before the first level section.
 pub const HEADER_SIZE: usize = 96;
 /// File name suffix of bake files.
@@ -20,10 +20,19 @@ pub(super) struct Layout {
     pub(super) total: u64,
 }
 
-/// Byte size of level `l`'s section with n tiles: min + max at level 0, above it ε over each
-/// tile's four quadrants.
+/// f32 values per tile in level `l`'s section: min + max at level 0, ε over each tile's four
+/// quadrants at level 1, over each of its 16 blocks above.
+pub(super) fn values_per_tile(l: u32) -> usize {
+    match l {
+        0 => 2,
+        1 => 4,
+        _ => 16,
+    }
+}
+
+/// Byte size of level `l`'s section with n tiles.
 pub(super) fn section_size(l: u32, n: usize) -> usize {
-    16 + if l == 0 { 8 * n } else { 16 * n }
+    16 + 4 * values_per_tile(l) * n
 }
 
 pub(super) fn file_layout(width: u32, height: u32, m: u32, levels: u32) -> Layout {

@@ -14,13 +14,18 @@
 //! mesh's triangles — at `u = i / 2^L`, `v = j / 2^L` (exact binary fractions). It measures ε
 //! over each of the tile's four quadrants (the level-(L−1) tiles it covers, edges included):
 //! a quadrant drawn at its parent's resolution has that error
-//! ([`LevelTable::coarse_eps`]), and the tile's ε is the largest of the four. It also stores
-//! the min/max full-resolution height per tile (for culling boxes) and whether the tile holds
-//! any real (non-padding) sample.
+//! ([`LevelTable::coarse_eps`]), and the tile's ε is the largest of the four. At levels
+//! L ≥ 2 it measures ε over each of the tile's 16 blocks (4 × 4, the level-(L−2) tiles it
+//! covers, edges included: a sample on a block boundary belongs to both blocks): a block
+//! drawn at its grandparent's resolution has that error ([`LevelTable::fine_eps`]), and a
+//! quadrant's ε is the largest of its 2 × 2 blocks' (exactly: the same samples, the same
+//! values). It also stores the min/max full-resolution height per tile (for culling boxes)
+//! and whether the tile holds any real (non-padding) sample.
 //!
 //! **Padding.** Padding samples are part of the surface and of every tile that also holds a
 //! real sample (their ε includes them). Tiles made only of padding are not terrain
-//! (`terrain = false`): their ε is not measured and is stored as 0. Every real sample lies in a
+//! (`terrain = false`): their ε is not measured and is stored as 0, and so are their quadrants'
+//! and blocks'. Every real sample lies in a
 //! terrain tile at every level, so [`ErrorBake::eps_refined`] still bounds the error at every
 //! real sample; it ignores the error over padding-only subtiles.
 //!
@@ -42,7 +47,8 @@
 //! ```text
 //! offset size  field
 //!      0    8  magic "AERIEBAK"
-//!      8    4  u32 format version (2; version 1 kept one ε per tile)
+//!      8    4  u32 format version (3; version 2 kept only the quadrants, version 1 one ε
+//!              per tile: an older file is replaced on first use, saying why)
 //!     12    4  u32 header size in bytes (96)
 //!     16    4  u32 m, tile side in vertices (2^j + 1)
 //!     20    4  u32 number of levels
@@ -61,16 +67,21 @@
 //!              (index ty · tiles_x + tx):
 //!              +0 u32 level (= L)     +4 u32 tiles_x     +8 u32 tiles_y     +12 u32 0
 //!              level 0:  +16 f32[n] min height    +16+4n f32[n] max height
-//!              level ≥1: +16 f32[4n] ε of the level-L surface over each level-(L−1) tile,
-//!                        row-major over level L−1's tiles (each tile's quadrants)
+//!              level 1:  +16 f32[4n] ε of the level-1 surface over each level-0 tile,
+//!                        row-major over level 0's tiles (each tile's quadrants)
+//!              level ≥2: +16 f32[16n] ε of the level-L surface over each level-(L−2) tile,
+//!                        row-major over level L−2's tiles (each tile's 4 × 4 blocks)
 //! size−4    4  u32 CRC-32 of bytes 0..size−4
 //! ```
 //!
-//! Only what is measured is stored: level-0 ε is 0, a level-L tile's ε is the largest of its
-//! quadrants', its min/max is that of its
-//! 2×2 level-(L−1) children, and the terrain flag follows from the real size, so the reader
-//! derives those. At m = 17 the file is ≈ 1.3 % of the (padded) dataset's f32 size.
-//! Reading checks magic, version, sizes, both CRCs, then the dataset (sizes, spacing, checksum):
+//! Only what is measured is stored: level-0 ε is 0, a quadrant's ε at levels ≥ 2 is the
+//! largest of its blocks', a level-L tile's ε the largest of its quadrants', its min/max is
+//! that of its 2×2 level-(L−1) children, and the terrain flag follows from the real size, so
+//! the reader derives those. Per level-0 tile that is 8 B of min/max, 4 B of level-1
+//! quadrants and ≈ 16/3 B of blocks over all levels ≥ 2: at m = 17 (a level-0 tile is 1 KiB
+//! of f32 samples) the file is ≈ 1.7 % of the (padded) dataset's f32 size (format 2: 1.3 %).
+//! Reading checks magic, version, sizes, both CRCs, that every ε is a finite number ≥ 0 (naming
+//! the level, the tile and the byte offset), then the dataset (sizes, spacing, checksum):
 //! every failure names the file, the field or byte offset and the reason, and says to re-run
 //! `aerie bake`.
 
@@ -92,6 +103,8 @@ pub use table::{
     REPORT_CSV_HEADER,
 };
 
+#[cfg(test)]
+mod file_tests;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]

@@ -98,8 +98,10 @@ pub struct LevelTable {
     pub coarse_eps: Vec<f32>,
     /// ε of the surface two levels coarser (level L+2) over this tile (metres, rounded up):
     /// the tile drawn as a sixteenth of its grandparent at the grandparent's resolution.
-    /// (≤ its parent's `coarse_eps`, which bounds it where it is not measured.) Empty on the
-    /// two coarsest levels.
+    /// Measured by the bake (≤ its parent's `coarse_eps`, the largest of the four siblings'
+    /// is the parent's); from a file that keeps only quadrants or tiles, the parent's
+    /// `coarse_eps` (a bound, looser). 0 under a grandparent that is all padding. Empty on
+    /// the two coarsest levels.
     pub fine_eps: Vec<f32>,
     /// Smallest / largest full-resolution height in the tile (edges included), metres.
     pub min: Vec<f32>,
@@ -149,11 +151,18 @@ pub struct ErrorBake {
 /// The errors a bake measures, as a file keeps them (index: level; entry 0 is ignored).
 #[derive(Debug, Clone, PartialEq)]
 pub enum MeasuredEps {
+    /// Level 1's surface over each of its tiles' four quadrants (indexed by level 0's tiles)
+    /// and each level-L surface (L ≥ 2) over each of its tiles' 16 blocks (indexed by level
+    /// L−2's tiles): the quadrants (the largest of their 2×2 blocks), the tiles' ε,
+    /// [`LevelTable::coarse_eps`] and [`LevelTable::fine_eps`] follow.
+    Blocks(Vec<Vec<f32>>),
     /// ε of each level-L surface (L ≥ 1) over each of its tiles' four quadrants, indexed by
-    /// level L−1's tiles: the tiles' ε and the quadrants' [`LevelTable::coarse_eps`] follow.
+    /// level L−1's tiles (older files): the tiles' ε and the quadrants'
+    /// [`LevelTable::coarse_eps`] follow; a tile's ε at its grandparent's resolution is taken
+    /// as its parent's there.
     Quadrants(Vec<Vec<f32>>),
     /// ε of each level-L tile (L ≥ 1) only (older files): a quadrant's ε at its parent's
-    /// resolution is taken as the parent's.
+    /// resolution is taken as the parent's, and at its grandparent's as the grandparent's.
     Tiles(Vec<Vec<f32>>),
 }
 
@@ -381,8 +390,10 @@ pub(super) fn level_geoms(q: usize, width: usize, height: usize, levels: u32) ->
 /// The level tables from what is measured (level-0 min/max, the errors of levels ≥ 1) and
 /// what follows from it: level-0 ε = 0; a level-L tile is exactly its 2×2 level-(L−1)
 /// children (edges included), so its min/max is theirs and, with quadrants measured, its ε is
-/// the largest of theirs at its resolution; a tile is terrain when its south-west sample is
-/// real; all-padding tiles have ε = 0. The file stores the measured part.
+/// the largest of theirs at its resolution (with blocks measured, a quadrant's ε is the
+/// largest of its 2×2 blocks' the same way); a tile is terrain when its south-west sample is
+/// real; all-padding tiles have ε = 0, and so have the quadrants and blocks of an
+/// all-padding tile. The file stores the measured part.
 pub(super) fn build_tables(
     geo: &[LevelGeom],
     min0: Vec<f32>,
@@ -391,6 +402,30 @@ pub(super) fn build_tables(
     valid_width: usize,
     valid_height: usize,
 ) -> Vec<LevelTable> {
+    // Per level L ≥ 1 its tiles' ε, or the quadrants' (indexed by level L−1's tiles); the
+    // blocks (indexed by level L−2's tiles) where measured.
+    let (tiles_eps, mut quads, mut blocks) = match eps {
+        MeasuredEps::Tiles(e) => (Some(e), None, None),
+        MeasuredEps::Quadrants(q) => (None, Some(q), None),
+        MeasuredEps::Blocks(mut b) => {
+            let q = (0..geo.len())
+                .map(|l| match l {
+                    0 => Vec::new(),
+                    1 => std::mem::take(&mut b[1]),
+                    _ => {
+                        let g = &geo[l];
+                        let quads = LevelGeom {
+                            t: g.t / 2,
+                            tiles_x: 2 * g.tiles_x,
+                            tiles_y: 2 * g.tiles_y,
+                        };
+                        children_fold(&quads, 4 * g.tiles_x, &b[l], &b[l]).1
+                    }
+                })
+                .collect();
+            (None, Some(q), Some(b))
+        }
+    };
     let mut tables: Vec<LevelTable> = Vec::with_capacity(geo.len());
     let terrain_of = |g: &LevelGeom| -> Vec<bool> {
         (0..g.tiles_x * g.tiles_y)
@@ -413,12 +448,10 @@ pub(super) fn build_tables(
         let mut e = if l == 0 {
             vec![0.0; n]
         } else {
-            match &eps {
-                MeasuredEps::Tiles(e) => e[l].clone(),
-                MeasuredEps::Quadrants(q) => {
-                    let fx = 2 * g.tiles_x;
-                    children_fold(g, fx, &q[l], &q[l]).1
-                }
+            match (&tiles_eps, &quads) {
+                (Some(e), _) => e[l].clone(),
+                (None, Some(q)) => children_fold(g, 2 * g.tiles_x, &q[l], &q[l]).1,
+                (None, None) => unreachable!("tiles' or quadrants' ε"),
             }
         };
         for (e, &t) in e.iter_mut().zip(&terrain) {
@@ -440,22 +473,9 @@ pub(super) fn build_tables(
     }
     // Each tile at its parent's resolution.
     for l in 1..tables.len() {
-        let coarse = match &eps {
-            MeasuredEps::Quadrants(q) => {
-                let mut c = q[l].clone();
-                let parent = &tables[l];
-                for (i, c) in c.iter_mut().enumerate() {
-                    let (cx, cy) = (
-                        i % (2 * parent.tiles_x as usize),
-                        i / (2 * parent.tiles_x as usize),
-                    );
-                    if !parent.terrain[(cy / 2) * parent.tiles_x as usize + cx / 2] {
-                        *c = 0.0;
-                    }
-                }
-                c
-            }
-            MeasuredEps::Tiles(_) => {
+        let coarse = match &mut quads {
+            Some(q) => zero_outside_terrain(std::mem::take(&mut q[l]), &tables[l], 2),
+            None => {
                 let (parent, child) = (&tables[l], &tables[l - 1]);
                 let px = parent.tiles_x as usize;
                 (0..child.len())
@@ -468,19 +488,37 @@ pub(super) fn build_tables(
         };
         tables[l - 1].coarse_eps = coarse;
     }
-    // Each tile at its grandparent's resolution: bounded by its parent's at the same one.
+    // Each tile at its grandparent's resolution: measured, or bounded by its parent's there.
     for l in 2..tables.len() {
-        let (parent, child) = (&tables[l - 1], &tables[l - 2]);
-        let px = parent.tiles_x as usize;
-        let fine = (0..child.len())
-            .map(|i| {
-                let (cx, cy) = (i % (2 * px), i / (2 * px));
-                parent.coarse_eps[(cy / 2) * px + cx / 2]
-            })
-            .collect();
+        let fine = match &mut blocks {
+            Some(b) => zero_outside_terrain(std::mem::take(&mut b[l]), &tables[l], 4),
+            None => {
+                let (parent, child) = (&tables[l - 1], &tables[l - 2]);
+                let px = parent.tiles_x as usize;
+                (0..child.len())
+                    .map(|i| {
+                        let (cx, cy) = (i % (2 * px), i / (2 * px));
+                        parent.coarse_eps[(cy / 2) * px + cx / 2]
+                    })
+                    .collect()
+            }
+        };
         tables[l - 2].fine_eps = fine;
     }
     tables
+}
+
+/// `parts` (a table of `k × k` parts per tile of `table`, row-major over the parts) with the
+/// parts of tiles that are all padding set to 0.
+fn zero_outside_terrain(mut parts: Vec<f32>, table: &LevelTable, k: usize) -> Vec<f32> {
+    let tx = table.tiles_x as usize;
+    for (i, p) in parts.iter_mut().enumerate() {
+        let (cx, cy) = (i % (k * tx), i / (k * tx));
+        if !table.terrain[(cy / k) * tx + cx / k] {
+            *p = 0.0;
+        }
+    }
+    parts
 }
 
 /// Per level-`g` tile, the min of `lo` and the max of `hi` over its 2×2 children in a table

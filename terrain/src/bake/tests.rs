@@ -93,7 +93,10 @@ fn the_diagonal_matters() {
 }
 
 /// The bake's fast loops give bit for bit what evaluating `quad_surface` at every sample
-/// gives (before and after rounding up), with and without AVX2.
+/// gives (before and after rounding up), with and without AVX2: every tile's ε, every
+/// quadrant's at its parent's resolution and every block's at its grandparent's, on grids
+/// padded on both sides (tiles of 3 vertices split a level-L cell between two blocks, tiles
+/// of 5 make a block one cell, coarse levels take the loops for cells of ≥ 64 samples).
 #[test]
 fn kernels_equal_per_sample_quad_surface() {
     let mut seed = 7u64;
@@ -104,53 +107,97 @@ fn kernels_equal_per_sample_quad_surface() {
         ((seed >> 33) as f64 / (1u64 << 31) as f64) as f32
     };
     let vals: Vec<f32> = (0..300 * 260).map(|_| rnd() * 900.0 - 100.0).collect();
-    let d = ds(300, 260, |c, r| vals[r * 300 + c]);
-    for m in [3, 5, 17] {
-        let params = BakeParams {
-            tile_size: m,
-            levels: 0,
-        };
-        let fast = bake_with(&d, params, &|_, _| {}, true);
-        let plain = bake_with(&d, params, &|_, _| {}, false);
-        assert_eq!(fast, plain, "m = {m}");
-        let q = (m - 1) as usize;
-        for t in &fast.levels {
-            let l = t.level;
-            let side = q << l;
-            for ty in 0..t.tiles_y as usize {
-                for tx in 0..t.tiles_x as usize {
-                    let e = if l == 0 {
-                        0.0
-                    } else {
-                        brute_eps(&d, 1 << l, side, tx, ty)
-                    };
-                    let i = ty * t.tiles_x as usize + tx;
-                    let want = if t.terrain[i] { round_up_f32(e) } else { 0.0 };
-                    assert_eq!(t.eps[i].to_bits(), want.to_bits(), "L{l} ({tx},{ty})");
-                    // The tile at its parent's resolution: the level-(L+1) surface over it.
-                    let Some(parent) = fast.levels.get(l as usize + 1) else {
-                        assert!(t.coarse_eps.is_empty());
-                        continue;
-                    };
-                    let e = brute_eps(&d, 2 << l, side, tx, ty);
-                    let p = (ty / 2) * parent.tiles_x as usize + tx / 2;
-                    let want = if parent.terrain[p] {
-                        round_up_f32(e)
-                    } else {
-                        0.0
-                    };
-                    let got = t.coarse_eps[i];
-                    assert_eq!(
-                        got.to_bits(),
-                        want.to_bits(),
-                        "L{l} ({tx},{ty}) at L{}",
-                        l + 1
-                    );
-                    assert!(got <= parent.eps[p]);
+    let grids = [
+        ds(300, 260, |c, r| vals[r * 300 + c]),
+        ds(70, 151, |c, r| {
+            vals[r * 300 + c] * 0.25 + (c * r) as f32 * 0.01
+        }),
+    ];
+    let mut blocks = 0;
+    for d in &grids {
+        for m in [3, 5, 17] {
+            let params = BakeParams {
+                tile_size: m,
+                levels: 0,
+            };
+            let fast = bake_with(d, params, &|_, _| {}, true);
+            let plain = bake_with(d, params, &|_, _| {}, false);
+            assert_eq!(fast, plain, "m = {m}");
+            blocks += check_against_brute_force(d, &fast);
+        }
+    }
+    assert!(blocks > 50_000, "{blocks} blocks checked");
+}
+
+/// Every tile's ε, `coarse_eps` and `fine_eps` in `b` against [`brute_eps`]; a quadrant's ε
+/// is the largest of its four blocks', each block's at most its parent's. Returns the number
+/// of blocks checked.
+fn check_against_brute_force(d: &Dataset, b: &ErrorBake) -> usize {
+    let q = (b.params.tile_size - 1) as usize;
+    let m = b.params.tile_size;
+    let mut blocks = 0;
+    // ε of the level-`at` surface over tile (tx, ty) of level `l`, rounded up; 0 under an
+    // ancestor at level `at` that is all padding.
+    let want = |l: u32, tx: usize, ty: usize, at: u32| -> f32 {
+        let anc = b.level(at);
+        let k = 1 << (at - l);
+        if !anc.terrain[(ty / k) * anc.tiles_x as usize + tx / k] {
+            return 0.0;
+        }
+        round_up_f32(brute_eps(d, 1 << at, q << l, tx, ty))
+    };
+    for t in &b.levels {
+        let l = t.level;
+        for ty in 0..t.tiles_y as usize {
+            for tx in 0..t.tiles_x as usize {
+                let i = ty * t.tiles_x as usize + tx;
+                let w = if l == 0 { 0.0 } else { want(l, tx, ty, l) };
+                assert_eq!(t.eps[i].to_bits(), w.to_bits(), "m {m} L{l} ({tx},{ty})");
+                // The tile at its parent's resolution: the level-(L+1) surface over it.
+                let Some(parent) = b.levels.get(l as usize + 1) else {
+                    assert!(t.coarse_eps.is_empty() && t.fine_eps.is_empty());
+                    continue;
+                };
+                let got = t.coarse_eps[i];
+                let w = want(l, tx, ty, l + 1);
+                assert_eq!(
+                    got.to_bits(),
+                    w.to_bits(),
+                    "m {m} L{l} ({tx},{ty}) at L{}",
+                    l + 1
+                );
+                let p = (ty / 2) * parent.tiles_x as usize + tx / 2;
+                assert!(got <= parent.eps[p]);
+                // At its grandparent's resolution: the level-(L+2) surface over it.
+                if b.levels.get(l as usize + 2).is_none() {
+                    assert!(t.fine_eps.is_empty());
+                    continue;
                 }
+                let got = t.fine_eps[i];
+                let w = want(l, tx, ty, l + 2);
+                assert_eq!(
+                    got.to_bits(),
+                    w.to_bits(),
+                    "m {m} L{l} ({tx},{ty}) at L{}",
+                    l + 2
+                );
+                assert!(got <= parent.coarse_eps[p], "m {m} L{l} ({tx},{ty})");
+                blocks += 1;
+            }
+        }
+        // Each quadrant of a level-(L+2) tile is the largest of its four blocks, exactly.
+        if l >= 1 && (l as usize + 1) < b.levels.len() {
+            let f = b.level(l - 1);
+            for (i, &c) in t.coarse_eps.iter().enumerate() {
+                let (tx, ty) = (i % t.tiles_x as usize, i / t.tiles_x as usize);
+                let fx = f.tiles_x as usize;
+                let kids = [0, 1, fx, fx + 1].map(|o| f.fine_eps[2 * ty * fx + 2 * tx + o]);
+                let most = kids.iter().fold(0f32, |a, &k| a.max(k));
+                assert_eq!(c.to_bits(), most.to_bits(), "m {m} L{l} ({tx},{ty})");
             }
         }
     }
+    blocks
 }
 
 /// max |h − ĥ| over the samples of the `side`-sample tile (tx, ty), edges included, ĥ being

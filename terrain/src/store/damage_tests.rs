@@ -190,9 +190,10 @@ fn damaged_headers_and_indexes_are_refused_with_offset_and_reason() {
         e.contains("byte 0 (magic)") && e.contains("not an aerie store"),
         "{e}"
     );
-    let e = case(&|b| b[8..12].copy_from_slice(&4u32.to_le_bytes()));
+    let e = case(&|b| b[8..12].copy_from_slice(&(STORE_VERSION + 1).to_le_bytes()));
     assert!(
-        e.contains("byte 8 (format version)") && e.contains("version 4 is newer"),
+        e.contains("byte 8 (format version)")
+            && e.contains(&format!("version {} is newer", STORE_VERSION + 1)),
         "{e}"
     );
     // A version-1 store (no bake section) is refused with what to do.

@@ -7,11 +7,12 @@ use crate::GeoReference;
 /// First 8 bytes of every store.
 pub const STORE_MAGIC: &[u8; 8] = b"AERIESTO";
 /// The format version this code writes (version 1 had no bake section: opening it needed
-/// every page; version 2 kept one ε per tile in it).
-pub const STORE_VERSION: u32 = 3;
+/// every page; version 2 kept one ε per tile in it, version 3 each tile's quadrants' ε).
+pub const STORE_VERSION: u32 = 4;
 /// The oldest format this build reads: version 2 stores keep one ε per tile (their quadrants'
 /// ε at the parent's resolution is taken as the parent's, a looser bound; re-import for the
-/// measured one).
+/// measured one); version 3 stores keep the quadrants but not the blocks (a tile's ε at its
+/// grandparent's resolution is taken as its parent's there).
 pub const OLDEST_STORE_VERSION: u32 = 2;
 /// File name extension of a store.
 pub const STORE_EXTENSION: &str = "aerie";

@@ -16,9 +16,9 @@
 //! ```text
 //! offset size  field
 //!      0    8  magic "AERIESTO"
-//!      8    4  u32 format version (3; 2 is read too, its bake section holding one ε per
-//!              tile; version 1 had no bake section and is refused with a message to
-//!              re-import; a newer one is refused)
+//!      8    4  u32 format version (4; 3 and 2 are read too, their bake sections holding
+//!              the quadrants' ε only or one ε per tile; version 1 had no bake section and
+//!              is refused with a message to re-import; a newer one is refused)
 //!     12    4  u32 header size H (= the first page's offset)
 //!     16   32  u32 tile size m, page tiles P, levels, width, height (padded), valid width,
 //!              valid height, page count
@@ -44,9 +44,11 @@
 //!              sample that is not an exact i16 (chosen when k ≤ samples / 8); coding 1 = f32
 //!              bits XOR the west neighbour's (south for column 0), as 4 byte planes.
 //!      B       bake section, one zstd frame: per level L = 1 … L−1 the f32 ε of the
-//!              level-L surface over each level-(L−1) tile (its tiles' quadrants; version 2:
-//!              ε per level-L tile), then level 0's min and max per tile (row-major), each
-//!              array as bits XOR the previous value, in 4 byte planes (`bake_section`)
+//!              level-L surface over each level-0 tile at L = 1 (its tiles' quadrants) and
+//!              over each level-(L−2) tile at L ≥ 2 (its tiles' 16 blocks; version 3: over
+//!              each level-(L−1) tile at every level; version 2: ε per level-L tile), then
+//!              level 0's min and max per tile (row-major), each array as bits XOR the
+//!              previous value, in 4 byte planes (`bake_section`)
 //!      I       index, one 32-byte entry per page, level 0 first, pages row-major:
 //!              u32 level, px, py, coding; u64 offset; u32 stored length; u32 CRC-32 of
 //!              the stored bytes
@@ -56,8 +58,8 @@
 //! ```
 //!
 //! **Reading.** [`Store::open`] reads the header, the trailer and the index only (≈ 1/2000 of
-//! the samples as f32); [`Store::read_bake`] the bake section only (≈ 1/100), which is the
-//! whole [`crate::bake::ErrorBake`] the selection needs. Open refuses
+//! the samples as f32); [`Store::read_bake`] the bake section only (≈ 1/75 of the file),
+//! which is the whole [`crate::bake::ErrorBake`] the selection needs. Open refuses
 //! (naming the byte offset and the reason) a bad magic, a newer version, a corrupt header,
 //! trailer or index, a header whose sizes disagree with the index, a truncated file (its end
 //! is not a trailer). [`Store::read_page`] reads

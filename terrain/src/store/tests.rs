@@ -464,8 +464,63 @@ fn a_page_whose_tables_differ_from_the_bake_section_is_named() {
     }
 }
 
+/// A bake section in an older format's payload, as that format's encoder wrote it: the
+/// current encoder writes level 1's array from level 0's `coarse_eps` and each level L ≥ 2's
+/// from level L−2's `fine_eps`, so putting there what the older format kept (version 3: the
+/// quadrants, level L−1's `coarse_eps`; version 2: the tiles' ε) gives its bytes.
+fn older_payload(b: &ErrorBake, version: u32) -> Vec<u8> {
+    let mut shifted = b.clone();
+    for l in 1..b.levels.len() {
+        let kept = match version {
+            3 => b.levels[l - 1].coarse_eps.clone(),
+            _ => b.levels[l].eps.clone(),
+        };
+        match l {
+            1 => shifted.levels[0].coarse_eps = kept,
+            _ => shifted.levels[l - 2].fine_eps = kept,
+        }
+    }
+    bake_section::encode(&shifted)
+}
+
+/// The store's bake section decoded as a store of `version` would hold it.
+fn decode_older(store: &Store, b: &ErrorBake, version: u32) -> ErrorBake {
+    let mut h = store.header().clone();
+    h.version = version;
+    let payload = older_payload(b, version);
+    assert_eq!(
+        payload.len(),
+        bake_section::raw_len(store.layout(), version)
+    );
+    bake_section::decode(&payload, &h, store.layout()).unwrap()
+}
+
+/// Each level-L tile's `fine_eps` is its parent's `coarse_eps`: the bound a file without the
+/// blocks gives.
+fn assert_fine_is_parents_coarse(old: &ErrorBake, measured: &ErrorBake) {
+    for l in 2..old.levels.len() {
+        let (parent, child) = (&old.levels[l - 1], &old.levels[l - 2]);
+        assert_eq!(child.fine_eps.len(), child.len());
+        for (i, &f) in child.fine_eps.iter().enumerate() {
+            let (cx, cy) = (i as u32 % child.tiles_x, i as u32 / child.tiles_x);
+            let p = ((cy / 2) * parent.tiles_x + cx / 2) as usize;
+            assert_eq!(
+                f.to_bits(),
+                parent.coarse_eps[p].to_bits(),
+                "L{} {i}",
+                l - 2
+            );
+            assert!(
+                f >= measured.levels[l - 2].fine_eps[i],
+                "a bound on the measured one"
+            );
+        }
+    }
+}
+
 /// A version-2 bake section (one ε per tile) still decodes: the tiles' ε as stored, each
-/// quadrant at its parent's ε — a bound on the measured quadrant ε that version 3 keeps.
+/// quadrant at its parent's ε and each tile at its grandparent's resolution at its parent's
+/// there — bounds on the measured ε that version 4 keeps.
 #[test]
 fn a_version_2_bake_section_reads_with_quadrants_at_their_parents_eps() {
     let dir = tempfile::tempdir().unwrap();
@@ -473,20 +528,10 @@ fn a_version_2_bake_section_reads_with_quadrants_at_their_parents_eps() {
     let b = baked(&ds, 9);
     let (p, _) = import(dir.path(), &ds, &b, 2);
     let store = Store::open(&p).unwrap();
-    let mut h = store.header().clone();
-    // The version-2 payload: ε of levels ≥ 1 per tile, then level 0's min and max, as planes.
-    h.version = 2;
-    // `encode` writes level l's array from level l−1's `coarse_eps`: put each level's tile ε
-    // there, and the bytes are a version-2 payload.
-    let mut shifted = b.clone();
-    for l in 1..shifted.levels.len() {
-        shifted.levels[l - 1].coarse_eps = b.levels[l].eps.clone();
-    }
-    let payload = bake_section::encode(&shifted);
-    assert_eq!(payload.len(), bake_section::raw_len(store.layout(), 2));
-    let old = bake_section::decode(&payload, &h, store.layout()).unwrap();
+    assert_eq!(store.header().version, STORE_VERSION);
+    let old = decode_older(&store, &b, 2);
     let now = store.read_bake().unwrap();
-    assert_eq!(now, b, "version 3 keeps the measured quadrants");
+    assert_eq!(now, b, "version 4 keeps the measured quadrants and blocks");
     for l in 1..b.levels.len() {
         let (parent, child) = (&b.levels[l], &old.levels[l - 1]);
         assert_eq!(
@@ -502,6 +547,80 @@ fn a_version_2_bake_section_reads_with_quadrants_at_their_parents_eps() {
             );
         }
     }
+    assert_fine_is_parents_coarse(&old, &b);
     // Measured quadrants are tighter somewhere on rough terrain, or the format would not pay.
     assert!((0..b.levels.len() - 1).any(|l| b.levels[l].coarse_eps != old.levels[l].coarse_eps));
+}
+
+/// A version-3 bake section (the quadrants of every level, no blocks) still decodes: the
+/// tiles' ε and the quadrants' as measured, each tile at its grandparent's resolution at its
+/// parent's ε there (the looser bound).
+#[test]
+fn a_version_3_bake_section_reads_with_blocks_at_their_parents_coarse_eps() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = dataset(150, 70, srtm_like);
+    let b = baked(&ds, 5);
+    assert!(b.levels.len() >= 4, "{} levels", b.levels.len());
+    let (p, _) = import(dir.path(), &ds, &b, 2);
+    let store = Store::open(&p).unwrap();
+    let old = decode_older(&store, &b, 3);
+    for (o, n) in old.levels.iter().zip(&b.levels) {
+        assert_eq!(o.eps, n.eps, "level {}: tiles' ε", n.level);
+        assert_eq!(
+            o.coarse_eps, n.coarse_eps,
+            "level {}: quadrants' ε",
+            n.level
+        );
+        assert_eq!((&o.min, &o.max, &o.terrain), (&n.min, &n.max, &n.terrain));
+    }
+    assert_fine_is_parents_coarse(&old, &b);
+    // Measured blocks are tighter somewhere.
+    assert!((0..b.levels.len() - 2).any(|l| b.levels[l].fine_eps != old.levels[l].fine_eps));
+    // The version-3 payload is shorter: the quadrants of levels ≥ 2 are a quarter of blocks.
+    assert!(bake_section::raw_len(store.layout(), 3) < bake_section::raw_len(store.layout(), 4));
+}
+
+/// A bake section value that is not an ε is refused naming the level, the tiles it is over
+/// and the tile: a quadrant's (level 1) and a block's (levels ≥ 2).
+#[test]
+fn a_bake_section_value_that_is_not_an_eps_names_its_level_and_tile() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = dataset(150, 70, srtm_like);
+    let b = baked(&ds, 5);
+    let (p, _) = import(dir.path(), &ds, &b, 2);
+    let store = Store::open(&p).unwrap();
+    let tx0 = b.levels[0].tiles_x as usize;
+    let tx1 = b.levels[1].tiles_x as usize;
+    for (level, of, k, v, what) in [
+        (
+            1,
+            0,
+            tx0 + 3,
+            f32::NAN,
+            "quadrant ε of level 1 over level 0's",
+        ),
+        (2, 0, 2 * tx0 + 1, -0.5, "block ε of level 2 over level 0's"),
+        (
+            3,
+            1,
+            tx1 + 2,
+            f32::INFINITY,
+            "block ε of level 3 over level 1's",
+        ),
+    ] {
+        let mut bad = b.clone();
+        let t = &mut bad.levels[of];
+        match level {
+            1 => t.coarse_eps[k] = v,
+            _ => t.fine_eps[k] = v,
+        }
+        let tx = t.tiles_x as usize;
+        let payload = bake_section::encode(&bad);
+        let e = bake_section::decode(&payload, store.header(), store.layout()).unwrap_err();
+        let want = format!("{what} tile ({}, {})", k % tx, k / tx);
+        assert!(
+            e.contains(&want) && e.contains("not a finite number"),
+            "{e} lacks {want}"
+        );
+    }
 }

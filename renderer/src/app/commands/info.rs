@@ -19,8 +19,20 @@ use aerie_terrain::store::{
 };
 use aerie_terrain::GeoReference;
 
+/// What `info` says of a store whose bake section is older than this build writes: version
+/// 2 has one ε per tile, version 3 the quadrants' ε but not the blocks'.
+fn old_bake_section(version: u32) -> Option<&'static str> {
+    match version {
+        2 => Some(OLD_BAKE_SECTION),
+        3 => Some(OLD_BAKE_SECTION_3),
+        _ => None,
+    }
+}
+
 /// What `info` says of a version-2 store, whose bake section has one ε per tile.
-const OLD_BAKE_SECTION: &str = "format 2: one ε per tile, so a quadrant drawn at its parent's resolution is bounded by the parent's ε (it draws more than it needs); re-import the store with `aerie import` for the measured quadrant ε";
+const OLD_BAKE_SECTION: &str = "format 2: one ε per tile, so a quadrant drawn at its parent's resolution is bounded by the parent's ε and a tile at its grandparent's by the grandparent's (it draws more than it needs); re-import the store with `aerie import` for the measured quadrant and block ε";
+/// What `info` says of a version-3 store, whose bake section has the quadrants' ε only.
+const OLD_BAKE_SECTION_3: &str = "format 3: ε over each tile's quadrants but not its 16 blocks, so a tile drawn at its grandparent's resolution is bounded by its parent's ε there (it draws more than it needs); re-import the store with `aerie import` for the measured block ε";
 
 #[derive(Debug, Args)]
 pub struct InfoArgs {
@@ -280,7 +292,8 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
         let v = serde_json::json!({
             "store": a.store.display().to_string(),
             "format_version": h.version,
-            "quadrant_eps": h.version >= aerie_terrain::store::STORE_VERSION,
+            "quadrant_eps": h.version >= 3,
+            "block_eps": h.version >= 4,
             "width": h.width,
             "height": h.height,
             "valid_width": h.valid_width,
@@ -322,8 +335,8 @@ pub fn run(a: InfoArgs) -> Result<(), Failure> {
         a.store.display(),
         h.version
     );
-    if h.version < aerie_terrain::store::STORE_VERSION {
-        println!("  {}", OLD_BAKE_SECTION);
+    if let Some(why) = old_bake_section(h.version) {
+        println!("  {why}");
     }
     println!(
         "  grid {}×{} samples ({}×{} real), spacing {} m × {} m ({})",
