@@ -432,10 +432,10 @@ fn instances_are_grouped_by_refinement_and_commands_follow_each_other() {
             (counts[k], first),
             "command {k}"
         );
-        let mesh = if k < RESOLUTIONS {
-            INDICES
-        } else {
-            MESHES.coarse
+        let mesh = match k / RESOLUTIONS {
+            0 => INDICES,
+            1 => MESHES.coarse,
+            _ => MESHES.sixteenth,
         };
         assert_eq!((d.first_index, d.index_count), mesh);
         first += counts[k];
