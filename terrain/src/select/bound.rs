@@ -199,7 +199,7 @@ pub(super) fn frustum_spread_gain(f: &Frustum, up: DVec3, slack: f64) -> f64 {
 /// Largest sqrt(1 + a² + b²) over the (a, b) a box shows, clamped to the frustum (the whole
 /// frustum's when a corner is at or behind the eye plane). Convex: attained at range ends.
 #[cfg(test)]
-fn obliquity_of(corners: &[DVec3; 8], f: &Frustum) -> f64 {
+pub(super) fn obliquity_of(corners: &[DVec3; 8], f: &Frustum) -> f64 {
     let (mut a_max, mut b_max) = (0.0f64, 0.0f64);
     for v in corners {
         if v.z <= 1e-9 {
@@ -308,14 +308,24 @@ impl CornerPass {
         if slack <= 0.0 {
             return g;
         }
-        let obliquity = if self.behind {
-            f.max_obliquity()
-        } else {
-            let a = self.a.map(|a| a.clamp(f.tan_left, f.tan_right).abs());
-            let b = self.b.map(|b| b.clamp(-f.tan_up, -f.tan_down).abs());
-            let (a_max, b_max) = (0f64.max(a[0]).max(a[1]), 0f64.max(b[0]).max(b[1]));
-            (1.0 + a_max * a_max + b_max * b_max).sqrt()
-        };
-        g + slack * obliquity
+        g + slack * self.obliquity(f)
+    }
+
+    /// [`Self::spread_gain`]'s two parts: the vertical gain along `up` and the obliquity
+    /// that multiplies the slack.
+    pub(super) fn gain_parts(&self, f: &Frustum, up: DVec3) -> (f64, f64) {
+        (self.vertical_gain(f, up), self.obliquity(f))
+    }
+
+    /// Largest sqrt(1 + a² + b²) over the corners, each clamped to the frustum (the whole
+    /// frustum's when a corner is at or behind the eye plane).
+    fn obliquity(&self, f: &Frustum) -> f64 {
+        if self.behind {
+            return f.max_obliquity();
+        }
+        let a = self.a.map(|a| a.clamp(f.tan_left, f.tan_right).abs());
+        let b = self.b.map(|b| b.clamp(-f.tan_up, -f.tan_down).abs());
+        let (a_max, b_max) = (0f64.max(a[0]).max(a[1]), 0f64.max(b[0]).max(b[1]));
+        (1.0 + a_max * a_max + b_max * b_max).sqrt()
     }
 }

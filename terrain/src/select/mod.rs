@@ -9,6 +9,7 @@ mod cdlod;
 pub mod cdlod_morph;
 mod horizon;
 mod node_cache;
+mod parts;
 mod quadtree;
 mod selection;
 mod skirts;

@@ -9,13 +9,12 @@ use crate::clipmap::{ring_tiles, ClipmapDesc, LevelPlacement};
 
 use super::bound::frustum_vertical_gain;
 use super::cdlod_morph::Morph;
+use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant};
 use super::selection::{
     AllReady, DrawItem, LevelStats, LodMode, SelectParams, Selection, TileReadiness, View,
     MAX_REFINEMENT,
 };
-use super::walk::{
-    choose_parts, has_terrain, Frame, Grid, MeshCosts, NodeEval, Parts, Quadrant, ViewCtx,
-};
+use super::walk::{has_terrain, Frame, Grid, ViewCtx};
 
 /// Selects the tiles to draw for one camera. `placements` come from `clipmap::place_levels`
 /// (finest first). Reuses `out`'s allocations.
@@ -306,9 +305,9 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                 let parent = frame.fixed(level, tx, ty);
                 let mut settled = [false; 4];
                 let quads = match &grand {
-                    // Meeting τ itself on the plane: its children bounded from its box alone.
-                    Some(_) if rho_norm <= 1.0 && parent.geo.is_none() => {
-                        frame.quadrants_within(&eval, level, tx, ty)
+                    // Meeting τ itself: its children bounded from its box alone.
+                    Some(g) if rho_norm <= 1.0 => {
+                        frame.quadrants_meeting(&eval, &parent, g, level, tx, ty)
                     }
                     _ => {
                         let mut quads = frame.quadrants(&parent, grand.as_ref(), level, tx, ty);

@@ -5,8 +5,8 @@
 use std::cell::Cell;
 
 use super::super::bound::{
-    frustum_spread_gain, min_depth_of, outside_of, projected_error_px, spread_gain_of,
-    vertical_gain_of,
+    frustum_spread_gain, min_depth_of, obliquity_of, outside_of, projected_error_px,
+    spread_gain_of, vertical_gain_of,
 };
 use super::{Frame, NodeEval, NodeFixed};
 
@@ -51,7 +51,8 @@ impl Frame<'_> {
     ) -> Option<NodeEval> {
         let geo = node.geo;
         let mut seen = false;
-        let (mut rho_px, mut rho_norm, mut gain) = (0.0f64, 0.0f64, 0.0f64);
+        let (mut rho_px, mut rho_norm) = (0.0f64, 0.0f64);
+        let (mut gain, mut gain_slack) = (0.0f64, 0.0f64);
         for v in &self.views {
             let aabb = match &geo {
                 Some(n) => n.aabb,
@@ -70,9 +71,16 @@ impl Frame<'_> {
                 (None, true) => vertical_gain_of(&corners, f, v.up),
                 (None, false) => v.vertical_gain,
             };
-            if geo.is_none() {
-                gain = gain.max(v.focal * c / v.tau);
-            }
+            let (g, s) = match (&geo, cull) {
+                (Some(n), true) => (
+                    vertical_gain_of(&corners, f, v.rotation * n.up),
+                    obliquity_of(&corners, f),
+                ),
+                (Some(_), false) => (0.0, 0.0),
+                (None, _) => (c, 0.0),
+            };
+            gain = gain.max(v.focal * g / v.tau);
+            gain_slack = gain_slack.max(v.focal * s / v.tau);
             let rho = projected_error_px(eps, z_min, v.focal, c);
             rho_px = rho_px.max(rho);
             rho_norm = rho_norm.max(rho / v.tau);
@@ -82,6 +90,7 @@ impl Frame<'_> {
             rho_px,
             rho_norm,
             gain,
+            gain_slack,
         })
     }
 }

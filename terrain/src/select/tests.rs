@@ -306,12 +306,13 @@ fn neighbour_eps_is_the_brute_force_edge_maximum() {
 /// more than the node's resolution and the node misses τ.
 #[test]
 fn choose_parts_draws_the_fewest_triangles_that_meet_tau() {
-    use super::walk::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant};
+    use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant};
     let eval = |rho_px: f64| NodeEval {
         eps: 1.0,
         rho_px,
         rho_norm: rho_px,
         gain: 0.0,
+        gain_slack: 0.0,
     };
     // ρ as a sixteenth (None: not measured), as a quadrant; own never read.
     let seen = |sub: Option<f64>, q: f64| Quadrant::Seen {

@@ -14,6 +14,7 @@ use super::bound::{
 };
 use super::cdlod_morph::Morph;
 use super::node_cache::{NodeCache, NodeFixed};
+use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant, HYBRID_REACH};
 use super::selection::{LodMode, SelectParams, TileReadiness};
 
 #[cfg(test)]
@@ -107,131 +108,6 @@ pub(super) struct ViewCtx<'a> {
     /// [`frustum_vertical_gain`].
     pub(super) vertical_gain: f64,
     pub(super) tau: f64,
-}
-
-/// A node as the views see it.
-#[derive(Clone, Copy)]
-pub(super) struct NodeEval {
-    pub(super) eps: f64,
-    /// Largest ρ (px) among the views that see the node.
-    pub(super) rho_px: f64,
-    /// Largest ρ/τ among them: the node meets every channel's bound when ≤ 1.
-    pub(super) rho_norm: f64,
-    /// On the plane, the largest f·g/τ among them (focal length times the box's vertical
-    /// gain, over τ): what bounds a part of the node from its box alone
-    /// ([`Frame::quadrants_within`]). 0 on the ellipsoid.
-    pub(super) gain: f64,
-}
-
-/// A child of a split node seen as a quadrant of it ([`Frame::quadrants`]).
-#[derive(Clone, Copy)]
-pub(super) enum Quadrant {
-    /// All padding: never drawn.
-    NoTerrain,
-    /// No view sees it.
-    Unseen,
-    /// `q` at the parent's resolution, `own` at its own, `sub` at the grandparent's (a
-    /// sixteenth of it) when that is measured and asked for.
-    Seen {
-        q: NodeEval,
-        own: NodeEval,
-        sub: Option<NodeEval>,
-    },
-}
-
-/// What one more instance costs beside its triangles (its ~450-byte record, its vertex
-/// setup), weighed in triangles: at 64 the lavapipe suite's Inn valley and Northern England
-/// flights drew the same triangles at equal error (within 2 %) as at 0, with 17 % fewer
-/// instances (16385² flat, 720p: 1,883 instead of 2,266).
-pub(super) const INSTANCE_TRIANGLES: u32 = 64;
-
-/// Triangles of the three meshes a node may be drawn with (`mesh`): whole, as a quadrant
-/// (stride 2), as a sixteenth (stride 4) — grid and skirts, as the renderer counts them —
-/// and what an instance costs besides ([`INSTANCE_TRIANGLES`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct MeshCosts {
-    pub(super) whole: u32,
-    pub(super) quadrant: u32,
-    pub(super) sixteenth: u32,
-    pub(super) instance: u32,
-}
-
-impl MeshCosts {
-    /// For tiles of `q` quads a side (a skirted tile of k quads: 2k² + 8k triangles).
-    pub(super) fn of(q: u32) -> Self {
-        let tris = |k: u32| 2 * k * k + 8 * k;
-        Self {
-            whole: tris(q),
-            quadrant: tris(q / 2),
-            sixteenth: tris(q / 4),
-            instance: INSTANCE_TRIANGLES,
-        }
-    }
-}
-
-/// How a node whose children were evaluated ([`Frame::quadrants`], with their sixteenths)
-/// is drawn.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) enum Parts {
-    /// The node whole at its own resolution, with this ρ (px) — `None`: its own evaluation's.
-    Whole(Option<f64>),
-    /// The node as a quadrant of its parent, at the parent's resolution: each seen child meets
-    /// τ as a sixteenth there, so the node's surface does wherever it is seen. The largest ρ
-    /// (px) and ρ/τ of the sixteenths.
-    AsQuadrant { rho_px: f64, rho_norm: f64 },
-    /// Child by child: a sixteenth where it meets τ so, else a quadrant where it meets τ so,
-    /// else the child at its own resolution or split further (never drawn when unseen).
-    Children,
-}
-
-/// The fewest triangles (instances weighed in) that meet τ for a node with children `quads`:
-/// the node whole (when it meets τ itself, or every seen child does at the node's resolution,
-/// so the node does wherever it is seen), as a quadrant of its parent, or child by child — chosen only when
-/// every seen child then meets τ as a sixteenth or quadrant. Ties go to fewer instances. When
-/// some seen child needs more than the node's resolution: whole if the node meets τ, else
-/// [`Parts::Children`], the children walked.
-pub(super) fn choose_parts(quads: &[Quadrant; 4], own_meets_tau: bool, cost: MeshCosts) -> Parts {
-    let mut children = 0u32;
-    // Every seen child meets τ: as a sixteenth (`all_sub`); at the node's resolution
-    // (`all_q`, so the node drawn whole does); in one of the two (`within`).
-    let (mut all_sub, mut all_q, mut within) = (true, true, true);
-    let (mut sub_rho, mut sub_norm, mut q_rho) = (0f64, 0f64, 0f64);
-    for quad in quads {
-        match quad {
-            Quadrant::NoTerrain | Quadrant::Unseen => {}
-            Quadrant::Seen { q, sub, .. } => match sub {
-                Some(s) if s.rho_norm <= 1.0 => {
-                    children += cost.sixteenth + cost.instance;
-                    (sub_rho, sub_norm) = (sub_rho.max(s.rho_px), sub_norm.max(s.rho_norm));
-                    all_q &= q.rho_norm <= 1.0;
-                    q_rho = q_rho.max(q.rho_px);
-                }
-                _ if q.rho_norm <= 1.0 => {
-                    children += cost.quadrant + cost.instance;
-                    all_sub = false;
-                    q_rho = q_rho.max(q.rho_px);
-                }
-                _ => (all_sub, all_q, within) = (false, false, false),
-            },
-        }
-    }
-    if !within {
-        return if own_meets_tau {
-            Parts::Whole(None)
-        } else {
-            Parts::Children
-        };
-    }
-    if all_sub && cost.quadrant + cost.instance <= children && cost.quadrant <= cost.whole {
-        return Parts::AsQuadrant {
-            rho_px: sub_rho,
-            rho_norm: sub_norm,
-        };
-    }
-    if (own_meets_tau || all_q) && cost.whole + cost.instance <= children {
-        return Parts::Whole((!own_meets_tau).then_some(q_rho));
-    }
-    Parts::Children
 }
 
 impl Frame<'_> {
@@ -421,7 +297,7 @@ impl Frame<'_> {
         let geo = node.geo;
         let (mut seen, mut hidden) = (false, false);
         let mut rho = [(0.0f64, 0.0f64); 3];
-        let mut gain_max = 0f64;
+        let (mut gain_max, mut slack_max) = (0f64, 0f64);
         for (vi, v) in self.views.iter().enumerate() {
             let aabb = match &geo {
                 Some(n) => n.aabb,
@@ -451,7 +327,12 @@ impl Frame<'_> {
                 (Some(n), false) => frustum_spread_gain(f, v.rotation * n.up, slack),
                 (None, _) => flat_gain,
             };
-            gain_max = gain_max.max(v.focal * flat_gain / v.tau);
+            let (g, c) = match (&geo, cull) {
+                (Some(n), true) => pass.gain_parts(f, v.rotation * n.up),
+                _ => (flat_gain, 0.0),
+            };
+            gain_max = gain_max.max(v.focal * g / v.tau);
+            slack_max = slack_max.max(v.focal * c / v.tau);
             for (k, &(eps, slack)) in errors.iter().enumerate() {
                 let r = projected_error_px(eps, z_min, v.focal, gain(slack));
                 rho[k] = (rho[k].0.max(r), rho[k].1.max(r / v.tau));
@@ -467,6 +348,7 @@ impl Frame<'_> {
                 rho_px: rho[k].0,
                 rho_norm: rho[k].1,
                 gain: gain_max,
+                gain_slack: slack_max,
             }
         };
         seen.then(|| [eval(0), eval(1), eval(2)])
@@ -496,60 +378,74 @@ impl Frame<'_> {
         out
     }
 
-    /// On the plane, the children of a node that meets τ itself (`eval`, at its resolution)
-    /// bounded from its box alone: as quadrants at its resolution and as sixteenths at its
-    /// parent's. Each child's surface lies in the node's
-    /// box, so the node's f·g/τ bounds the child's; only the child's own smallest depth (its
-    /// box drawn at the parent's resolution, the larger) is formed — no corner pass, no cull
-    /// (every child holding terrain counts as seen). A child drawn on this bound meets τ
+    /// The children of node (level, tx, ty) that meets τ itself (`eval`, at its resolution,
+    /// `node` its fixed values) bounded from its box alone: as quadrants at its resolution and
+    /// as sixteenths at its parent's (`parent`'s fixed values). Each child's surface lies in
+    /// the node's box, so the node's gains bound the child's (on the ellipsoid the child's
+    /// normals lie within the node's spread of the node's centre normal, so the slack is the
+    /// node's spread and the drawn cell's sag over ε); only the child's own smallest depth
+    /// (its box drawn at the parent's resolution, the larger) is formed — no corner pass, no
+    /// cull (every child holding terrain counts as seen). A child drawn on this bound meets τ
     /// wherever it is drawn.
     pub(super) fn quadrants_within(
         &self,
         eval: &NodeEval,
+        node: &NodeFixed,
+        parent: &NodeFixed,
         level: u32,
         tx: u32,
         ty: u32,
     ) -> [Quadrant; 4] {
-        debug_assert!(self.params.earth.is_none());
-        let (node_sag, parent_sag) = (self.flat_sag(level), self.flat_sag(level + 1));
         let mut out = [Quadrant::NoTerrain; 4];
         for (k, q) in out.iter_mut().enumerate() {
             let (cx, cy) = (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1));
             if !has_terrain(self.bake, level - 1, cx, cy) {
                 continue;
             }
-            // The child's box drawn at the parent's resolution (`Self::aabb` on the plane),
-            // from the two table reads it needs.
-            let (lo, hi) = self.grid.rect(level - 1, cx, cy);
-            let (min_h, max_h) = self.bake.bounds(level - 1, cx, cy);
-            let diagonal = self.cell_diagonal(level + 1);
-            let z = self
-                .views
-                .iter()
-                .map(|v| {
-                    let (eye, curvature) = (v.camera.position, self.params.curvature);
-                    let aabb = tile_aabb(lo, hi, min_h, max_h, eye, curvature, diagonal);
-                    min_view_depth_of(&v.to_view, &aabb).max(v.camera.near)
-                })
-                .fold(f64::INFINITY, f64::min);
-            let bounded = |(eps, _): (f64, f64)| {
-                let rho_norm = projected_error_px(eps, z, eval.gain, 1.0);
+            let z = match node.geo {
+                // The child's box on the ellipsoid (eye-independent, cached).
+                Some(_) => {
+                    let child = self.fixed(level - 1, cx, cy);
+                    let aabb = child.geo.map_or_else(|| unreachable!(), |g| g.aabb);
+                    self.views
+                        .iter()
+                        .map(|v| min_view_depth_of(&v.to_view, &aabb).max(v.camera.near))
+                        .fold(f64::INFINITY, f64::min)
+                }
+                // On the plane (`Self::aabb`), from the two table reads it needs.
+                None => {
+                    let (lo, hi) = self.grid.rect(level - 1, cx, cy);
+                    let (min_h, max_h) = self.bake.bounds(level - 1, cx, cy);
+                    let diagonal = self.cell_diagonal(level + 1);
+                    self.views
+                        .iter()
+                        .map(|v| {
+                            let (eye, curvature) = (v.camera.position, self.params.curvature);
+                            let aabb = tile_aabb(lo, hi, min_h, max_h, eye, curvature, diagonal);
+                            min_view_depth_of(&v.to_view, &aabb).max(v.camera.near)
+                        })
+                        .fold(f64::INFINITY, f64::min)
+                }
+            };
+            // ε at a drawn level with that level's sag (as `as_quadrant` / `as_sixteenth`).
+            let bounded = |raw: f32, sag: f64| {
+                let eps = raw as f64 + sag;
+                let slack = match node.geo {
+                    Some(_) => node.spread + if eps > 0.0 { sag / eps } else { 0.0 },
+                    None => 0.0,
+                };
+                let gain = eval.gain + slack * eval.gain_slack;
+                let rho_norm = projected_error_px(eps, z, gain, 1.0);
                 NodeEval {
                     eps,
                     rho_px: rho_norm * self.tau_max,
                     rho_norm,
                     gain: eval.gain,
+                    gain_slack: eval.gain_slack,
                 }
             };
-            // As `as_quadrant` and `as_sixteenth` form them on the plane (no slack).
-            let quadrant = bounded((
-                self.bake.coarse_eps(level - 1, cx, cy) as f64 + node_sag,
-                0.0,
-            ));
-            let sub = bounded((
-                self.bake.fine_eps(level - 1, cx, cy) as f64 + parent_sag,
-                0.0,
-            ));
+            let quadrant = bounded(self.bake.coarse_eps(level - 1, cx, cy), node.sag);
+            let sub = bounded(self.bake.fine_eps(level - 1, cx, cy), parent.sag);
             *q = Quadrant::Seen {
                 q: quadrant,
                 own: quadrant,
@@ -559,7 +455,54 @@ impl Frame<'_> {
         out
     }
 
-    /// On the plane, before split node (level, tx, ty)'s children are drawn or walked
+    /// The children of node (level, tx, ty) that meets τ itself, for [`choose_parts`]: bounded
+    /// from its box ([`Self::quadrants_within`]); where that finds the node best drawn whole,
+    /// each child that came within [`HYBRID_REACH`] of τ as a sixteenth is evaluated exactly
+    /// too (its own box and gain, [`Self::evaluate_quadrant`]) and each of its bounds taken
+    /// the smaller of the two — both hold — or the child dropped where no view sees it.
+    pub(super) fn quadrants_meeting(
+        &self,
+        eval: &NodeEval,
+        node: &NodeFixed,
+        parent: &NodeFixed,
+        level: u32,
+        tx: u32,
+        ty: u32,
+    ) -> [Quadrant; 4] {
+        let mut quads = self.quadrants_within(eval, node, parent, level, tx, ty);
+        if !matches!(choose_parts(&quads, true, self.costs), Parts::Whole(_)) {
+            return quads;
+        }
+        for (k, quad) in quads.iter_mut().enumerate() {
+            let Quadrant::Seen {
+                q, sub: Some(sub), ..
+            } = quad
+            else {
+                continue;
+            };
+            if sub.rho_norm <= 1.0 || sub.rho_norm > HYBRID_REACH {
+                continue;
+            }
+            let (cx, cy) = (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1));
+            let tighter = |a: &mut NodeEval, b: NodeEval| {
+                if b.rho_norm < a.rho_norm {
+                    (a.rho_px, a.rho_norm) = (b.rho_px, b.rho_norm);
+                }
+            };
+            match self.evaluate_quadrant(node, Some(parent), level - 1, cx, cy) {
+                None => *quad = Quadrant::Unseen,
+                Some((eq, _, es)) => {
+                    tighter(q, eq);
+                    if let Some(es) = es {
+                        tighter(sub, es);
+                    }
+                }
+            }
+        }
+        quads
+    }
+
+    /// Before split node (level, tx, ty)'s children are drawn or walked
     /// (`node` its fixed values): a child that missed τ as a quadrant by its own box but
     /// meets τ itself, and whose children (when `splittable`) all meet τ as sixteenths
     /// bounded from its box ([`Self::quadrants_within`]), meets τ at this node's resolution
@@ -577,7 +520,7 @@ impl Frame<'_> {
         splittable: impl Fn(u32, u32) -> bool,
     ) -> [bool; 4] {
         let mut settled = [false; 4];
-        if node.geo.is_some() || !self.sixteenths_below(level - 1) {
+        if !self.sixteenths_below(level - 1) {
             return settled;
         }
         for (k, quad) in quads.iter_mut().enumerate() {
@@ -588,7 +531,8 @@ impl Frame<'_> {
             if q.rho_norm <= 1.0 || own.rho_norm > 1.0 || !splittable(cx, cy) {
                 continue;
             }
-            let kids = self.quadrants_within(own, level - 1, cx, cy);
+            let child = self.fixed(level - 1, cx, cy);
+            let kids = self.quadrants_meeting(own, &child, node, level - 1, cx, cy);
             match choose_parts(&kids, true, self.costs) {
                 Parts::AsQuadrant { rho_px, rho_norm } => {
                     (q.rho_px, q.rho_norm) = (rho_px, rho_norm)
@@ -691,9 +635,7 @@ impl Frame<'_> {
             let node = self.fixed(level, tx, ty);
             let mut settled = [false; 4];
             let quads = match &grand {
-                Some(_) if !split && node.geo.is_none() => {
-                    self.quadrants_within(&eval, level, tx, ty)
-                }
+                Some(g) if !split => self.quadrants_meeting(&eval, &node, g, level, tx, ty),
                 _ => {
                     let mut quads = self.quadrants(&node, grand.as_ref(), level, tx, ty);
                     settled = self.upgrade_quadrants(&mut quads, &node, level, tx, ty, |_, _| {
