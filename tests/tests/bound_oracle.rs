@@ -16,7 +16,7 @@ use aerie::terrain::geodesy::wgs84::{WGS84_A, WGS84_E2};
 use aerie::terrain::geodesy::{GeoGrid, Geodetic};
 use aerie::terrain::load::geographic_spacing_m;
 use aerie::terrain::load_dem;
-use aerie::terrain::select::{select_tiles, SelectParams, Selection, EARTH_RADIUS_M};
+use aerie::terrain::select::{select_tiles, DrawItem, SelectParams, Selection, EARTH_RADIUS_M};
 use aerie::terrain::GeoReference;
 use aerie::terrain::Heightfield;
 use aerie_tests::demo_dem;
@@ -27,6 +27,27 @@ const H: u32 = 180;
 const M: u32 = 17;
 
 /// splitmix64: a small deterministic generator, so failures reproduce.
+/// `any` drawn items of `sel` at random, and `parts` each of its quadrants drawn at their
+/// parent's resolution and of its sixteenths drawn at their grandparent's (fewer where fewer).
+fn sample_items(sel: &Selection, rng: &mut Rng, any: usize, parts: usize) -> Vec<DrawItem> {
+    let pick = |rng: &mut Rng, items: &[&DrawItem]| {
+        *items[(rng.next() * items.len() as f64) as usize % items.len()]
+    };
+    let all: Vec<&DrawItem> = sel.items.iter().collect();
+    let mut sample: Vec<DrawItem> = (0..all.len().min(any)).map(|_| pick(rng, &all)).collect();
+    for up in [1, 2] {
+        let kind: Vec<&DrawItem> = all
+            .iter()
+            .copied()
+            .filter(|i| i.morph.levels_up() == up)
+            .collect();
+        for _ in 0..kind.len().min(parts) {
+            sample.push(pick(rng, &kind));
+        }
+    }
+    sample
+}
+
 struct Rng(u64);
 impl Rng {
     fn next(&mut self) -> f64 {
@@ -231,20 +252,7 @@ fn every_drawn_tile_is_within_tau_for_a_thousand_random_cameras() {
         // A sample of the drawn tiles per camera (all of them would take minutes in debug), and
         // as many of the quadrants drawn at their parent's resolution and of the sixteenths
         // drawn at their grandparent's.
-        let n = sel.items.len();
-        let mut sample: Vec<_> = (0..n.min(6))
-            .map(|_| sel.items[(rng.next() * n as f64) as usize % n])
-            .collect();
-        for up in [1, 2] {
-            let parts: Vec<_> = sel
-                .items
-                .iter()
-                .filter(|i| i.morph.levels_up() == up)
-                .collect();
-            for _ in 0..parts.len().min(6) {
-                sample.push(*parts[(rng.next() * parts.len() as f64) as usize % parts.len()]);
-            }
-        }
+        let sample = sample_items(&sel, &mut rng, 6, 6);
         for item in sample {
             // The node is drawn as the level-`node_level` surface over its own tile, a quadrant
             // as its parent's, a sixteenth as its grandparent's.
@@ -554,20 +562,7 @@ fn geodetic_oracle(scenes: &[GeoScene], cameras: usize, seed: u64, what: &str) -
             "{}: camera {k} has unbounded tiles",
             g.s.name
         );
-        let n = sel.items.len();
-        let mut sample: Vec<_> = (0..n.min(6))
-            .map(|_| sel.items[(rng.next() * n as f64) as usize % n])
-            .collect();
-        for up in [1, 2] {
-            let parts: Vec<_> = sel
-                .items
-                .iter()
-                .filter(|i| i.morph.levels_up() == up)
-                .collect();
-            for _ in 0..parts.len().min(3) {
-                sample.push(*parts[(rng.next() * parts.len() as f64) as usize % parts.len()]);
-            }
-        }
+        let sample = sample_items(&sel, &mut rng, 6, 3);
         for item in sample {
             // A quadrant is drawn as its parent's surface, a sixteenth as its grandparent's.
             let drawn = item.node_level + item.morph.levels_up();

@@ -64,6 +64,16 @@ pub(super) fn has_terrain(bake: &ErrorBake, level: u32, tx: u32, ty: u32) -> boo
     tx < t.tiles_x && ty < t.tiles_y && t.terrain[(ty * t.tiles_x + tx) as usize]
 }
 
+/// (ε, slack) of a node drawn at an ancestor's resolution: `raw` the bake's ε of that level's
+/// surface over the node, plus the drawn cell's `sag`; on the ellipsoid the normals' `spread`
+/// plus that sag relative to ε (as [`Frame::compute_fixed`] forms a node's own).
+#[inline]
+fn drawn_at(raw: f32, sag: f64, spread: Option<f64>) -> (f64, f64) {
+    let eps = raw as f64 + sag;
+    let slack = spread.map_or(0.0, |s| s + if eps > 0.0 { sag / eps } else { 0.0 });
+    (eps, slack)
+}
+
 /// Context shared by every tile of a frame.
 pub(super) struct Frame<'a> {
     /// Distance mode: nodes split last frame, and the set being filled this frame.
@@ -255,12 +265,8 @@ impl Frame<'_> {
         tx: u32,
         ty: u32,
     ) -> (f64, f64) {
-        let eps = self.bake.fine_eps(level, tx, ty) as f64 + grand.sag;
-        let slack = match grand.geo {
-            Some(_) => grand.spread + if eps > 0.0 { grand.sag / eps } else { 0.0 },
-            None => 0.0,
-        };
-        (eps, slack)
+        let spread = grand.geo.map(|_| grand.spread);
+        drawn_at(self.bake.fine_eps(level, tx, ty), grand.sag, spread)
     }
 
     /// (ε, slack) of node (level, tx, ty) drawn at its parent's resolution, `parent` being
@@ -275,12 +281,8 @@ impl Frame<'_> {
         tx: u32,
         ty: u32,
     ) -> (f64, f64) {
-        let eps = self.bake.coarse_eps(level, tx, ty) as f64 + parent.sag;
-        let slack = match parent.geo {
-            Some(_) => parent.spread + if eps > 0.0 { parent.sag / eps } else { 0.0 },
-            None => 0.0,
-        };
-        (eps, slack)
+        let spread = parent.geo.map(|_| parent.spread);
+        drawn_at(self.bake.coarse_eps(level, tx, ty), parent.sag, spread)
     }
 
     /// [`Self::evaluate`] of the node `node` drawn at level `drawn`'s resolution (its own, or
@@ -429,11 +431,7 @@ impl Frame<'_> {
             };
             // ε at a drawn level with that level's sag (as `as_quadrant` / `as_sixteenth`).
             let bounded = |raw: f32, sag: f64| {
-                let eps = raw as f64 + sag;
-                let slack = match node.geo {
-                    Some(_) => node.spread + if eps > 0.0 { sag / eps } else { 0.0 },
-                    None => 0.0,
-                };
+                let (eps, slack) = drawn_at(raw, sag, node.geo.map(|_| node.spread));
                 let gain = eval.gain + slack * eval.gain_slack;
                 let rho_norm = projected_error_px(eps, z, gain, 1.0);
                 NodeEval {
