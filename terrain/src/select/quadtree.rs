@@ -9,6 +9,7 @@ use crate::clipmap::{ring_tiles, ClipmapDesc, LevelPlacement};
 
 use super::bound::frustum_vertical_gain;
 use super::cdlod_morph::Morph;
+use super::node_cache::NodeFixed;
 use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant};
 use super::selection::{
     AllReady, DrawItem, LevelStats, LodMode, SelectParams, Selection, TileReadiness, View,
@@ -183,7 +184,8 @@ pub fn select_tiles_multi_ready(
                     .push(DrawItem::whole(level, tx, ty, eps as f32, rho as f32));
                 continue;
             }
-            out.unbounded += refine_ring_tile(&frame, level, tx, ty, eval, i, &mut nodes, out);
+            out.unbounded +=
+                refine_ring_tile(&frame, level, tx, ty, eval, None, i, &mut nodes, out);
         }
     }
     out.hidden = frame.hidden.get();
@@ -203,6 +205,7 @@ fn refine_ring_tile(
     tx: u32,
     ty: u32,
     eval: NodeEval,
+    parent: Option<NodeFixed>,
     level_index: usize,
     nodes: &mut Vec<(u32, u32, u32, f32, f32)>,
     out: &mut Selection,
@@ -210,7 +213,7 @@ fn refine_ring_tile(
     let cap = frame.params.max_refinement.min(level).min(MAX_REFINEMENT);
     nodes.clear();
     frame.quadrants.borrow_mut().clear();
-    let missed = frame.subdivide_seen(level, tx, ty, eval, level - cap, None, nodes);
+    let missed = frame.subdivide_seen(level, tx, ty, eval, level - cap, parent, nodes);
     let first = out.items.len();
     out.push_refined(level_index, level, tx, ty, nodes);
     for &(k, morph) in frame.quadrants.borrow().iter() {
@@ -384,7 +387,11 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
         out.levels[i].drawn += 1;
         // Waiting for finer texels, the node is refined from the pools instead: beyond the
         // cap it is late for streaming, not a tile the cap leaves unbounded.
-        let missed = refine_ring_tile(frame, level, tx, ty, eval, i, &mut nodes, out);
+        // A node that missed τ as its parent's quadrant: its children may be that parent's
+        // sixteenths, from the pools.
+        let parent = (known.is_some() && retry && frame.sixteenths_below(level))
+            .then(|| frame.fixed(level + 1, tx / 2, ty / 2));
+        let missed = refine_ring_tile(frame, level, tx, ty, eval, parent, i, &mut nodes, out);
         if waiting {
             out.stream_late += (missed > 0) as u32;
         } else {
