@@ -1,5 +1,5 @@
 //! The fast selection (cached node values kept across frames, reused vectors, the fused corner
-//! pass) selects exactly what the reference evaluation does, on random cameras over flat and
+//! pass, the children a parent's upgrade formed taken instead of formed again) selects exactly what the reference evaluation does, on random cameras over flat and
 //! geographic data, one and two channels, with one `Selection` kept across all of them (so the
 //! cache also meets dataset changes).
 

@@ -34,6 +34,19 @@ pub(super) enum Quadrant {
     },
 }
 
+/// What [`Frame::upgrade_quadrants`](super::walk::Frame::upgrade_quadrants) found of a child
+/// that missed τ as a quadrant but meets it itself, its children bounded from its box.
+#[derive(Clone, Copy)]
+pub(super) enum Upgrade {
+    /// Not tried (or drawn as a quadrant after all): nothing to remember.
+    Untried,
+    /// Best drawn whole: walked, it need not be tried in parts again.
+    Whole,
+    /// Best drawn child by child, with these children: walked, it takes them instead of
+    /// bounding them again (the same call on the same values).
+    Children([Quadrant; 4]),
+}
+
 /// What one more instance costs beside its triangles (its ~450-byte record, its vertex
 /// setup), weighed in triangles: at 64 the lavapipe suite's Inn valley and Northern England
 /// flights drew the same triangles at equal error (within 2 %) as at 0, with 17 % fewer

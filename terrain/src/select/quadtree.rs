@@ -9,13 +9,12 @@ use crate::clipmap::{ring_tiles, ClipmapDesc, LevelPlacement};
 
 use super::bound::frustum_vertical_gain;
 use super::cdlod_morph::Morph;
-use super::node_cache::NodeFixed;
-use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant};
+use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant, Upgrade};
 use super::selection::{
     AllReady, DrawItem, LevelStats, LodMode, SelectParams, Selection, TileReadiness, View,
     MAX_REFINEMENT,
 };
-use super::walk::{has_terrain, Frame, Grid, ViewCtx};
+use super::walk::{has_terrain, Frame, Grid, TryParts, ViewCtx};
 
 /// Selects the tiles to draw for one camera. `placements` come from `clipmap::place_levels`
 /// (finest first). Reuses `out`'s allocations.
@@ -205,7 +204,7 @@ fn refine_ring_tile(
     tx: u32,
     ty: u32,
     eval: NodeEval,
-    parent: Option<NodeFixed>,
+    retry: Option<TryParts>,
     level_index: usize,
     nodes: &mut Vec<(u32, u32, u32, f32, f32)>,
     out: &mut Selection,
@@ -213,7 +212,7 @@ fn refine_ring_tile(
     let cap = frame.params.max_refinement.min(level).min(MAX_REFINEMENT);
     nodes.clear();
     frame.quadrants.borrow_mut().clear();
-    let missed = frame.subdivide_seen(level, tx, ty, eval, level - cap, parent, nodes);
+    let missed = frame.subdivide_seen(level, tx, ty, eval, level - cap, retry, nodes);
     let first = out.items.len();
     out.push_refined(level_index, level, tx, ty, nodes);
     for &(k, morph) in frame.quadrants.borrow().iter() {
@@ -237,16 +236,23 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
     let mut nodes = Vec::new();
     let top = placements.len() - 1;
     // Nodes to visit, with their evaluation when a quadrant test made it already, and whether
-    // they may still be tried in parts (see `Frame::upgrade_quadrants`).
-    let mut stack: Vec<(usize, u32, u32, Option<NodeEval>, bool)> = (0..roots.tiles_y)
+    // they may still be tried in parts (see `Frame::upgrade_quadrants`); the children that
+    // test formed, by index.
+    let mut stack: Vec<(usize, u32, u32, Option<NodeEval>, Retry)> = (0..roots.tiles_y)
         .rev()
         .flat_map(|ty| {
             (0..roots.tiles_x)
                 .rev()
-                .map(move |tx| (top, tx, ty, None, true))
+                .map(move |tx| (top, tx, ty, None, Retry::Yes))
         })
         .collect();
+    let mut formed: Vec<[Quadrant; 4]> = Vec::new();
     while let Some((i, tx, ty, known, retry)) = stack.pop() {
+        let kids = match retry {
+            Retry::Formed(k) => frame.formed(Some(formed[k as usize])),
+            _ => None,
+        };
+        let retry = !matches!(retry, Retry::No);
         let level = placements[i].level;
         if !has_terrain(frame.bake, level, tx, ty) {
             continue;
@@ -298,7 +304,7 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
             if children_ready {
                 if !frame.params.parent_quadrants {
                     for (cx, cy) in children {
-                        stack.push((i - 1, cx, cy, None, true));
+                        stack.push((i - 1, cx, cy, None, Retry::Yes));
                     }
                     continue;
                 }
@@ -306,12 +312,13 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                 // fully morphed onto this node's grid), and as a sixteenth of the parent; then
                 // the fewest triangles that meet τ.
                 let parent = frame.fixed(level, tx, ty);
-                let mut settled = [false; 4];
+                let mut found = [Upgrade::Untried; 4];
                 let quads = match &grand {
-                    // Meeting τ itself: its children bounded from its box alone.
-                    Some(g) if rho_norm <= 1.0 => {
+                    // Meeting τ itself: its children bounded from its box alone (or formed
+                    // so already, by its parent's upgrade).
+                    Some(g) if rho_norm <= 1.0 => kids.unwrap_or_else(|| {
                         frame.quadrants_meeting(&eval, &parent, g, level, tx, ty)
-                    }
+                    }),
                     _ => {
                         let mut quads = frame.quadrants(&parent, grand.as_ref(), level, tx, ty);
                         let grandchildren_ready = |cx: u32, cy: u32| {
@@ -323,7 +330,7 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                                         || frame.ready.is_ready(level - 2, gx, gy)
                                 })
                         };
-                        settled = frame.upgrade_quadrants(
+                        found = frame.upgrade_quadrants(
                             &mut quads,
                             &parent,
                             level,
@@ -372,7 +379,15 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                             push_drawn(out, i - 1, drawn(q, Morph::QUADRANT));
                         }
                         Quadrant::Seen { own, .. } => {
-                            stack.push((i - 1, cx, cy, Some(own), !settled[k]))
+                            let retry = match found[k] {
+                                Upgrade::Whole => Retry::No,
+                                Upgrade::Untried => Retry::Yes,
+                                Upgrade::Children(kids) => {
+                                    formed.push(kids);
+                                    Retry::Formed(formed.len() as u32 - 1)
+                                }
+                            };
+                            stack.push((i - 1, cx, cy, Some(own), retry))
                         }
                     }
                 }
@@ -389,9 +404,11 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
         // cap it is late for streaming, not a tile the cap leaves unbounded.
         // A node that missed τ as its parent's quadrant: its children may be that parent's
         // sixteenths, from the pools.
-        let parent = (known.is_some() && retry && frame.sixteenths_below(level))
-            .then(|| frame.fixed(level + 1, tx / 2, ty / 2));
-        let missed = refine_ring_tile(frame, level, tx, ty, eval, parent, i, &mut nodes, out);
+        let retry = (known.is_some() && retry && frame.sixteenths_below(level)).then(|| TryParts {
+            parent: frame.fixed(level + 1, tx / 2, ty / 2),
+            kids,
+        });
+        let missed = refine_ring_tile(frame, level, tx, ty, eval, retry, i, &mut nodes, out);
         if waiting {
             out.stream_late += (missed > 0) as u32;
         } else {
@@ -405,7 +422,16 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
     }
 }
 
-/// Whether level-ℓ tile (tx, ty) lies in `placement`'s patch (ℓ = placement.level).
+/// Whether a node on the coarsest-first walk's stack, evaluated as its parent's quadrant, may
+/// still be tried in parts ([`Frame::upgrade_quadrants`]): no (found best drawn whole), yes,
+/// or yes with its children formed already (by index in the walk's table of them).
+#[derive(Clone, Copy)]
+enum Retry {
+    No,
+    Yes,
+    Formed(u32),
+}
+
 /// `item` drawn as a node of `out.levels[i]`: counted considered, drawn, unrefined.
 fn push_drawn(out: &mut Selection, i: usize, item: DrawItem) {
     let stats = &mut out.levels[i];
@@ -416,6 +442,7 @@ fn push_drawn(out: &mut Selection, i: usize, item: DrawItem) {
     out.items.push(item);
 }
 
+/// Whether level-ℓ tile (tx, ty) lies in `placement`'s patch (ℓ = placement.level).
 fn inside_patch(placement: &LevelPlacement, tx: u32, ty: u32) -> bool {
     let n = placement.patch_tiles as i64;
     let [ox, oy] = placement.patch_origin;

@@ -14,7 +14,7 @@ use super::bound::{
 };
 use super::cdlod_morph::Morph;
 use super::node_cache::{NodeCache, NodeFixed};
-use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant, HYBRID_REACH};
+use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant, Upgrade, HYBRID_REACH};
 use super::selection::{LodMode, SelectParams, TileReadiness};
 
 #[cfg(test)]
@@ -74,6 +74,15 @@ fn drawn_at(raw: f32, sag: f64, spread: Option<f64>) -> (f64, f64) {
     (eps, slack)
 }
 
+/// A node that missed τ as its parent's quadrant but may still be drawn in parts: its
+/// parent's fixed values (its children may be that parent's sixteenths) and, when
+/// [`Frame::upgrade_quadrants`] bounded its children already, those.
+#[derive(Clone, Copy)]
+pub(super) struct TryParts {
+    pub(super) parent: NodeFixed,
+    pub(super) kids: Option<[Quadrant; 4]>,
+}
+
 /// Context shared by every tile of a frame.
 pub(super) struct Frame<'a> {
     /// Distance mode: nodes split last frame, and the set being filled this frame.
@@ -126,6 +135,17 @@ impl Frame<'_> {
             Some(&d) => d,
             None => self.grid.cell_diagonal(level_drawn),
         }
+    }
+
+    /// The children [`Self::upgrade_quadrants`] formed for a node, to be taken instead of
+    /// formed again — except on the reference path (tests), which forms them afresh, so the
+    /// equivalence tests check that taking them changes nothing.
+    pub(super) fn formed(&self, kids: Option<[Quadrant; 4]>) -> Option<[Quadrant; 4]> {
+        #[cfg(test)]
+        if self.reference {
+            return None;
+        }
+        kids
     }
 
     /// On the plane, the curvature slack of a level-`level` cell (0 without curvature).
@@ -503,11 +523,12 @@ impl Frame<'_> {
     /// Before split node (level, tx, ty)'s children are drawn or walked
     /// (`node` its fixed values): a child that missed τ as a quadrant by its own box but
     /// meets τ itself, and whose children (when `splittable`) all meet τ as sixteenths
-    /// bounded from its box ([`Self::quadrants_within`]), meets τ at this node's resolution
+    /// bounded from its box ([`Self::quadrants_meeting`]), meets τ at this node's resolution
     /// after all — so [`choose_parts`] weighs this node whole against its children with it
     /// (decided later, when the child is walked, it would be drawn as a quadrant beside
-    /// siblings that add up to more than the node whole). Returns which children were found
-    /// best drawn whole that way: walked, they need not be tried in parts again.
+    /// siblings that add up to more than the node whole). Returns what it found of each child
+    /// ([`Upgrade`]): walked, one best drawn whole need not be tried in parts again, and one
+    /// best drawn in parts takes the children formed here.
     pub(super) fn upgrade_quadrants(
         &self,
         quads: &mut [Quadrant; 4],
@@ -516,10 +537,10 @@ impl Frame<'_> {
         tx: u32,
         ty: u32,
         splittable: impl Fn(u32, u32) -> bool,
-    ) -> [bool; 4] {
-        let mut settled = [false; 4];
+    ) -> [Upgrade; 4] {
+        let mut found = [Upgrade::Untried; 4];
         if !self.sixteenths_below(level - 1) {
-            return settled;
+            return found;
         }
         for (k, quad) in quads.iter_mut().enumerate() {
             let Quadrant::Seen { q, own, .. } = quad else {
@@ -535,11 +556,11 @@ impl Frame<'_> {
                 Parts::AsQuadrant { rho_px, rho_norm } => {
                     (q.rho_px, q.rho_norm) = (rho_px, rho_norm)
                 }
-                Parts::Whole(_) => settled[k] = true,
-                Parts::Children => {}
+                Parts::Whole(_) => found[k] = Upgrade::Whole,
+                Parts::Children => found[k] = Upgrade::Children(kids),
             }
         }
-        settled
+        found
     }
 
     /// Distance LOD: split while the eye is within `distance_factor` node sides of the node's
@@ -587,9 +608,9 @@ impl Frame<'_> {
         }
     }
 
-    /// [`Self::subdivide`] of a node some view sees, already evaluated (`eval`). `parent`: its
-    /// parent's fixed values when it missed τ as that parent's quadrant (its children may then
-    /// be drawn as sixteenths of the parent, [`SelectParams::sixteenths`]).
+    /// [`Self::subdivide`] of a node some view sees, already evaluated (`eval`). `retry`: when
+    /// it missed τ as its parent's quadrant, its parent (its children may then be drawn as
+    /// sixteenths of the parent, [`SelectParams::sixteenths`]).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn subdivide_seen(
         &self,
@@ -598,7 +619,7 @@ impl Frame<'_> {
         ty: u32,
         eval: NodeEval,
         finest: u32,
-        parent: Option<NodeFixed>,
+        retry: Option<TryParts>,
         out: &mut Vec<(u32, u32, u32, f32, f32)>,
     ) -> u32 {
         let NodeEval {
@@ -623,7 +644,8 @@ impl Frame<'_> {
             _ => rho_norm > 1.0,
         };
         let quadrants = self.params.parent_quadrants && self.params.mode == LodMode::Bounded;
-        let grand = parent.filter(|_| quadrants && self.sixteenths_below(level));
+        let retry = retry.filter(|_| quadrants && self.sixteenths_below(level));
+        let grand = retry.map(|r| r.parent);
         if (!split && grand.is_none()) || level == finest {
             out.push((level, tx, ty, e as f32, rho as f32));
             return (rho_norm > 1.0 && self.params.mode == LodMode::Bounded) as u32;
@@ -631,12 +653,13 @@ impl Frame<'_> {
         let mut missed = 0;
         if quadrants {
             let node = self.fixed(level, tx, ty);
-            let mut settled = [false; 4];
-            let quads = match &grand {
-                Some(g) if !split => self.quadrants_meeting(&eval, &node, g, level, tx, ty),
+            let mut found = [Upgrade::Untried; 4];
+            let quads = match (&grand, self.formed(retry.and_then(|r| r.kids))) {
+                (Some(_), Some(kids)) if !split => kids,
+                (Some(g), None) if !split => self.quadrants_meeting(&eval, &node, g, level, tx, ty),
                 _ => {
                     let mut quads = self.quadrants(&node, grand.as_ref(), level, tx, ty);
-                    settled = self.upgrade_quadrants(&mut quads, &node, level, tx, ty, |_, _| {
+                    found = self.upgrade_quadrants(&mut quads, &node, level, tx, ty, |_, _| {
                         level - 1 > finest
                     });
                     quads
@@ -672,8 +695,18 @@ impl Frame<'_> {
                     out.push((level - 1, cx, cy, d.eps as f32, d.rho_px as f32));
                     self.quadrants.borrow_mut().push((out.len() - 1, morph));
                 } else {
-                    let parent = (!settled[k]).then_some(node);
-                    missed += self.subdivide_seen(level - 1, cx, cy, own, finest, parent, out);
+                    let retry = match found[k] {
+                        Upgrade::Whole => None,
+                        Upgrade::Untried => Some(TryParts {
+                            parent: node,
+                            kids: None,
+                        }),
+                        Upgrade::Children(kids) => Some(TryParts {
+                            parent: node,
+                            kids: Some(kids),
+                        }),
+                    };
+                    missed += self.subdivide_seen(level - 1, cx, cy, own, finest, retry, out);
                 }
             }
             return missed;
