@@ -36,6 +36,9 @@ pub(super) enum Quadrant {
 
 /// What [`Frame::upgrade_quadrants`](super::walk::Frame::upgrade_quadrants) found of a child
 /// that missed τ as a quadrant but meets it itself, its children bounded from its box.
+// Four of these live on the stack while one node's children are walked; boxing the large
+// variant would allocate per child instead.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy)]
 pub(super) enum Upgrade {
     /// Not tried (or drawn as a quadrant after all): nothing to remember.
