@@ -158,7 +158,8 @@ pub(super) fn vertical_gain_of(corners: &[DVec3; 8], f: &Frustum, w: DVec3) -> f
         if v.z <= 1e-9 {
             return vertical_gain(w, [f.tan_left, f.tan_right], [-f.tan_up, -f.tan_down]);
         }
-        let (a, b) = (v.x / v.z, v.y / v.z);
+        let r = 1.0 / v.z;
+        let (a, b) = (v.x * r, v.y * r);
         (a_lo, a_hi) = (a_lo.min(a), a_hi.max(a));
         (b_lo, b_hi) = (b_lo.min(b), b_hi.max(b));
     }
@@ -205,8 +206,9 @@ pub(super) fn obliquity_of(corners: &[DVec3; 8], f: &Frustum) -> f64 {
         if v.z <= 1e-9 {
             return f.max_obliquity();
         }
-        let a = (v.x / v.z).clamp(f.tan_left, f.tan_right);
-        let b = (v.y / v.z).clamp(-f.tan_up, -f.tan_down);
+        let r = 1.0 / v.z;
+        let a = (v.x * r).clamp(f.tan_left, f.tan_right);
+        let b = (v.y * r).clamp(-f.tan_up, -f.tan_down);
         (a_max, b_max) = (a_max.max(a.abs()), b_max.max(b.abs()));
     }
     (1.0 + a_max * a_max + b_max * b_max).sqrt()
@@ -250,7 +252,7 @@ pub(super) struct CornerPass {
 }
 
 impl CornerPass {
-    /// The pass. The (a, b) ranges — sixteen divisions — are formed only for a box inside the
+    /// The pass. The (a, b) ranges — eight divisions — are formed only for a box inside the
     /// frustum with every corner in front of the eye: a culled box's gains are never read, and
     /// with a corner behind the gains take the whole frustum's ranges.
     pub(super) fn of(c: &ViewCorners, f: &Frustum, near: f64) -> Self {
@@ -275,8 +277,10 @@ impl CornerPass {
             f64::NEG_INFINITY,
         );
         if !outside && !behind {
-            let a: [f64; 8] = std::array::from_fn(|i| c.x[i] / c.z[i]);
-            let b: [f64; 8] = std::array::from_fn(|i| c.y[i] / c.z[i]);
+            // One division per corner (a = x·(1/z), b = y·(1/z)), as the reference forms them.
+            let r: [f64; 8] = std::array::from_fn(|i| 1.0 / c.z[i]);
+            let a: [f64; 8] = std::array::from_fn(|i| c.x[i] * r[i]);
+            let b: [f64; 8] = std::array::from_fn(|i| c.y[i] * r[i]);
             for i in 0..8 {
                 (a_lo, a_hi) = (a_lo.min(a[i]), a_hi.max(a[i]));
                 (b_lo, b_hi) = (b_lo.min(b[i]), b_hi.max(b[i]));
