@@ -214,6 +214,36 @@ pub(super) fn obliquity_of(corners: &[DVec3; 8], f: &Frustum) -> f64 {
     (1.0 + a_max * a_max + b_max * b_max).sqrt()
 }
 
+/// The least vertical gain anywhere in the frustum: no box's gain ([`vertical_gain_of`], its
+/// ranges clamped to the frustum or the whole frustum's) is below it. Each squared component
+/// is least where its own variable comes nearest to making it vanish.
+pub(super) fn frustum_gain_floor(f: &Frustum, w: DVec3) -> f64 {
+    let least = |wc: f64, lo: f64, hi: f64| {
+        let t = if w.z != 0.0 {
+            (wc / w.z).clamp(lo, hi)
+        } else {
+            lo
+        };
+        (wc - t * w.z).powi(2)
+    };
+    (least(w.x, f.tan_left, f.tan_right) + least(w.y, -f.tan_up, -f.tan_down)).sqrt()
+}
+
+/// Whether a box with these view-space corners is culled: [`CornerPass::of`]'s `outside`, the
+/// same comparisons, without the depth and the gain's divisions.
+pub(super) fn corners_outside(c: &ViewCorners, f: &Frustum, near: f64) -> bool {
+    let [mut n, mut r, mut l, mut u, mut d] = [true; 5];
+    for i in 0..8 {
+        let (x, y, z) = (c.x[i], c.y[i], c.z[i]);
+        n &= z < near;
+        r &= x > f.tan_right * z;
+        l &= x < f.tan_left * z;
+        u &= -y > f.tan_up * z;
+        d &= -y < f.tan_down * z;
+    }
+    n || r || l || u || d
+}
+
 fn vertical_gain(w: DVec3, a: [f64; 2], b: [f64; 2]) -> f64 {
     let gx = a.map(|a| (w.x - a * w.z).powi(2));
     let gy = b.map(|b| (w.y - b * w.z).powi(2));

@@ -5,7 +5,7 @@
 
 use glam::DVec3;
 
-use super::walk::reference::with_reference;
+use super::walk::reference::{with_every_hybrid, with_reference};
 use super::*;
 use crate::bake::{bake, BakeParams, ErrorBake};
 use crate::camera::{Attitude, Camera, Frustum};
@@ -187,6 +187,42 @@ fn the_fast_selection_equals_the_reference_on_random_cameras_flat_and_geographic
     }
     assert!(drawn > 1000, "the cameras saw too little: {drawn} items");
     assert!(!fast.node_cache.is_empty());
+}
+
+/// Skipping the exact evaluations of children within reach that could change nothing
+/// (`Frame::gain_floor`, one view on the plane) draws the same nodes in the same parts, each
+/// with a bound no tighter than the exact one.
+#[test]
+fn skipping_exact_evaluations_that_change_nothing_draws_the_same() {
+    let s = scene(false);
+    let mut rng = Rng(0x15_06);
+    let (mut fast, mut every) = (Selection::default(), Selection::default());
+    let (mut looser, mut drawn) = (0, 0);
+    for k in 0..160 {
+        let params = SelectParams {
+            coarsen: k % 4 != 3,
+            tau_px: [0.5, 1.0, 3.0][k % 3],
+            max_refinement: 5,
+            ..SelectParams::default()
+        };
+        let cams = [random_camera(&mut rng, &s)];
+        select(&s, &cams, &params, &mut fast);
+        with_every_hybrid(|| select(&s, &cams, &params, &mut every));
+        let what = format!("camera {k}");
+        assert_eq!(fast.items.len(), every.items.len(), "{what}: items");
+        for (a, b) in fast.items.iter().zip(&every.items) {
+            let bare = |i: &DrawItem| DrawItem { rho_px: 0.0, ..*i };
+            assert_eq!(bare(a), bare(b), "{what}: item");
+            assert!(a.rho_px >= b.rho_px, "{what}: {} < {}", a.rho_px, b.rho_px);
+            looser += (a.rho_px > b.rho_px) as usize;
+        }
+        assert_eq!(fast.levels, every.levels, "{what}: level statistics");
+        assert_eq!(fast.unbounded, every.unbounded, "{what}: unbounded");
+        drawn += fast.items.len();
+    }
+    // The skip happened (some bounds stayed looser) on cameras that saw enough.
+    assert!(drawn > 1000, "the cameras saw too little: {drawn} items");
+    assert!(looser > 0, "no evaluation was skipped");
 }
 
 /// Copying a selection copies what was selected, never the node cache: a clone starts with

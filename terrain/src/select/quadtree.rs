@@ -7,7 +7,7 @@ use crate::bake::ErrorBake;
 use crate::camera::Camera;
 use crate::clipmap::{ring_tiles, ClipmapDesc, LevelPlacement};
 
-use super::bound::frustum_vertical_gain;
+use super::bound::{frustum_gain_floor, frustum_vertical_gain};
 use super::cdlod_morph::Morph;
 use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant, Upgrade};
 use super::selection::{
@@ -105,6 +105,14 @@ pub fn select_tiles_multi_ready(
     }
     let grid = Grid::of(bake);
     let tau_max = views.iter().map(|v| v.tau).fold(0.0, f64::max);
+    let gain_floor = match views.as_slice() {
+        [v] if params.earth.is_none() && !cull_hidden => {
+            Some(v.focal * frustum_gain_floor(&v.camera.frustum, v.up) / v.tau)
+        }
+        _ => None,
+    };
+    #[cfg(test)]
+    let gain_floor = gain_floor.filter(|_| !super::walk::reference::every_hybrid());
     let frame = Frame {
         split_prev: distance.then_some(&split_prev),
         split_now: distance.then_some(&split_now),
@@ -124,6 +132,7 @@ pub fn select_tiles_multi_ready(
         quadrants: std::cell::RefCell::new(Vec::new()),
         costs: MeshCosts::of(grid.q),
         tau_max,
+        gain_floor,
     };
 
     if params.mode == LodMode::Bounded && params.coarsen {

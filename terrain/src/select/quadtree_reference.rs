@@ -12,6 +12,21 @@ use super::{Frame, NodeEval, NodeFixed};
 
 thread_local! {
     static REFERENCE: Cell<bool> = const { Cell::new(false) };
+    static EVERY_HYBRID: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Whether selections on this thread evaluate exactly every child `Frame::quadrants_meeting`
+/// finds within reach (no `Frame::gain_floor` skip).
+pub(in crate::select) fn every_hybrid() -> bool {
+    EVERY_HYBRID.with(|r| r.get())
+}
+
+/// Runs `f` with the selections on this thread evaluating every child within reach exactly.
+pub(crate) fn with_every_hybrid<T>(f: impl FnOnce() -> T) -> T {
+    EVERY_HYBRID.with(|r| r.set(true));
+    let t = f();
+    EVERY_HYBRID.with(|r| r.set(false));
+    t
 }
 
 /// Whether selections on this thread take the reference path now.

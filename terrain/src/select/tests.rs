@@ -1,6 +1,6 @@
 use glam::{DVec2, DVec3};
 
-use super::bound::outside_of;
+use super::bound::{corners_outside, frustum_gain_floor, outside_of, view_corners};
 use super::*;
 use crate::camera::{Attitude, Camera, Frustum};
 use crate::clipmap::ClipmapDesc;
@@ -121,6 +121,37 @@ fn vertical_gain_bounds_vertical_errors_on_screen() {
         assert_eq!(
             outside_of(&corners, &cam.frustum, cam.near),
             crate::tiles::outside_frustum(&cam, &aabb)
+        );
+        let fused = view_corners(&cam.world_to_view(), &aabb);
+        assert_eq!(
+            corners_outside(&fused, &cam.frustum, cam.near),
+            outside_of(&corners, &cam.frustum, cam.near)
+        );
+        // No box's gain is below the frustum's least.
+        let up = cam.world_to_view_rotation() * DVec3::Z;
+        let floor = frustum_gain_floor(&cam.frustum, up);
+        assert!(floor <= g, "floor {floor} above gain {g}");
+        // And it is the least: a grid over the frustum comes within its spacing of it.
+        let f = &cam.frustum;
+        let n = 40;
+        let (sa, sb) = (
+            (f.tan_right - f.tan_left) / n as f64,
+            (f.tan_up - f.tan_down) / n as f64,
+        );
+        let least = (0..=n)
+            .flat_map(|i| (0..=n).map(move |j| (i, j)))
+            .map(|(i, j)| {
+                let (a, b) = (f.tan_left + sa * i as f64, -f.tan_up + sb * j as f64);
+                ((up.x - a * up.z).powi(2) + (up.y - b * up.z).powi(2)).sqrt()
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            floor <= least + 1e-12,
+            "floor {floor} above the grid's {least}"
+        );
+        assert!(
+            least - floor <= (sa + sb) * up.z.abs() + 1e-12,
+            "floor {floor} far below the grid's {least}"
         );
         assert!(g <= box_obliquity_reference(&cam, &aabb) + 1e-12);
         let (fx, fy) = cam.frustum.focal_px(w, h);

@@ -9,8 +9,8 @@ use crate::camera::Camera;
 use crate::tiles::Aabb;
 
 use super::bound::{
-    curvature_interpolation_error, frustum_spread_gain, min_view_depth_of, projected_error_px,
-    tile_aabb, view_corners, CornerPass,
+    corners_outside, curvature_interpolation_error, frustum_spread_gain, min_view_depth_of,
+    projected_error_px, tile_aabb, view_corners, CornerPass,
 };
 use super::cdlod_morph::Morph;
 use super::node_cache::{NodeCache, NodeFixed};
@@ -112,6 +112,10 @@ pub(super) struct Frame<'a> {
     pub(super) costs: MeshCosts,
     /// The largest τ of the views (px).
     pub(super) tau_max: f64,
+    /// One view on the plane, no horizon culling: f·g/τ for the least vertical gain g in its
+    /// frustum ([`super::bound::frustum_gain_floor`]), what bounds an exact evaluation from
+    /// below (see [`Frame::quadrants_meeting`]).
+    pub(super) gain_floor: Option<f64>,
 }
 
 /// One channel's camera with what the bound needs from it.
@@ -478,6 +482,13 @@ impl Frame<'_> {
     /// each child that came within [`HYBRID_REACH`] of τ as a sixteenth is evaluated exactly
     /// too (its own box and gain, [`Self::evaluate_quadrant`]) and each of its bounds taken
     /// the smaller of the two — both hold — or the child dropped where no view sees it.
+    ///
+    /// Not where the exact evaluation could change nothing ([`Self::gain_floor`]): with one
+    /// view on the plane the two share ε and depth, so they differ by the gain alone, and the
+    /// child's gain is at least the frustum's least — a child whose bounds, scaled by that
+    /// least gain over the node's, still miss τ as a sixteenth (and as a quadrant, unless it
+    /// meets τ so already), and that the view does not cull, keeps what it meets τ as. Only
+    /// its ρ stays the looser bound.
     pub(super) fn quadrants_meeting(
         &self,
         eval: &NodeEval,
@@ -502,6 +513,16 @@ impl Frame<'_> {
                 continue;
             }
             let (cx, cy) = (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1));
+            if let Some(floor) = self.gain_floor {
+                // Above 1 by more than rounding, scaled down to the least gain.
+                let misses = |r: f64| r * (floor / eval.gain) > 1.0 + 1e-9;
+                if misses(sub.rho_norm)
+                    && (q.rho_norm <= 1.0 || misses(q.rho_norm))
+                    && !self.culls(node, level - 1, cx, cy, level + 1)
+                {
+                    continue;
+                }
+            }
             let tighter = |a: &mut NodeEval, b: NodeEval| {
                 if b.rho_norm < a.rho_norm {
                     (a.rho_px, a.rho_norm) = (b.rho_px, b.rho_norm);
@@ -518,6 +539,21 @@ impl Frame<'_> {
             }
         }
         quads
+    }
+
+    /// Whether the one view culls node (level, tx, ty) drawn at level `drawn` ([`Self::aabb`]'s
+    /// box, the cull [`Self::evaluate_as`] does), `parent` its parent's fixed values (on the
+    /// plane; only with [`Self::gain_floor`]).
+    fn culls(&self, parent: &NodeFixed, level: u32, tx: u32, ty: u32, drawn: u32) -> bool {
+        debug_assert!(parent.geo.is_none() && self.views.len() == 1);
+        let v = &self.views[0];
+        let node = self.fixed(level, tx, ty);
+        let aabb = self.aabb(drawn, &node, v.camera.position);
+        corners_outside(
+            &view_corners(&v.to_view, &aabb),
+            &v.camera.frustum,
+            v.camera.near,
+        )
     }
 
     /// Before split node (level, tx, ty)'s children are drawn or walked
