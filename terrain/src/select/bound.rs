@@ -229,21 +229,6 @@ pub(super) fn frustum_gain_floor(f: &Frustum, w: DVec3) -> f64 {
     (least(w.x, f.tan_left, f.tan_right) + least(w.y, -f.tan_up, -f.tan_down)).sqrt()
 }
 
-/// Whether a box with these view-space corners is culled: [`CornerPass::of`]'s `outside`, the
-/// same comparisons, without the depth and the gain's divisions.
-pub(super) fn corners_outside(c: &ViewCorners, f: &Frustum, near: f64) -> bool {
-    let [mut n, mut r, mut l, mut u, mut d] = [true; 5];
-    for i in 0..8 {
-        let (x, y, z) = (c.x[i], c.y[i], c.z[i]);
-        n &= z < near;
-        r &= x > f.tan_right * z;
-        l &= x < f.tan_left * z;
-        u &= -y > f.tan_up * z;
-        d &= -y < f.tan_down * z;
-    }
-    n || r || l || u || d
-}
-
 fn vertical_gain(w: DVec3, a: [f64; 2], b: [f64; 2]) -> f64 {
     let gx = a.map(|a| (w.x - a * w.z).powi(2));
     let gy = b.map(|b| (w.y - b * w.z).powi(2));
@@ -286,6 +271,12 @@ impl CornerPass {
     /// frustum with every corner in front of the eye: a culled box's gains are never read, and
     /// with a corner behind the gains take the whole frustum's ranges.
     pub(super) fn of(c: &ViewCorners, f: &Frustum, near: f64) -> Self {
+        Self::cull_and_depth(c, f, near).with_ranges(c)
+    }
+
+    /// The pass's first half: the cull, the smallest depth and whether a corner is behind the
+    /// eye, without the (a, b) ranges ([`Self::with_ranges`] forms them).
+    pub(super) fn cull_and_depth(c: &ViewCorners, f: &Frustum, near: f64) -> Self {
         let mut z_min = f64::INFINITY;
         let [mut n, mut r, mut l, mut u, mut d] = [true; 5];
         let mut behind = false;
@@ -299,30 +290,29 @@ impl CornerPass {
             d &= -y < f.tan_down * z;
             behind |= z <= 1e-9;
         }
-        let outside = n || r || l || u || d;
-        let (mut a_lo, mut a_hi, mut b_lo, mut b_hi) = (
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        );
-        if !outside && !behind {
+        Self {
+            outside: n || r || l || u || d,
+            z_min,
+            behind,
+            a: [f64::INFINITY, f64::NEG_INFINITY],
+            b: [f64::INFINITY, f64::NEG_INFINITY],
+        }
+    }
+
+    /// The pass's second half: the (a, b) ranges of the same corners, for a box kept with
+    /// every corner in front (else left empty, as [`Self::of`] says).
+    pub(super) fn with_ranges(mut self, c: &ViewCorners) -> Self {
+        if !self.outside && !self.behind {
             // One division per corner (a = x·(1/z), b = y·(1/z)), as the reference forms them.
             let r: [f64; 8] = std::array::from_fn(|i| 1.0 / c.z[i]);
             let a: [f64; 8] = std::array::from_fn(|i| c.x[i] * r[i]);
             let b: [f64; 8] = std::array::from_fn(|i| c.y[i] * r[i]);
             for i in 0..8 {
-                (a_lo, a_hi) = (a_lo.min(a[i]), a_hi.max(a[i]));
-                (b_lo, b_hi) = (b_lo.min(b[i]), b_hi.max(b[i]));
+                (self.a[0], self.a[1]) = (self.a[0].min(a[i]), self.a[1].max(a[i]));
+                (self.b[0], self.b[1]) = (self.b[0].min(b[i]), self.b[1].max(b[i]));
             }
         }
-        Self {
-            outside,
-            z_min,
-            behind,
-            a: [a_lo, a_hi],
-            b: [b_lo, b_hi],
-        }
+        self
     }
 
     /// [`vertical_gain_of`] of the corners; `w` is the world vertical in view space.

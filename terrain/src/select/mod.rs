@@ -5,6 +5,7 @@
 //! refinement r with ρ(ε(L−r)) ≤ τ. Pure CPU: plain data in, plain data out.
 
 mod bound;
+mod box_bounds;
 mod cdlod;
 pub mod cdlod_morph;
 mod horizon;

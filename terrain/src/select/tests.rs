@@ -1,6 +1,6 @@
 use glam::{DVec2, DVec3};
 
-use super::bound::{corners_outside, frustum_gain_floor, outside_of, view_corners};
+use super::bound::{frustum_gain_floor, outside_of, view_corners, CornerPass};
 use super::*;
 use crate::camera::{Attitude, Camera, Frustum};
 use crate::clipmap::ClipmapDesc;
@@ -124,7 +124,7 @@ fn vertical_gain_bounds_vertical_errors_on_screen() {
         );
         let fused = view_corners(&cam.world_to_view(), &aabb);
         assert_eq!(
-            corners_outside(&fused, &cam.frustum, cam.near),
+            CornerPass::cull_and_depth(&fused, &cam.frustum, cam.near).outside,
             outside_of(&corners, &cam.frustum, cam.near)
         );
         // No box's gain is below the frustum's least.
