@@ -213,7 +213,7 @@ fn refine_ring_tile(
     tx: u32,
     ty: u32,
     eval: NodeEval,
-    retry: Option<TryParts>,
+    retry: Option<TryParts<'_>>,
     level_index: usize,
     nodes: &mut Vec<(u32, u32, u32, f32, f32)>,
     out: &mut Selection,
@@ -258,7 +258,7 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
     let mut formed: Vec<[Quadrant; 4]> = Vec::new();
     while let Some((i, tx, ty, known, retry)) = stack.pop() {
         let kids = match retry {
-            Retry::Formed(k) => frame.formed(Some(formed[k as usize])),
+            Retry::Formed(k) => frame.formed(Some(&formed[k as usize])).copied(),
             _ => None,
         };
         let retry = !matches!(retry, Retry::No);
@@ -339,13 +339,14 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                                         || frame.ready.is_ready(level - 2, gx, gy)
                                 })
                         };
-                        found = frame.upgrade_quadrants(
+                        frame.upgrade_quadrants(
                             &mut quads,
                             &parent,
                             level,
                             tx,
                             ty,
                             grandchildren_ready,
+                            &mut found,
                         );
                         quads
                     }
@@ -388,11 +389,11 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                             push_drawn(out, i - 1, drawn(q, Morph::QUADRANT));
                         }
                         Quadrant::Seen { own, .. } => {
-                            let retry = match found[k] {
+                            let retry = match &found[k] {
                                 Upgrade::Whole => Retry::No,
                                 Upgrade::Untried => Retry::Yes,
                                 Upgrade::Children(kids) => {
-                                    formed.push(kids);
+                                    formed.push(*kids);
                                     Retry::Formed(formed.len() as u32 - 1)
                                 }
                             };
@@ -413,9 +414,11 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
         // cap it is late for streaming, not a tile the cap leaves unbounded.
         // A node that missed τ as its parent's quadrant: its children may be that parent's
         // sixteenths, from the pools.
-        let retry = (known.is_some() && retry && frame.sixteenths_below(level)).then(|| TryParts {
-            parent: frame.fixed(level + 1, tx / 2, ty / 2),
-            kids,
+        let parent = (known.is_some() && retry && frame.sixteenths_below(level))
+            .then(|| frame.fixed(level + 1, tx / 2, ty / 2));
+        let retry = parent.as_ref().map(|parent| TryParts {
+            parent,
+            kids: kids.as_ref(),
         });
         let missed = refine_ring_tile(frame, level, tx, ty, eval, retry, i, &mut nodes, out);
         if waiting {

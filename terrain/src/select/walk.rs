@@ -78,9 +78,9 @@ pub(super) fn drawn_at(raw: f32, sag: f64, spread: Option<f64>) -> (f64, f64) {
 /// parent's fixed values (its children may be that parent's sixteenths) and, when
 /// [`Frame::upgrade_quadrants`] bounded its children already, those.
 #[derive(Clone, Copy)]
-pub(super) struct TryParts {
-    pub(super) parent: NodeFixed,
-    pub(super) kids: Option<[Quadrant; 4]>,
+pub(super) struct TryParts<'k> {
+    pub(super) parent: &'k NodeFixed,
+    pub(super) kids: Option<&'k [Quadrant; 4]>,
 }
 
 /// Context shared by every tile of a frame.
@@ -144,7 +144,7 @@ impl Frame<'_> {
     /// The children [`Self::upgrade_quadrants`] formed for a node, to be taken instead of
     /// formed again — except on the reference path (tests), which forms them afresh, so the
     /// equivalence tests check that taking them changes nothing.
-    pub(super) fn formed(&self, kids: Option<[Quadrant; 4]>) -> Option<[Quadrant; 4]> {
+    pub(super) fn formed<'k>(&self, kids: Option<&'k [Quadrant; 4]>) -> Option<&'k [Quadrant; 4]> {
         #[cfg(test)]
         if self.reference {
             return None;
@@ -411,8 +411,9 @@ impl Frame<'_> {
     /// after all — so [`choose_parts`] weighs this node whole against its children with it
     /// (decided later, when the child is walked, it would be drawn as a quadrant beside
     /// siblings that add up to more than the node whole). Returns what it found of each child
-    /// ([`Upgrade`]): walked, one best drawn whole need not be tried in parts again, and one
-    /// best drawn in parts takes the children formed here.
+    /// ([`Upgrade`]) in `found`: walked, one best drawn whole need not be tried in parts
+    /// again, and one best drawn in parts takes the children formed here.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn upgrade_quadrants(
         &self,
         quads: &mut [Quadrant; 4],
@@ -421,10 +422,10 @@ impl Frame<'_> {
         tx: u32,
         ty: u32,
         splittable: impl Fn(u32, u32) -> bool,
-    ) -> [Upgrade; 4] {
-        let mut found = [Upgrade::Untried; 4];
+        found: &mut [Upgrade; 4],
+    ) {
         if !self.sixteenths_below(level - 1) {
-            return found;
+            return;
         }
         for (k, quad) in quads.iter_mut().enumerate() {
             let Quadrant::Seen { q, own, .. } = quad else {
@@ -444,7 +445,6 @@ impl Frame<'_> {
                 Parts::Children => found[k] = Upgrade::Children(kids),
             }
         }
-        found
     }
 
     /// Distance LOD: split while the eye is within `distance_factor` node sides of the node's
@@ -503,7 +503,7 @@ impl Frame<'_> {
         ty: u32,
         eval: NodeEval,
         finest: u32,
-        retry: Option<TryParts>,
+        retry: Option<TryParts<'_>>,
         out: &mut Vec<(u32, u32, u32, f32, f32)>,
     ) -> u32 {
         let NodeEval {
@@ -538,14 +538,15 @@ impl Frame<'_> {
         if quadrants {
             let node = self.fixed(level, tx, ty);
             let mut found = [Upgrade::Untried; 4];
-            let quads = match (&grand, self.formed(retry.and_then(|r| r.kids))) {
-                (Some(_), Some(kids)) if !split => kids,
+            let quads = match (grand, self.formed(retry.and_then(|r| r.kids))) {
+                (Some(_), Some(kids)) if !split => *kids,
                 (Some(g), None) if !split => self.quadrants_meeting(&eval, &node, g, level, tx, ty),
                 _ => {
-                    let mut quads = self.quadrants(&node, grand.as_ref(), level, tx, ty);
-                    found = self.upgrade_quadrants(&mut quads, &node, level, tx, ty, |_, _| {
-                        level - 1 > finest
-                    });
+                    let mut quads = self.quadrants(&node, grand, level, tx, ty);
+                    let splittable = |_, _| level - 1 > finest;
+                    self.upgrade_quadrants(
+                        &mut quads, &node, level, tx, ty, splittable, &mut found,
+                    );
                     quads
                 }
             };
@@ -556,7 +557,7 @@ impl Frame<'_> {
                 }
                 Parts::AsQuadrant { rho_px, .. } => {
                     // `grand` is this node's parent here.
-                    let (peps, _) = self.as_quadrant(grand.as_ref().unwrap(), level, tx, ty);
+                    let (peps, _) = self.as_quadrant(grand.unwrap(), level, tx, ty);
                     out.push((level, tx, ty, peps as f32, rho_px as f32));
                     self.quadrants
                         .borrow_mut()
@@ -579,14 +580,14 @@ impl Frame<'_> {
                     out.push((level - 1, cx, cy, d.eps as f32, d.rho_px as f32));
                     self.quadrants.borrow_mut().push((out.len() - 1, morph));
                 } else {
-                    let retry = match found[k] {
+                    let retry = match &found[k] {
                         Upgrade::Whole => None,
                         Upgrade::Untried => Some(TryParts {
-                            parent: node,
+                            parent: &node,
                             kids: None,
                         }),
                         Upgrade::Children(kids) => Some(TryParts {
-                            parent: node,
+                            parent: &node,
                             kids: Some(kids),
                         }),
                     };
