@@ -5,7 +5,7 @@
 use super::bound::{min_view_depth_of, projected_error_px, tile_aabb, view_corners, CornerPass};
 use super::node_cache::NodeFixed;
 use super::parts::{choose_parts, NodeEval, Parts, Quadrant, HYBRID_REACH};
-use super::walk::{drawn_at, has_terrain, Frame};
+use super::walk::{child_of, drawn_at, has_terrain, Frame};
 
 impl Frame<'_> {
     /// The children of node (level, tx, ty) that meets τ itself (`eval`, at its resolution,
@@ -28,7 +28,7 @@ impl Frame<'_> {
     ) -> [Quadrant; 4] {
         let mut out = [Quadrant::NoTerrain; 4];
         for (k, q) in out.iter_mut().enumerate() {
-            let (cx, cy) = (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1));
+            let (cx, cy) = child_of(tx, ty, k);
             if !has_terrain(self.bake, level - 1, cx, cy) {
                 continue;
             }
@@ -116,7 +116,7 @@ impl Frame<'_> {
             if sub.rho_norm <= 1.0 || sub.rho_norm > HYBRID_REACH {
                 continue;
             }
-            let (cx, cy) = (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1));
+            let (cx, cy) = child_of(tx, ty, k);
             if let Some(floor) = self.gain_floor {
                 // Above 1 by more than rounding, scaled down to the least gain.
                 let misses = |r: f64| r * (floor / eval.gain) > 1.0 + 1e-9;

@@ -14,7 +14,7 @@ use super::selection::{
     AllReady, DrawItem, LevelStats, LodMode, SelectParams, Selection, TileReadiness, View,
     MAX_REFINEMENT,
 };
-use super::walk::{has_terrain, Frame, Grid, TryParts, ViewCtx};
+use super::walk::{child_of, has_terrain, Frame, Grid, TryParts, ViewCtx};
 
 /// Selects the tiles to draw for one camera. `placements` come from `clipmap::place_levels`
 /// (finest first). Reuses `out`'s allocations.
@@ -334,7 +334,7 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                             i >= 2
                                 && inside_patch(&placements[i - 2], 2 * cx, 2 * cy)
                                 && (0..4).all(|k| {
-                                    let (gx, gy) = (2 * cx + (k & 1), 2 * cy + (k >> 1));
+                                    let (gx, gy) = child_of(cx, cy, k);
                                     !has_terrain(frame.bake, level - 2, gx, gy)
                                         || frame.ready.is_ready(level - 2, gx, gy)
                                 })
@@ -371,7 +371,7 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
                 }
                 // North-east first, so that the stack pops them south-west first.
                 for (k, quad) in quads.iter().enumerate().rev() {
-                    let (cx, cy) = (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1));
+                    let (cx, cy) = child_of(tx, ty, k);
                     let drawn = |q: NodeEval, morph: Morph| DrawItem {
                         morph,
                         ..DrawItem::whole(child_level, cx, cy, q.eps as f32, q.rho_px as f32)

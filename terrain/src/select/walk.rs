@@ -58,6 +58,13 @@ impl Grid {
 /// Nodes (level, tx, ty).
 pub(super) type NodeSet = std::collections::HashSet<(u32, u32, u32)>;
 
+/// Child `k` of node (tx, ty) in the order of [`Quadrant`] arrays (south-west, south-east,
+/// north-west, north-east).
+#[inline]
+pub(super) fn child_of(tx: u32, ty: u32, k: usize) -> (u32, u32) {
+    (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1))
+}
+
 /// Whether level-L tile (tx, ty) exists and holds any real (non-padding) sample.
 pub(super) fn has_terrain(bake: &ErrorBake, level: u32, tx: u32, ty: u32) -> bool {
     let t = &bake.levels[level as usize];
@@ -393,7 +400,7 @@ impl Frame<'_> {
     ) -> [Quadrant; 4] {
         let mut out = [Quadrant::NoTerrain; 4];
         for (k, q) in out.iter_mut().enumerate() {
-            let (cx, cy) = (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1));
+            let (cx, cy) = child_of(tx, ty, k);
             if has_terrain(self.bake, level - 1, cx, cy) {
                 *q = match self.evaluate_quadrant(parent, grand, level - 1, cx, cy) {
                     None => Quadrant::Unseen,
@@ -431,7 +438,7 @@ impl Frame<'_> {
             let Quadrant::Seen { q, own, .. } = quad else {
                 continue;
             };
-            let (cx, cy) = (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1));
+            let (cx, cy) = child_of(tx, ty, k);
             if q.rho_norm <= 1.0 || own.rho_norm > 1.0 || !splittable(cx, cy) {
                 continue;
             }
@@ -567,7 +574,7 @@ impl Frame<'_> {
                 Parts::Children => {}
             }
             for (k, quad) in quads.iter().enumerate() {
-                let (cx, cy) = (2 * tx + (k as u32 & 1), 2 * ty + (k as u32 >> 1));
+                let (cx, cy) = child_of(tx, ty, k);
                 let Quadrant::Seen { q, own, sub } = *quad else {
                     continue;
                 };
