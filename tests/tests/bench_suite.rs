@@ -169,7 +169,27 @@ fn a_tiny_suite_reports_ratios_read_off_its_curves() {
             }
             None => {
                 assert!(r["ratio"].is_empty(), "{r:?}: no common error");
-                assert!(r["note"].contains("out of range"), "{r:?}");
+                // Apart: bounded across the gap when the curve below is the cheaper one.
+                let (o, b) = (ours[ours.len() - 1], base[0]);
+                let (bo, bb) = (base[base.len() - 1], ours[0]);
+                let bound = if o.0 < b.0 && o.1 < b.1 {
+                    Some(("upper", o.1 / b.1))
+                } else if bo.0 < bb.0 && bo.1 < bb.1 {
+                    Some(("lower", bb.1 / bo.1))
+                } else {
+                    None
+                };
+                match bound {
+                    Some((kind, ratio)) => {
+                        let got: f64 = r["bound_ratio"].parse().expect("a bound");
+                        assert!(
+                            r["bound"] == kind && (got - ratio).abs() <= 1e-9 * ratio,
+                            "{r:?}: expected the {kind} bound {ratio}"
+                        );
+                        in_range += 1;
+                    }
+                    None => assert!(r["note"].contains("out of range"), "{r:?}"),
+                }
             }
         }
     }
@@ -340,4 +360,61 @@ fn no_holes_measures_the_error_without_the_full_reference() {
     }
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(md.contains("Holes not measured (`--no-holes`"), "{md}");
+}
+
+/// `--settle`: every configuration renders the first pose until nothing is late or pending
+/// before the measured frames; summary.md says how many frames each took, and a configuration
+/// that filled starts the flight with no late tile.
+#[test]
+fn settle_fills_every_configuration_before_the_first_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = dir.path().join("N47E011.hgt.zip");
+    std::fs::copy(aerie_tests::demo_dem(), &dem).unwrap();
+    let out = dir.path().join("out");
+    aerie(&[
+        "bench",
+        "--dem",
+        dem.to_str().unwrap(),
+        "--modes",
+        "bounded,clipmap",
+        "--tau",
+        "0.5",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--settle",
+        "12",
+        "--size",
+        "160x90",
+        "--no-image-error",
+        "--oracle-nodes",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .map_err(|f| f.message)
+    .expect("bench runs");
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    let line = md
+        .lines()
+        .find(|l| l.contains("start-up fill (at most 12 frames"))
+        .unwrap_or_else(|| panic!("no start-up line: {md}"));
+    for label in ["bounded τ=0.5", "clipmap"] {
+        let frames: u32 = line
+            .split(&format!("{label} "))
+            .nth(1)
+            .and_then(|t| t.split([',', ' ']).next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{label} filled, with its frame count: {line}"));
+        assert!((1..=12).contains(&frames), "{line}");
+    }
+    for r in table(&out.join("results.csv")) {
+        assert_eq!(r["warmup"], "0");
+        assert_eq!(
+            (r["tiles_late"].as_str(), r["cells_pending"].as_str()),
+            ("0", "0"),
+            "{r:?}"
+        );
+    }
 }

@@ -31,6 +31,7 @@ mod flights;
 mod plot;
 mod report;
 mod rows;
+mod settle;
 mod suite;
 mod suite_config;
 mod suite_report;
@@ -238,6 +239,7 @@ fn suite_flight(
     args.fov = r.fov;
     args.frames = r.frames;
     args.warmup = r.warmup;
+    args.settle = r.settle;
     args.fps = r.fps;
     args.modes = r.modes.clone();
     args.tau = join(&r.tau);
@@ -420,6 +422,7 @@ fn run_flight(
         .iter()
         .position(|l| l.config.mode == LodMode::Full && l.variant.is_none())
         .filter(|_| image_error);
+    let startup = settle_lanes(&mut lanes, flight, p, a.settle)?;
     let bar = count_bar(total_frames as u64 * lanes.len() as u64, "renders", "");
     let mut rows: Vec<FrameRow> = Vec::new();
     let size = (p.view.width, p.view.height);
@@ -576,6 +579,7 @@ fn run_flight(
         validation: lanes[0].renderer.desc().validation,
         image_error,
         oracle_nodes: a.oracle_nodes,
+        startup,
     };
     // Every output is tried even when one fails; the charts and heat maps go first so that
     // summary.md can list what is missing.
@@ -645,6 +649,41 @@ fn run_flight(
         device: meta.device,
         summaries,
     })
+}
+
+/// The start-up fill (`--settle`, [`settle`]): each lane renders the flight's first pose until
+/// a frame leaves nothing late or pending, at most `max` frames; summary.md's line on it.
+fn settle_lanes(
+    lanes: &mut [Lane],
+    flight: &FlightPlan,
+    p: &Plan,
+    max: u32,
+) -> Result<Option<String>, Failure> {
+    if max == 0 {
+        return Ok(None);
+    }
+    let (pos, att) = flight.pose_at(0.0);
+    let camera = Camera::new(pos, att, p.view.frustum);
+    let started = Instant::now();
+    let mut fills = Vec::new();
+    for lane in lanes.iter_mut() {
+        let mut settler = settle::Settler::new(max);
+        while settler.wants_frame() {
+            let stats = lane
+                .renderer
+                .render(&camera)
+                .map_err(|e| runtime(format!("{} start-up frame: {e}", lane.config.label())))?;
+            settler.rendered(&stats);
+        }
+        if lane.reported {
+            fills.push((lane.config.label(), settler.fill()));
+        }
+    }
+    let line = settle::describe(max, &fills);
+    if let Some(l) = &line {
+        eprintln!("{l} ({:.1} s)", started.elapsed().as_secs_f64());
+    }
+    Ok(line)
 }
 
 /// Measures one lane's frame, accumulates it (outside warm-up) and keeps its worst heat map.

@@ -47,6 +47,12 @@ pub struct BenchArgs {
     /// Frames rendered first and left out of the summaries (caches, pools, pipelines warm up).
     #[arg(long, default_value_t = 3)]
     pub warmup: u32,
+    /// Start-up fill: before the first frame every configuration renders the flight's first
+    /// pose again until a frame has no late tile and no clipmap cell pending, at most this
+    /// many frames (0: none) — as an IG fills its caches while the host waits for the
+    /// database to load. Those frames are not measured; summary.md says how many each took.
+    #[arg(long, default_value_t = 0)]
+    pub settle: u32,
     /// Simulated frame rate: frame k is the pose at k / fps seconds.
     #[arg(long, default_value_t = 30.0)]
     pub fps: f64,

@@ -81,17 +81,69 @@ pub enum Ratio {
     /// The largest ratio over the errors both curves reach (the baseline at the error that
     /// suits it best), and that error.
     Value { ratio: f64, at_error_px: f64 },
-    /// No error both curves reach; why.
+    /// No error both curves reach, but one curve lies wholly at smaller errors and its
+    /// cheapest setting costs less than the other's dearest ([`bound_across_gap`]): a bound on
+    /// the ratio at every error of the gap between the two ranges, `gap_px`.
+    Bound {
+        /// Ours' cost over the baseline's at the gap's two ends (see `upper`).
+        ratio: f64,
+        /// `true`: ours lies below and costs less — `ratio` (< 1) is an upper bound. `false`:
+        /// the baseline lies below and costs less — `ratio` (> 1) is a lower bound.
+        upper: bool,
+        gap_px: (f64, f64),
+    },
+    /// No error both curves reach, and neither is better across the gap; why.
     OutOfRange(String),
 }
 
 impl Ratio {
+    /// The ratio read at equal error (a bound is not one).
     pub fn value(&self) -> Option<f64> {
         match self {
             Ratio::Value { ratio, .. } => Some(*ratio),
-            Ratio::OutOfRange(_) => None,
+            Ratio::Bound { .. } | Ratio::OutOfRange(_) => None,
         }
     }
+
+    /// The largest the ratio can be: the value, or an upper bound.
+    pub fn at_most(&self) -> Option<f64> {
+        match self {
+            Ratio::Value { ratio, .. } => Some(*ratio),
+            Ratio::Bound {
+                ratio, upper: true, ..
+            } => Some(*ratio),
+            _ => None,
+        }
+    }
+}
+
+/// Two curves that share no error, compared across the gap between them. Each mode's cost
+/// grows as its error falls (a curve keeps only efficient settings, cost strictly descending
+/// in error), so on the gap the curve below costs at most its cheapest setting (the one at its
+/// largest error) and the curve above at least its dearest (the one at its smallest error).
+/// When the curve below's cheapest costs less than the curve above's dearest, the one below
+/// is better at every error of the gap, by at least that factor; otherwise nothing is known.
+/// Reading that bound assumes only that the curve above could not reach the gap's smaller
+/// errors with fewer triangles than its own dearest setting draws — its knob's trend, not a
+/// value read beyond it.
+pub fn bound_across_gap(ours: &Curve, base: &Curve) -> Option<Ratio> {
+    let (&(olo, olo_cost), &(ohi, ohi_cost)) = (ours.points.first()?, ours.points.last()?);
+    let (&(blo, blo_cost), &(bhi, bhi_cost)) = (base.points.first()?, base.points.last()?);
+    if ohi < blo && ohi_cost < blo_cost {
+        return Some(Ratio::Bound {
+            ratio: ohi_cost / blo_cost,
+            upper: true,
+            gap_px: (ohi, blo),
+        });
+    }
+    if bhi < olo && bhi_cost < olo_cost {
+        return Some(Ratio::Bound {
+            ratio: olo_cost / bhi_cost,
+            upper: false,
+            gap_px: (bhi, olo),
+        });
+    }
+    None
 }
 
 /// `ours` over `base` at equal error, over the errors both measured. Both costs are
@@ -104,6 +156,9 @@ pub fn ratio_at_equal_error(ours: &Curve, base: &Curve) -> Ratio {
     };
     let (lo, hi) = (olo.max(blo), ohi.min(bhi));
     if lo > hi {
+        if let Some(bound) = bound_across_gap(ours, base) {
+            return bound;
+        }
         return Ratio::OutOfRange(format!(
             "out of range (ours {} px, baseline {} px)",
             span(olo, ohi),
@@ -219,6 +274,51 @@ mod tests {
             panic!()
         };
         assert!((ratio - 1000f64.sqrt() / 50.0).abs() < 1e-12 && at_error_px == 2.0);
+    }
+
+    #[test]
+    fn curves_apart_are_bounded_across_their_gap_only_when_the_lower_one_is_cheaper() {
+        // Ours: 0.04 px at 600 … 8 px at 40. Base: 16 px at 300 … 18 px at 20.
+        let ours = Curve::new(&[(0.04, 600.0), (2.0, 200.0), (8.0, 40.0)]);
+        let base = Curve::new(&[(16.0, 300.0), (18.0, 20.0)]);
+        assert_eq!(
+            ratio_at_equal_error(&ours, &base),
+            Ratio::Bound {
+                ratio: 40.0 / 300.0,
+                upper: true,
+                gap_px: (8.0, 16.0)
+            }
+        );
+        // Swapped, the baseline is the better one: a lower bound above 1.
+        let r = ratio_at_equal_error(&base, &ours);
+        assert_eq!(
+            r,
+            Ratio::Bound {
+                ratio: 300.0 / 40.0,
+                upper: false,
+                gap_px: (8.0, 16.0)
+            }
+        );
+        assert_eq!((r.value(), r.at_most()), (None, None));
+        // The bound holds on the whole gap for any curves continuing the two trends: ours
+        // costs at most 40 there, the baseline at least 300.
+        for e in [8.0, 10.0, 12.0, 16.0] {
+            let ours_at = 40.0 * (8.0f64 / e).powf(0.5);
+            let base_at = 300.0 * (16.0f64 / e).powf(2.0);
+            assert!(ours_at / base_at <= 40.0 / 300.0 + 1e-12, "{e}");
+        }
+        // Apart, but the curve below costs more than the one above: nothing is known.
+        let dear = Curve::new(&[(0.04, 6000.0), (8.0, 400.0)]);
+        assert!(matches!(
+            ratio_at_equal_error(&dear, &base),
+            Ratio::OutOfRange(s) if s.contains("out of range")
+        ));
+        assert_eq!(bound_across_gap(&ours, &Curve::new(&[])), None);
+        // Curves that overlap are read, never bounded.
+        assert!(matches!(
+            ratio_at_equal_error(&ours, &Curve::new(&[(1.0, 500.0), (4.0, 100.0)])),
+            Ratio::Value { .. }
+        ));
     }
 
     #[test]

@@ -66,6 +66,8 @@ pub(crate) struct RunInfo {
     pub validation: bool,
     pub image_error: bool,
     pub oracle_nodes: u32,
+    /// The start-up fill's line (`--settle`), if there was one.
+    pub startup: Option<String>,
 }
 
 /// Image error of one configuration over the measured frames.
@@ -514,6 +516,9 @@ pub(crate) fn summary_md(info: &RunInfo, summaries: &[Summary]) -> String {
         "- {}×{} px, {}° horizontal FOV; {} measured frames after {} warm-up frames; flight: {}",
         info.size.0, info.size.1, info.fov_deg, info.frames, info.warmup, info.flight
     );
+    if let Some(line) = &info.startup {
+        let _ = writeln!(s, "- {line}");
+    }
     let _ = writeln!(
         s,
         "- validation layer {}",

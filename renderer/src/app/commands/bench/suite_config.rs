@@ -8,6 +8,7 @@
 //! fov = 90.0
 //! frames = 24                 # measured frames per flight (+ warmup)
 //! warmup = 3
+//! settle = 30                 # start-up fill: at most 30 frames at the first pose (default 0)
 //! fps = 10.0
 //! modes = ["bounded", "clipmap", "distance", "cdlod"]
 //! tau = [0.5, 1, 2, 5]
@@ -50,6 +51,7 @@ struct RawRun {
     fov: Option<f64>,
     frames: Option<u32>,
     warmup: Option<u32>,
+    settle: Option<u32>,
     fps: Option<f64>,
     modes: Option<Vec<String>>,
     tau: Option<Vec<f64>>,
@@ -111,6 +113,8 @@ pub struct RunSettings {
     pub fov: f64,
     pub frames: u32,
     pub warmup: u32,
+    /// `--settle`: at most this many start-up frames at the first pose.
+    pub settle: u32,
     pub fps: f64,
     /// As `--modes`, `--tau` take them.
     pub modes: String,
@@ -263,6 +267,7 @@ pub fn parse_suite(text: &str, source: &str) -> Result<Suite, String> {
         fov,
         frames,
         warmup: r.warmup.unwrap_or(3),
+        settle: r.settle.unwrap_or(0),
         fps,
         modes,
         tau,
@@ -484,6 +489,10 @@ datasets = ["mixed"]
         assert_eq!(s.run.tau, vec![1.0, 4.0]);
         assert_eq!(s.run.sweeps.distance_scale, vec![0.5, 1.0, 2.0, 4.0]);
         assert_eq!(s.run.modes, "bounded,clipmap,distance,cdlod");
+        assert_eq!(s.run.settle, 0, "no start-up fill unless asked");
+        let settled = parse_suite(&GOOD.replace("frames = 4", "frames = 4\nsettle = 12"), "s")
+            .expect("settle parses");
+        assert_eq!(settled.run.settle, 12);
         assert_eq!(
             s.datasets[1].source,
             DatasetSource::Generate {
@@ -587,6 +596,8 @@ datasets = ["mixed"]
                 w.clipmap_n.len() >= 3 && w.distance_scale.len() >= 4 && w.cdlod_range.len() >= 4
             );
             assert!(s.run.tau.len() >= 4, "{name}");
+            // Late tiles are counted in flight, after the caches filled at the first pose.
+            assert!(s.run.settle >= 10, "{name}");
         }
     }
 }

@@ -114,6 +114,16 @@ fn mode_word(m: LodMode) -> &'static str {
 fn cell(r: &Ratio) -> String {
     match r {
         Ratio::Value { ratio, at_error_px } => format!("{ratio:.2}× @{} px", px(*at_error_px)),
+        Ratio::Bound {
+            ratio,
+            upper,
+            gap_px: (lo, hi),
+        } => format!(
+            "{} {ratio:.2}× across {}–{} px",
+            if *upper { "≤" } else { "≥" },
+            px(*lo),
+            px(*hi)
+        ),
         Ratio::OutOfRange(why) => why.clone(),
     }
 }
@@ -146,21 +156,42 @@ pub(crate) fn curves_csv(results: &[FlightResult]) -> String {
 
 /// `ratios.csv`: one row per flight × baseline × metric.
 pub(crate) fn ratios_csv(results: &[FlightResult]) -> String {
-    let mut s = String::from("dataset,flight,baseline,metric,ratio,at_error_px,note\n");
+    let mut s = String::from(
+        "dataset,flight,baseline,metric,ratio,at_error_px,bound,bound_ratio,gap_from_px,gap_to_px,note\n",
+    );
     for r in results {
         for base in BASELINES {
             for m in &METRICS {
                 let Some(ratio) = flight_ratio(&r.summaries, base, m) else {
                     continue;
                 };
-                let (v, at, note) = match &ratio {
-                    Ratio::Value { ratio, at_error_px } => {
-                        (ratio.to_string(), at_error_px.to_string(), String::new())
+                let none = String::new;
+                let (v, at, bound, note) = match &ratio {
+                    Ratio::Value { ratio, at_error_px } => (
+                        ratio.to_string(),
+                        at_error_px.to_string(),
+                        ",,,".to_string(),
+                        none(),
+                    ),
+                    Ratio::Bound {
+                        ratio,
+                        upper,
+                        gap_px: (lo, hi),
+                    } => (
+                        none(),
+                        none(),
+                        format!(
+                            "{},{ratio},{lo},{hi}",
+                            if *upper { "upper" } else { "lower" }
+                        ),
+                        "no common error: a bound across the gap between the curves".into(),
+                    ),
+                    Ratio::OutOfRange(why) => {
+                        (none(), none(), ",,,".to_string(), why.replace(',', ";"))
                     }
-                    Ratio::OutOfRange(why) => (String::new(), String::new(), why.replace(',', ";")),
                 };
                 s.push_str(&format!(
-                    "{},{},{},{},{v},{at},{note}\n",
+                    "{},{},{},{},{v},{at},{bound},{note}\n",
                     r.dataset,
                     r.flight,
                     mode_word(base),
@@ -200,8 +231,12 @@ pub(crate) fn suite_md(info: &SuiteInfo, results: &[FlightResult]) -> String {
          Each cell is bounded's cost over the baseline's at the same error, read off the two \
          curves (each mode's efficient settings, piecewise-linear in log error and log cost), \
          the largest ratio over the errors both curves reach (the baseline at the error that \
-         suits it best), and that error. *out of range*: the curves share no error (never \
-         extrapolated).\n\n",
+         suits it best), and that error. Where the curves share no error but one lies wholly \
+         at smaller errors and its cheapest setting costs less than the other's dearest, the \
+         cell is a bound across the gap between them (*≤ r×*: bounded is at least that much \
+         cheaper at every error of the gap; *≥ r×*: the baseline is), since a mode's cost grows \
+         as its error falls; bounds are left out of the geometric means. *out of range*: the \
+         curves share no error and neither bound holds (never extrapolated).\n\n",
     );
     let legend: Vec<String> = METRICS
         .iter()
@@ -220,14 +255,21 @@ pub(crate) fn suite_md(info: &SuiteInfo, results: &[FlightResult]) -> String {
     }
     md.push('\n');
     let mut columns: Vec<Vec<f64>> = vec![Vec::new(); bases.len() * METRICS.len()];
+    // Per column: cells known to be ≤ 0.8× (read or bounded above), cells known at all.
+    let mut within: Vec<(usize, usize)> = vec![(0, 0); bases.len() * METRICS.len()];
     for r in results {
         md.push_str(&format!("| {} |", r.key()));
         for (bi, b) in bases.iter().enumerate() {
             for (mi, m) in METRICS.iter().enumerate() {
                 let c = match flight_ratio(&r.summaries, *b, m) {
                     Some(ratio) => {
+                        let col = bi * METRICS.len() + mi;
                         if let Some(v) = ratio.value() {
-                            columns[bi * METRICS.len() + mi].push(v);
+                            columns[col].push(v);
+                        }
+                        if !matches!(ratio, Ratio::OutOfRange(_)) {
+                            within[col].1 += 1;
+                            within[col].0 += ratio.at_most().is_some_and(|v| v <= 0.8) as usize;
                         }
                         cell(&ratio)
                     }
@@ -244,6 +286,10 @@ pub(crate) fn suite_md(info: &SuiteInfo, results: &[FlightResult]) -> String {
             Some(g) => md.push_str(&format!(" **{g:.2}×** ({}/{}) |", col.len(), results.len())),
             None => md.push_str(" — |"),
         }
+    }
+    md.push_str("\n| **≤ 0.8× (read or bounded)** |");
+    for (n, known) in &within {
+        md.push_str(&format!(" {n} of {known} |"));
     }
     md.push_str("\n\n");
     md.push_str(&targets(results));
