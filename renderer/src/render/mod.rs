@@ -19,6 +19,7 @@
 //! - `tess_pass` (the hardware-tessellation baseline: its heights, patch records and draw);
 //! - `frame` (the renderer: plan → stage → record → submit) on top of them all.
 
+pub mod ahead_select;
 pub mod atmosphere;
 pub mod content;
 pub mod desc;

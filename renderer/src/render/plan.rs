@@ -38,11 +38,10 @@ use aerie_terrain::camera::Camera;
 use aerie_terrain::clipmap::{place_levels, ClipmapDesc, LevelPlacement};
 use aerie_terrain::pool::{RefinedTilePool, Request, TileKey};
 use aerie_terrain::select::cdlod_morph::Morph;
-use aerie_terrain::select::{
-    select_tiles, select_tiles_multi_ready, DrawItem, SelectParams, Selection, View,
-};
+use aerie_terrain::select::{select_tiles_multi_ready, DrawItem, SelectParams, Selection, View};
 use aerie_terrain::source::TerrainSource;
 
+use crate::render::ahead_select::{AheadJob, AheadSelector};
 use crate::render::feed::{Feed, DRAWN_PRIORITY, PREFETCH_PRIORITY};
 use crate::render::gathered::Gatherer;
 
@@ -111,7 +110,9 @@ pub struct PlanState {
     /// The level textures' caches and content, the source and this frame's samples from it.
     pub feed: Feed,
     pub(crate) prefetch_selection: Selection,
-    /// The frame `prefetch_selection` was made in, and how many were made.
+    /// Where the next selection of the view ahead is being made (`ahead_select.rs`).
+    pub(crate) ahead: AheadSelector,
+    /// The frame of the last reselect of the view ahead, and how many reselects were made.
     prefetch_selected_at: Option<u64>,
     pub prefetch_selections: u64,
     shared: SharedSelection,
@@ -162,6 +163,7 @@ impl PlanState {
             prev_eye: None,
             feed,
             prefetch_selection: Selection::default(),
+            ahead: AheadSelector::threaded(),
             prefetch_selected_at: None,
             prefetch_selections: 0,
             shared: SharedSelection::default(),
@@ -698,15 +700,20 @@ fn prefetch(
         .prefetch_selected_at
         .is_none_or(|f| inputs.frame >= f + PREFETCH_RESELECT_FRAMES || inputs.frame < f);
     if stale {
-        select_tiles(
-            &state.bake,
-            &state.clipmap,
-            &placements,
-            &ahead,
-            inputs.viewport,
-            &state.select_params(inputs.select),
-            &mut state.prefetch_selection,
-        );
+        let job = AheadJob {
+            bake: state.bake.clone(),
+            clipmap: state.clipmap.clone(),
+            placements: placements.clone(),
+            camera: ahead,
+            viewport: inputs.viewport,
+            params: state.select_params(inputs.select),
+        };
+        let last = state.prefetch_selected_at;
+        let fresh = last
+            .is_some_and(|f| inputs.frame >= f && inputs.frame < f + 2 * PREFETCH_RESELECT_FRAMES);
+        state
+            .ahead
+            .reselect(job, fresh, &mut state.prefetch_selection);
         state.prefetch_selected_at = Some(inputs.frame);
         state.prefetch_selections += 1;
     }

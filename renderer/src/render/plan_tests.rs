@@ -513,6 +513,44 @@ fn drawn_keys(p: &FramePlan) -> Vec<TileKey> {
 
 const BIG: Option<u64> = Some(64 << 20);
 
+/// The view ahead selected on the worker thread or inline when taken: the same plans frame by
+/// frame — the protocol, not the worker's timing, decides what each frame prefetches from —
+/// and the frames after a reselect prefetch from the selection of the previous reselect's
+/// inputs (the first reselect's own, made on the frame thread, for the first two periods).
+#[test]
+fn the_view_ahead_selected_off_the_frame_thread_plans_as_inline() {
+    let cam = |f: u64| camera(600.0 - 40.0 * f as f64, 1280.0, 300.0, 90.0);
+    let run = |ahead: AheadSelector| {
+        let mut st = state(&[64, 64, 64, 64, 64, 0]);
+        st.ahead = ahead;
+        let mut frames = Vec::new();
+        let mut items = Vec::new();
+        for f in 0..15u64 {
+            let p = refining_frame(&mut st, f, &cam(f), 20.0, BIG);
+            let uploads: Vec<(TileKey, bool)> =
+                p.pool_uploads.iter().map(|u| (u.key, u.prefetch)).collect();
+            frames.push((uploads, p.stats.prefetched));
+            items.push(st.prefetch_selection.items.clone());
+        }
+        (frames, items, st.prefetch_selections)
+    };
+    let (threaded, items, reselects) = run(AheadSelector::threaded());
+    let prefetched: u32 = threaded.iter().map(|f| f.1).sum();
+    assert!(prefetched > 0, "the flight prefetches");
+    assert_eq!(reselects, 4, "frames 1, 5, 9 and 13 select ahead");
+    let (inline, inline_items, _) = run(AheadSelector::inline());
+    assert_eq!(threaded, inline);
+    assert_eq!(items, inline_items);
+    // Frame 5 takes what frame 1 sent: frame 1's inputs, which frame 1 selected on its own.
+    assert!(!items[1].is_empty());
+    assert_eq!(items[5], items[1]);
+    // Frame 9 takes frame 5's: the view ahead of a frame 160 m further on.
+    assert_ne!(items[9], items[5]);
+    for f in [2, 3, 4] {
+        assert_eq!(items[f], items[1], "frame {f} keeps the last reselect's");
+    }
+}
+
 #[test]
 fn prefetch_follows_the_motion_only_and_spares_recent_draws() {
     let mut st = state(&[64, 64, 64, 64, 64, 0]);
