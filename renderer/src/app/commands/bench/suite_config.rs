@@ -588,6 +588,10 @@ datasets = ["mixed"]
                 "lavapipe.toml",
                 include_str!("../../../../../bench/suites/lavapipe.toml"),
             ),
+            (
+                "gpu-1080p.toml",
+                include_str!("../../../../../bench/suites/gpu-1080p.toml"),
+            ),
         ] {
             let s = parse_suite(text, name).unwrap();
             assert_eq!(s.pairs().len(), 20, "{name}");
