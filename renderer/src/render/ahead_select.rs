@@ -48,7 +48,8 @@ type Request = (AheadJob, Selection);
 
 /// The worker thread: a request in, its selection out, until the request side is dropped.
 struct Worker {
-    requests: Sender<Request>,
+    /// `None` once dropped: closing it ends the worker's loop.
+    requests: Option<Sender<Request>>,
     results: Receiver<Selection>,
     thread: Option<JoinHandle<()>>,
 }
@@ -69,7 +70,7 @@ impl Worker {
             })
             .ok()?;
         Some(Self {
-            requests,
+            requests: Some(requests),
             results,
             thread: Some(thread),
         })
@@ -79,8 +80,7 @@ impl Worker {
 impl Drop for Worker {
     fn drop(&mut self) {
         // Closing the request channel ends the worker's loop once its job (if any) is done.
-        let (closed, _) = channel();
-        drop(std::mem::replace(&mut self.requests, closed));
+        drop(self.requests.take());
         if let Some(t) = self.thread.take() {
             let _ = t.join();
         }
@@ -120,11 +120,12 @@ impl AheadSelector {
     /// (sent by the reselect just before this one), else `job`'s, made now on this thread;
     /// then `job` goes out for the next reselect, into `current`'s old allocations.
     pub fn reselect(&mut self, job: AheadJob, fresh: bool, current: &mut Selection) {
-        let buffer = match self.take().filter(|_| fresh) {
-            Some(sel) => std::mem::replace(current, sel),
-            None => {
+        let buffer = match (self.take(), fresh) {
+            (Some(sel), true) => std::mem::replace(current, sel),
+            // A stale result (or none): its allocations and node cache serve the next request.
+            (stale, _) => {
                 job.run(current);
-                Selection::default()
+                stale.unwrap_or_default()
             }
         };
         self.request(job, buffer);
@@ -146,8 +147,8 @@ impl AheadSelector {
             self.wanted_worker = self.worker.is_some();
         }
         let request = (job, buffer);
-        let request = match &self.worker {
-            Some(w) => match w.requests.send(request) {
+        let request = match self.worker.as_ref().and_then(|w| w.requests.as_ref()) {
+            Some(requests) => match requests.send(request) {
                 Ok(()) => {
                     self.in_flight = true;
                     return;

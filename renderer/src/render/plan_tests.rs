@@ -525,7 +525,9 @@ fn the_view_ahead_selected_off_the_frame_thread_plans_as_inline() {
         st.ahead = ahead;
         let mut frames = Vec::new();
         let mut items = Vec::new();
-        for f in 0..15u64 {
+        // Frame 30 comes after a gap: the request frame 13 sent is stale there, and frame 30
+        // selects on its own thread again.
+        for f in (0..15u64).chain([30]) {
             let p = refining_frame(&mut st, f, &cam(f), 20.0, BIG);
             let uploads: Vec<(TileKey, bool)> =
                 p.pool_uploads.iter().map(|u| (u.key, u.prefetch)).collect();
@@ -537,7 +539,7 @@ fn the_view_ahead_selected_off_the_frame_thread_plans_as_inline() {
     let (threaded, items, reselects) = run(AheadSelector::threaded());
     let prefetched: u32 = threaded.iter().map(|f| f.1).sum();
     assert!(prefetched > 0, "the flight prefetches");
-    assert_eq!(reselects, 4, "frames 1, 5, 9 and 13 select ahead");
+    assert_eq!(reselects, 5, "frames 1, 5, 9, 13 and 30 select ahead");
     let (inline, inline_items, _) = run(AheadSelector::inline());
     assert_eq!(threaded, inline);
     assert_eq!(items, inline_items);
@@ -546,6 +548,15 @@ fn the_view_ahead_selected_off_the_frame_thread_plans_as_inline() {
     assert_eq!(items[5], items[1]);
     // Frame 9 takes frame 5's: the view ahead of a frame 160 m further on.
     assert_ne!(items[9], items[5]);
+    // Frame 30 prefetches from its own view ahead, not from frame 13's.
+    assert_ne!(items[15], items[14]);
+    let mut own = Selection::default();
+    let mut st = state(&[64, 64, 64, 64, 64, 0]);
+    st.ahead = AheadSelector::inline();
+    refining_frame(&mut st, 14, &cam(14), 20.0, BIG);
+    refining_frame(&mut st, 30, &cam(30), 20.0, BIG);
+    std::mem::swap(&mut own, &mut st.prefetch_selection);
+    assert_eq!(items[15], own.items, "frame 30 selected its own view ahead");
     for f in [2, 3, 4] {
         assert_eq!(items[f], items[1], "frame {f} keeps the last reselect's");
     }
