@@ -535,6 +535,10 @@ datasets = ["mixed"]
             ),
             (GOOD.replace("\"160x90\"", "\"160\""), "run.size"),
             (
+                GOOD.replace("frames = 4", "frames = 4\nsettle = -3"),
+                "s.toml:5:10: invalid value: integer `-3`",
+            ),
+            (
                 GOOD.replace("kind = \"cruise\"", "kind = \"loop\""),
                 "flight[0].kind",
             ),
