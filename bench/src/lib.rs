@@ -155,13 +155,5 @@ impl TargetScene {
 }
 
 /// This thread's CPU time, microseconds: per-frame figures on a loaded machine, where the wall
-/// clock's p99 is the scheduler's time slice.
-pub fn thread_cpu_us() -> f64 {
-    let mut t = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `t` is a valid, writable timespec; CLOCK_THREAD_CPUTIME_ID exists on Linux.
-    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
-    t.tv_sec as f64 * 1e6 + t.tv_nsec as f64 * 1e-3
-}
+/// clock's p99 is the scheduler's time slice (the renderer's own clock, which `fly` reports).
+pub use aerie::render::cpu_clock::thread_cpu_us;

@@ -17,6 +17,7 @@ use aerie_terrain::geodesy::GeoGrid;
 use aerie_terrain::select::{LodMode, SelectParams, Selection};
 use aerie_terrain::source::{InMemoryTerrain, StreamStats, TerrainSource};
 
+use crate::render::cpu_clock::thread_cpu_us;
 use crate::render::drape_textures::{drape_rasters, DrapeTextures, DrapedRasters, MAX_DRAPE_SIDE};
 use crate::render::entity_instances::{EntityDraw, EntityFrameStats};
 use crate::render::entity_lod::{LodParams, LodView};
@@ -530,6 +531,7 @@ impl TerrainRenderer {
 
         // Plan: clipmap placement and tile selection, then the budget's decisions (pure CPU).
         let t0 = Instant::now();
+        let cpu0 = thread_cpu_us();
         // The tessellation baseline draws from its own patches, not the clipmap's tiles.
         let tess_mode = self.desc.select.mode == LodMode::Tessellation;
         if tess_mode && self.tess.is_none() {
@@ -549,6 +551,7 @@ impl TerrainRenderer {
         let mut cpu_select_us = t0.elapsed().as_secs_f64() * 1e6;
         let t1 = Instant::now();
         let plan = plan_frame(&mut t.plan, &inputs, &self.selection, strips).map_err(plan_error)?;
+        let cpu_thread_plan_us = thread_cpu_us() - cpu0;
 
         // Stage: spilled strips in their own submissions, then this frame's region, from the
         // samples the plan gathered in that order.
@@ -631,6 +634,7 @@ impl TerrainRenderer {
         )?;
         let mut stats = FrameStats {
             cpu_select_us,
+            cpu_thread_plan_us,
             imagery_cells,
             imagery_cells_pending: self.drape.as_ref().map_or(0, |t| t.stream.pending()),
             cpu_upload_us: t1.elapsed().as_secs_f64() * 1e6,
@@ -688,6 +692,7 @@ impl TerrainRenderer {
                 self.target.record_readback(d, cmd);
                 let submitted = frame.submit(d)?;
                 stats.cpu_record_us = t2.elapsed().as_secs_f64() * 1e6;
+                stats.cpu_thread_us = thread_cpu_us() - cpu0;
                 // Headless: wait for this frame so its image and timings can be read.
                 self.ring.wait(d, submitted)?
             }
@@ -696,6 +701,7 @@ impl TerrainRenderer {
                 let stage = [ACQUIRE_WAIT_STAGE];
                 let _in_flight = frame.submit_with(d, &[p.acquired], &stage, &[p.rendered])?;
                 stats.cpu_record_us = t2.elapsed().as_secs_f64() * 1e6;
+                stats.cpu_thread_us = thread_cpu_us() - cpu0;
                 previous_gpu
             }
         };

@@ -22,6 +22,7 @@
 pub mod ahead_select;
 pub mod atmosphere;
 pub mod content;
+pub mod cpu_clock;
 pub mod desc;
 pub mod drape_textures;
 pub mod entity_instances;

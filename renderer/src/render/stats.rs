@@ -70,10 +70,18 @@ pub struct FrameStats {
     /// Streamed imagery: cells copied this frame, and cells still wanted after it.
     pub imagery_cells: u32,
     pub imagery_cells_pending: u32,
+    /// The frame thread's CPU time (its thread clock, `render/cpu_clock.rs`) over what
+    /// `cpu_select_us` + `cpu_upload_us` + `cpu_record_us` span — selection, plan, staging,
+    /// recording, submission — without waits (a frame's fence) and without the time other
+    /// threads (a software rasteriser on shared cores) took from it: the whole CPU frame.
+    pub cpu_thread_us: f64,
+    /// Its part up to the end of the plan (selection and plan, what `fly --no-draw`
+    /// measures); the rest is staging, recording and submission.
+    pub cpu_thread_plan_us: f64,
 }
 
 impl FrameStats {
-    pub const CSV_HEADER: &'static str = "frame,finest_level,tiles_considered,tiles_culled,tiles_drawn,refined_r0,refined_r1,refined_r2,refined_r3,refined_r4,refined_r5,refined_r6,instances,tiles_late,tiles_late_stream,tiles_unbounded,triangles,draw_calls,bytes_clipmap,bytes_refined,bytes_uploaded,budget_spills,pool_hits,pool_misses,prefetched,cells_pending,stream_hits,stream_misses,stream_loaded,stream_failed,stream_resident_bytes,stream_budget_bytes,cpu_terrain_data_us,cpu_select_us,cpu_upload_us,cpu_record_us,gpu_upload_ms,gpu_terrain_ms,tiles_hidden,cpu_normals_us,bytes_normals,gpu_normals_ms,imagery_cells,imagery_cells_pending";
+    pub const CSV_HEADER: &'static str = "frame,finest_level,tiles_considered,tiles_culled,tiles_drawn,refined_r0,refined_r1,refined_r2,refined_r3,refined_r4,refined_r5,refined_r6,instances,tiles_late,tiles_late_stream,tiles_unbounded,triangles,draw_calls,bytes_clipmap,bytes_refined,bytes_uploaded,budget_spills,pool_hits,pool_misses,prefetched,cells_pending,stream_hits,stream_misses,stream_loaded,stream_failed,stream_resident_bytes,stream_budget_bytes,cpu_terrain_data_us,cpu_select_us,cpu_upload_us,cpu_record_us,gpu_upload_ms,gpu_terrain_ms,tiles_hidden,cpu_normals_us,bytes_normals,gpu_normals_ms,imagery_cells,imagery_cells_pending,cpu_thread_us,cpu_thread_plan_us";
 
     /// Copies the source's running totals.
     pub fn set_stream(&mut self, s: &aerie_terrain::source::StreamStats) {
@@ -88,7 +96,7 @@ impl FrameStats {
     pub fn csv_row(&self) -> String {
         let r = &self.tiles_by_refinement;
         format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1},{:.1},{:.1},{:.1},{:.3},{:.3},{},{:.1},{},{:.4},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1},{:.1},{:.1},{:.1},{:.3},{:.3},{},{:.1},{},{:.4},{},{},{:.1},{:.1}",
             self.frame,
             self.finest_level,
             self.tiles_considered,
@@ -132,7 +140,9 @@ impl FrameStats {
             self.bytes_normals,
             self.gpu_normals_ms,
             self.imagery_cells,
-            self.imagery_cells_pending
+            self.imagery_cells_pending,
+            self.cpu_thread_us,
+            self.cpu_thread_plan_us
         )
     }
 }
@@ -183,6 +193,8 @@ mod tests {
             cpu_normals_us: 3.25,
             bytes_normals: 512,
             gpu_normals_ms: 0.0625,
+            cpu_thread_us: 431.25,
+            cpu_thread_plan_us: 250.5,
             ..Default::default()
         };
         let row = s.csv_row();
@@ -191,5 +203,7 @@ mod tests {
         assert_eq!(at("cpu_normals_us"), "3.2");
         assert_eq!(at("bytes_normals"), "512");
         assert_eq!(at("gpu_normals_ms"), "0.0625");
+        assert_eq!(at("cpu_thread_us"), "431.2");
+        assert_eq!(at("cpu_thread_plan_us"), "250.5");
     }
 }

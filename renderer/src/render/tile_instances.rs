@@ -168,8 +168,8 @@ pub fn build_instances(
         (t.slot_x, t.slot_y, t.slot_stride) = (slot_x, slot_y, slot_stride);
         t.morph = item.morph.to_gpu();
         if let Some(e) = &geo {
-            let g = e.node_fields_cached(geo_cache, origin, 1 << item.node_level, q);
-            t.geo_origin = g.geo_origin;
+            let (g, rel) = e.node_fields_in(geo_cache, origin, 1 << item.node_level, q);
+            t.geo_origin = [rel[0], rel[1], rel[2], g.geo_origin[3]];
             t.geo_axis_r = g.geo_axis_r;
             t.geo_axis_t = g.geo_axis_t;
             t.geo_axis_z = g.geo_axis_z;
