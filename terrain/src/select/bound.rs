@@ -181,7 +181,7 @@ pub fn frustum_vertical_gain(camera: &Camera) -> f64 {
 /// slack in any direction. Writing each normal as up + δ with |δ| ≤ spread, the screen motion
 /// of ε·n is at most ε·(g(up) + spread·c) with c = max sqrt(1 + a² + b²), the direction-free
 /// factor; the slack s adds s·c. So the gain is `g(up) + c·slack` with slack = spread + s/ε.
-/// (The reference of [`CornerPass::spread_gain`]: tests only.)
+/// (The reference of [`CornerPass::gain_parts`] and `evaluate_as`'s gain: tests only.)
 #[cfg(test)]
 pub(super) fn spread_gain_of(corners: &[DVec3; 8], f: &Frustum, up: DVec3, slack: f64) -> f64 {
     let g = vertical_gain_of(corners, f, up);
@@ -325,18 +325,10 @@ impl CornerPass {
         vertical_gain(w, a, b)
     }
 
-    /// [`spread_gain_of`] of the corners. The largest |a| over the corners, each clamped, is
-    /// the larger of the clamped range ends' (clamping is monotonic): the same value.
-    pub(super) fn spread_gain(&self, f: &Frustum, up: DVec3, slack: f64) -> f64 {
-        let g = self.vertical_gain(f, up);
-        if slack <= 0.0 {
-            return g;
-        }
-        g + slack * self.obliquity(f)
-    }
-
-    /// [`Self::spread_gain`]'s two parts: the vertical gain along `up` and the obliquity
-    /// that multiplies the slack.
+    /// The two parts of [`spread_gain_of`] of the corners: the vertical gain along `up` and
+    /// the obliquity that multiplies the slack (`g` for no slack, `g + slack·c` else). The
+    /// largest |a| over the corners, each clamped, is the larger of the clamped range ends'
+    /// (clamping is monotonic): the same values.
     pub(super) fn gain_parts(&self, f: &Frustum, up: DVec3) -> (f64, f64) {
         (self.vertical_gain(f, up), self.obliquity(f))
     }

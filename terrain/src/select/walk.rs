@@ -355,14 +355,17 @@ impl Frame<'_> {
                 (None, true) => pass.vertical_gain(f, v.up),
                 (None, false) => v.vertical_gain,
             };
-            let gain = |slack: f64| match (&geo, cull) {
-                (Some(n), true) => pass.spread_gain(f, v.rotation * n.up, slack),
-                (Some(n), false) => frustum_spread_gain(f, v.rotation * n.up, slack),
-                (None, _) => flat_gain,
-            };
+            // On the ellipsoid the gain's two parts, formed once for all errors:
+            // `CornerPass::spread_gain` is g for no slack and g + slack·c else, bit for bit.
             let (g, c) = match (&geo, cull) {
                 (Some(n), true) => pass.gain_parts(f, v.rotation * n.up),
                 _ => (flat_gain, 0.0),
+            };
+            let gain = |slack: f64| match (&geo, cull) {
+                (Some(_), true) if slack <= 0.0 => g,
+                (Some(_), true) => g + slack * c,
+                (Some(n), false) => frustum_spread_gain(f, v.rotation * n.up, slack),
+                (None, _) => flat_gain,
             };
             gain_max = gain_max.max(v.focal * g / v.tau);
             slack_max = slack_max.max(v.focal * c / v.tau);
