@@ -607,5 +607,10 @@ datasets = ["mixed"]
             // Late tiles are counted in flight, after the caches filled at the first pose.
             assert!(s.run.settle >= 10, "{name}");
         }
+        // The CPU-frame measurement's flights: the four real datasets' 16, 4 s at 30 fps.
+        let text = include_str!("../../../../../bench/suites/cpu-frame.toml");
+        let s = parse_suite(text, "cpu-frame.toml").unwrap();
+        assert_eq!(s.pairs().len(), 16);
+        assert_eq!((s.run.frames, s.run.fps), (120, 30.0));
     }
 }
