@@ -41,6 +41,22 @@ fn aerie(args: &[&str]) -> Result<(), aerie::app::failure::Failure> {
 }
 
 /// CSV text → rows of column name → cell.
+/// Runs `aerie bench` on a copy of the demo DEM in a temporary folder with `args` (besides
+/// `--dem`, `--size 160x90`, `--oracle-nodes 0` and `--out`); the folder (kept alive by the
+/// returned guard) and the output folder.
+fn bench_demo(args: &[&str]) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = dir.path().join("N47E011.hgt.zip");
+    std::fs::copy(aerie_tests::demo_dem(), &dem).unwrap();
+    let out = dir.path().join("out");
+    let mut all = vec!["bench", "--dem", dem.to_str().unwrap()];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--size", "160x90", "--oracle-nodes", "0"]);
+    all.extend_from_slice(&["--out", out.to_str().unwrap()]);
+    aerie(&all).map_err(|f| f.message).expect("bench runs");
+    (dir, out)
+}
+
 fn table(path: &Path) -> Vec<HashMap<String, String>> {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
@@ -266,14 +282,7 @@ fn a_bad_suite_names_its_key() {
 /// per feature with the terrain pass's GPU time measured on every frame, summary.md the table.
 #[test]
 fn feature_costs_draw_the_first_configuration_with_each_feature_off() {
-    let dir = tempfile::tempdir().unwrap();
-    let dem = dir.path().join("N47E011.hgt.zip");
-    std::fs::copy(aerie_tests::demo_dem(), &dem).unwrap();
-    let out = dir.path().join("out");
-    aerie(&[
-        "bench",
-        "--dem",
-        dem.to_str().unwrap(),
+    let (_dir, out) = bench_demo(&[
         "--modes",
         "bounded,clipmap",
         "--tau",
@@ -282,17 +291,9 @@ fn feature_costs_draw_the_first_configuration_with_each_feature_off() {
         "3",
         "--warmup",
         "1",
-        "--size",
-        "160x90",
         "--no-image-error",
-        "--oracle-nodes",
-        "0",
         "--feature-costs",
-        "--out",
-        out.to_str().unwrap(),
-    ])
-    .map_err(|f| f.message)
-    .expect("bench runs");
+    ]);
     let rows = table(&out.join("features.csv"));
     let off: Vec<&str> = rows.iter().map(|r| r["feature_off"].as_str()).collect();
     assert_eq!(
@@ -318,14 +319,7 @@ fn feature_costs_draw_the_first_configuration_with_each_feature_off() {
 /// reference lane, every frame's error measured, zero holes, and the report says why.
 #[test]
 fn no_holes_measures_the_error_without_the_full_reference() {
-    let dir = tempfile::tempdir().unwrap();
-    let dem = dir.path().join("N47E011.hgt.zip");
-    std::fs::copy(aerie_tests::demo_dem(), &dem).unwrap();
-    let out = dir.path().join("out");
-    aerie(&[
-        "bench",
-        "--dem",
-        dem.to_str().unwrap(),
+    let (_dir, out) = bench_demo(&[
         "--modes",
         "bounded",
         "--tau",
@@ -334,16 +328,8 @@ fn no_holes_measures_the_error_without_the_full_reference() {
         "3",
         "--warmup",
         "0",
-        "--size",
-        "160x90",
-        "--oracle-nodes",
-        "0",
         "--no-holes",
-        "--out",
-        out.to_str().unwrap(),
-    ])
-    .map_err(|f| f.message)
-    .expect("bench runs");
+    ]);
     let rows = table(&out.join("results.csv"));
     assert_eq!(
         rows.len(),
@@ -367,14 +353,7 @@ fn no_holes_measures_the_error_without_the_full_reference() {
 /// that filled starts the flight with no late tile.
 #[test]
 fn settle_fills_every_configuration_before_the_first_frame() {
-    let dir = tempfile::tempdir().unwrap();
-    let dem = dir.path().join("N47E011.hgt.zip");
-    std::fs::copy(aerie_tests::demo_dem(), &dem).unwrap();
-    let out = dir.path().join("out");
-    aerie(&[
-        "bench",
-        "--dem",
-        dem.to_str().unwrap(),
+    let (_dir, out) = bench_demo(&[
         "--modes",
         "bounded,clipmap",
         "--tau",
@@ -385,16 +364,8 @@ fn settle_fills_every_configuration_before_the_first_frame() {
         "0",
         "--settle",
         "12",
-        "--size",
-        "160x90",
         "--no-image-error",
-        "--oracle-nodes",
-        "0",
-        "--out",
-        out.to_str().unwrap(),
-    ])
-    .map_err(|f| f.message)
-    .expect("bench runs");
+    ]);
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     let line = md
         .lines()

@@ -9,9 +9,8 @@ pub fn thread_cpu_us() -> f64 {
         tv_sec: 0,
         tv_nsec: 0,
     };
-    // SAFETY: `t` is a valid, writable timespec that outlives the call; clock_gettime only
-    // writes it, and CLOCK_THREAD_CPUTIME_ID is a clock id every Linux kernel knows (an error
-    // leaves `t` zero and is reported as 0).
+    // clock_gettime only writes `t`; an error leaves it zero and is reported as 0.
+    // SAFETY: `t` is a valid, writable timespec that outlives the call, and the clock id exists.
     let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
     if rc != 0 {
         return 0.0;

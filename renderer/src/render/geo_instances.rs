@@ -113,16 +113,21 @@ impl GeoEye {
             .nodes
             .entry(key)
             .or_insert_with(|| self.node_frame(origin, step, q));
-        let rel = self.to_world * (frame.centre_ecef - self.eye_ecef);
+        let rel = self.centre_rel(frame);
         (&frame.fields, [rel.x as f32, rel.y as f32, rel.z as f32])
     }
 
     /// The node's fields with `geo_origin.xyz` its centre relative to this eye.
     fn with_eye(&self, frame: &NodeFrame) -> (GeoFields, DVec3) {
-        let rel = self.to_world * (frame.centre_ecef - self.eye_ecef);
+        let rel = self.centre_rel(frame);
         let mut fields = frame.fields;
         fields.geo_origin[..3].copy_from_slice(&[rel.x as f32, rel.y as f32, rel.z as f32]);
         (fields, rel)
+    }
+
+    /// The vector from this eye to the node's centre vertex, in world axes (f64).
+    fn centre_rel(&self, frame: &NodeFrame) -> DVec3 {
+        self.to_world * (frame.centre_ecef - self.eye_ecef)
     }
 
     /// Everything of a node's fields that does not depend on the eye.

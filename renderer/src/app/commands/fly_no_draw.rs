@@ -145,15 +145,14 @@ pub fn fly_no_draw(
         let t1 = Instant::now();
         let plan = plan_frame(&mut st, &inputs, &sel, strips)
             .map_err(|e| crate::app::failure::runtime(format!("frame {f}: {e}")))?;
+        // No staging or recording here: the whole thread time is the plan's part.
+        let thread = thread_cpu_us() - cpu0;
         let stats = FrameStats {
             cpu_select_us: (t1 - t0).as_secs_f64() * 1e6,
             cpu_upload_us: t1.elapsed().as_secs_f64() * 1e6,
-            cpu_thread_us: thread_cpu_us() - cpu0,
+            cpu_thread_us: thread,
+            cpu_thread_plan_us: thread,
             ..plan.stats
-        };
-        let stats = FrameStats {
-            cpu_thread_plan_us: stats.cpu_thread_us,
-            ..stats
         };
         cpu_us.push(t0.elapsed().as_secs_f64() * 1e6);
         thread_us.push(stats.cpu_thread_us);
