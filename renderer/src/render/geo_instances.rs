@@ -109,10 +109,12 @@ impl GeoEye {
             ((origin[0] as u64) << 32) | (origin[1] as u64 & 0xffff_ffff),
             ((step as u64) << 16) | q as u64,
         );
-        let frame = cache
-            .nodes
-            .entry(key)
-            .or_insert_with(|| self.node_frame(origin, step, q));
+        let next = cache.frames.len() as u32;
+        let at = *cache.index.entry(key).or_insert(next);
+        if at == next {
+            cache.frames.push(self.node_frame(origin, step, q));
+        }
+        let frame = &cache.frames[at as usize];
         let rel = self.centre_rel(frame);
         (&frame.fields, [rel.x as f32, rel.y as f32, rel.z as f32])
     }
@@ -223,28 +225,39 @@ const GEO_CACHE_CAPACITY: usize = 1 << 14;
 #[derive(Debug, Default)]
 pub struct GeoNodeCache {
     grid: Option<GeoGrid>,
-    /// Keyed by (south-west sample column << 32 | row, step << 16 | quads): two hashing
-    /// rounds (sample indices of a grid at most 2^32 wide, steps and quads far below 2^16).
-    nodes: std::collections::HashMap<(u64, u64), NodeFrame, FastHash>,
+    /// Each node's place in `frames`, keyed by (south-west sample column << 32 | row,
+    /// step << 16 | quads): two hashing rounds (sample indices of a grid at most 2^32 wide,
+    /// steps and quads far below 2^16). The records sit apart from the table, so growing it
+    /// moves 20-byte entries, not 400-byte records (a table of records growing under a flight
+    /// made that frame one of its slowest).
+    index: std::collections::HashMap<(u64, u64), u32, FastHash>,
+    frames: Vec<NodeFrame>,
 }
+
+/// Nodes room is made for at the start (a frame draws one to two thousand): the cache grows
+/// past it by doubling, each time copying its records once.
+const GEO_CACHE_RESERVE: usize = 4096;
 
 impl GeoNodeCache {
     /// Starts a frame on `grid`: forgets every node when the grid changed or the cache is full.
     pub fn begin(&mut self, grid: &GeoGrid) {
-        if self.grid.as_ref() != Some(grid) || self.nodes.len() >= GEO_CACHE_CAPACITY {
-            self.nodes.clear();
+        if self.grid.as_ref() != Some(grid) || self.frames.len() >= GEO_CACHE_CAPACITY {
+            self.index.clear();
+            self.frames.clear();
+            self.index.reserve(GEO_CACHE_RESERVE);
+            self.frames.reserve(GEO_CACHE_RESERVE);
             self.grid = Some(*grid);
         }
     }
 
     /// Nodes held.
     pub fn len(&self) -> usize {
-        self.nodes.len()
+        self.frames.len()
     }
 
     /// Whether it holds none.
     pub fn is_empty(&self) -> bool {
-        self.nodes.is_empty()
+        self.frames.is_empty()
     }
 }
 

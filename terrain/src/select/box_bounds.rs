@@ -35,8 +35,9 @@ impl Frame<'_> {
             let z = match node.geo {
                 // The child's box on the ellipsoid (eye-independent, cached).
                 Some(_) => {
-                    let child = self.fixed(level - 1, cx, cy);
-                    let aabb = child.geo.map_or_else(|| unreachable!(), |g| g.aabb);
+                    let aabb = self.with_fixed(level - 1, cx, cy, |child| {
+                        child.geo.map_or_else(|| unreachable!(), |g| g.aabb)
+                    });
                     self.views
                         .iter()
                         .map(|v| min_view_depth_of(&v.to_view, &aabb).max(v.camera.near))

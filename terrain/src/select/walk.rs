@@ -184,6 +184,27 @@ impl Frame<'_> {
             .get(level, tx, ty, || self.compute_fixed(level, tx, ty))
     }
 
+    /// `f` of [`Self::fixed`], read in place in the cache (no copy of the whole record). `f`
+    /// must not ask for fixed values itself: the cache is borrowed while it runs.
+    #[inline]
+    pub(super) fn with_fixed<R>(
+        &self,
+        level: u32,
+        tx: u32,
+        ty: u32,
+        f: impl FnOnce(&NodeFixed) -> R,
+    ) -> R {
+        #[cfg(test)]
+        if self.reference {
+            return f(&self.compute_fixed(level, tx, ty));
+        }
+        if self.params.earth.is_none() {
+            return f(&self.compute_fixed(level, tx, ty));
+        }
+        let mut cache = self.cache.borrow_mut();
+        f(cache.get_ref(level, tx, ty, || self.compute_fixed(level, tx, ty)))
+    }
+
     /// [`Self::fixed`] computed: ε of the level-ℓ surface over the level-ℓ tile (tx, ty) with
     /// the curvature interpolation (on the ellipsoid: the drawn cell's slack,
     /// `GeoGrid::cell_sag_m`), and the node on the ellipsoid (geographic data).
@@ -237,9 +258,10 @@ impl Frame<'_> {
         if self.reference {
             return self.evaluate_reference(level, tx, ty, cull);
         }
-        let node = self.fixed(level, tx, ty);
-        let own = (node.eps, node.slack);
-        self.evaluate_as(level, &node, &[own], cull).map(|e| e[0])
+        self.with_fixed(level, tx, ty, |node| {
+            let own = (node.eps, node.slack);
+            self.evaluate_as(level, node, &[own], cull).map(|e| e[0])
+        })
     }
 
     /// The quadrant (level, tx, ty) of its parent drawn at the parent's resolution — the
@@ -273,15 +295,16 @@ impl Frame<'_> {
             });
             return Some((q, o, sub.flatten()));
         }
-        let node = self.fixed(level, tx, ty);
         let p = self.as_quadrant(parent, level, tx, ty);
-        let own = (node.eps, node.slack);
         let g = grand.map(|grand| self.as_sixteenth(grand, level, tx, ty));
-        let errors = match g {
-            Some(g) => [p, own, g],
-            None => [p, own, own],
-        };
-        let e = self.evaluate_as(drawn, &node, &errors[..2 + g.is_some() as usize], true)?;
+        let e = self.with_fixed(level, tx, ty, |node| {
+            let own = (node.eps, node.slack);
+            let errors = match g {
+                Some(g) => [p, own, g],
+                None => [p, own, own],
+            };
+            self.evaluate_as(drawn, node, &errors[..2 + g.is_some() as usize], true)
+        })?;
         Some((e[0], e[1], g.map(|_| e[2])))
     }
 
