@@ -43,11 +43,11 @@ pub fn tile_aabb(
                 hi.y
             },
         );
-        let d_min = (nearest - e).length();
-        let d_max = (far - e).length();
-        zhi -= d_min * d_min / (2.0 * EARTH_RADIUS_M);
-        zlo -=
-            d_max * d_max / (2.0 * EARTH_RADIUS_M) + curvature_interpolation_error(cell_diagonal_m);
+        // d² directly: its square root squared again is d² to rounding, two roots dearer.
+        let d_min2 = (nearest - e).length_squared();
+        let d_max2 = (far - e).length_squared();
+        zhi -= d_min2 / (2.0 * EARTH_RADIUS_M);
+        zlo -= d_max2 / (2.0 * EARTH_RADIUS_M) + curvature_interpolation_error(cell_diagonal_m);
     }
     Aabb {
         min: DVec3::new(lo.x, lo.y, zlo),

@@ -89,6 +89,8 @@ pub fn select_tiles_multi_ready(
                 focal: fx.max(fy),
                 vertical_gain: frustum_vertical_gain(v.camera),
                 tau: v.tau_px,
+                inv_tau: 1.0 / v.tau_px,
+                focal_per_tau: fx.max(fy) / v.tau_px,
             }
         })
         .collect();
@@ -107,7 +109,7 @@ pub fn select_tiles_multi_ready(
     let tau_max = views.iter().map(|v| v.tau).fold(0.0, f64::max);
     let gain_floor = match views.as_slice() {
         [v] if params.earth.is_none() && !cull_hidden => {
-            Some(v.focal * frustum_gain_floor(&v.camera.frustum, v.up) / v.tau)
+            Some(frustum_gain_floor(&v.camera.frustum, v.up) * v.focal_per_tau)
         }
         _ => None,
     };

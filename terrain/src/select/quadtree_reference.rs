@@ -94,11 +94,11 @@ impl Frame<'_> {
                 (Some(_), false) => (0.0, 0.0),
                 (None, _) => (c, 0.0),
             };
-            gain = gain.max(v.focal * g / v.tau);
-            gain_slack = gain_slack.max(v.focal * s / v.tau);
+            gain = gain.max(g * v.focal_per_tau);
+            gain_slack = gain_slack.max(s * v.focal_per_tau);
             let rho = projected_error_px(eps, z_min, v.focal, c);
             rho_px = rho_px.max(rho);
-            rho_norm = rho_norm.max(rho / v.tau);
+            rho_norm = rho_norm.max(rho * v.inv_tau);
         }
         seen.then_some(NodeEval {
             eps,

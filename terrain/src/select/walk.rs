@@ -138,6 +138,10 @@ pub(super) struct ViewCtx<'a> {
     /// [`frustum_vertical_gain`].
     pub(super) vertical_gain: f64,
     pub(super) tau: f64,
+    /// 1/τ and f/τ, formed once a frame: a node's evaluation scales by them five times
+    /// (multiplications, not divisions; the reference evaluation scales alike).
+    pub(super) inv_tau: f64,
+    pub(super) focal_per_tau: f64,
 }
 
 impl Frame<'_> {
@@ -390,11 +394,11 @@ impl Frame<'_> {
                 (Some(n), false) => frustum_spread_gain(f, v.rotation * n.up, slack),
                 (None, _) => flat_gain,
             };
-            gain_max = gain_max.max(v.focal * g / v.tau);
-            slack_max = slack_max.max(v.focal * c / v.tau);
+            gain_max = gain_max.max(g * v.focal_per_tau);
+            slack_max = slack_max.max(c * v.focal_per_tau);
             for (k, &(eps, slack)) in errors.iter().enumerate() {
                 let r = projected_error_px(eps, z_min, v.focal, gain(slack));
-                rho[k] = (rho[k].0.max(r), rho[k].1.max(r / v.tau));
+                rho[k] = (rho[k].0.max(r), rho[k].1.max(r * v.inv_tau));
             }
         }
         if hidden && !seen {
