@@ -10,12 +10,51 @@ use crate::fast_hash::FastHash;
 /// not. Each fine–coarse pair is found from the finer node by walking up from the position
 /// across its edge to the first drawn node (a same-level neighbour or a coarser ancestor) and
 /// updates both.
+///
+/// The nodes are looked up in a dense grid per level over the box its nodes and their
+/// ancestors span (a frame's nodes of one level lie in that level's clipmap patch), where the
+/// ancestors of drawn nodes are marked split: a walk that meets a split node stops there — no
+/// node above it is drawn, unless drawn nodes overlap, which no selection makes and which
+/// then takes the full walk. Nodes too scattered for the grids (more than
+/// [`GRID_CELLS_PER_NODE`] cells a node) take a hash table and the full walk; both give the
+/// same values (tests).
 pub fn neighbour_eps(nodes: &[(u32, u32, u32, f32)]) -> Vec<f32> {
+    match LevelGrids::of(nodes) {
+        Some(grids) => walk_neighbours(nodes, |l, x, y| grids.get(l, x, y)),
+        None => neighbour_eps_hashed(nodes),
+    }
+}
+
+/// [`neighbour_eps`] through a hash table of the drawn nodes, every walk to the top.
+fn neighbour_eps_hashed(nodes: &[(u32, u32, u32, f32)]) -> Vec<f32> {
     let mut index: std::collections::HashMap<(u32, u32, u32), usize, FastHash> =
         std::collections::HashMap::with_capacity_and_hasher(nodes.len(), FastHash::default());
     for (i, &(l, x, y, _)) in nodes.iter().enumerate() {
         index.insert((l, x, y), i);
     }
+    walk_neighbours(nodes, |l, x, y| match index.get(&(l, x, y)) {
+        Some(&j) => Cell::Drawn(j),
+        None => Cell::Empty,
+    })
+}
+
+/// What a lookup finds at (level, x, y).
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Cell {
+    /// No drawn node, none below.
+    Empty,
+    /// Node `j` of the list.
+    Drawn(usize),
+    /// Not drawn, and drawn nodes lie below it (nothing above it is drawn, unless drawn
+    /// nodes overlap).
+    Split,
+}
+
+/// The walk itself, over any lookup (a `Split` cell ends the walk).
+fn walk_neighbours(
+    nodes: &[(u32, u32, u32, f32)],
+    find: impl Fn(u32, u32, u32) -> Cell,
+) -> Vec<f32> {
     let top = nodes.iter().map(|n| n.0).max().unwrap_or(0);
     let mut out: Vec<f32> = nodes.iter().map(|n| n.3).collect();
     for (i, &(l, x, y, e)) in nodes.iter().enumerate() {
@@ -25,16 +64,235 @@ pub fn neighbour_eps(nodes: &[(u32, u32, u32, f32)]) -> Vec<f32> {
                 continue;
             }
             for k in 0..=(top - l) {
-                let key = (l + k, (nx >> k) as u32, (ny >> k) as u32);
-                if let Some(&j) = index.get(&key) {
-                    if j != i {
-                        out[i] = out[i].max(nodes[j].3);
-                        out[j] = out[j].max(e);
+                match find(l + k, (nx >> k) as u32, (ny >> k) as u32) {
+                    Cell::Empty => continue,
+                    Cell::Split => break,
+                    Cell::Drawn(j) => {
+                        if j != i {
+                            out[i] = out[i].max(nodes[j].3);
+                            out[j] = out[j].max(e);
+                        }
+                        break;
                     }
-                    break;
                 }
             }
         }
     }
     out
+}
+
+/// Grid cells allowed per node before [`neighbour_eps`] takes the hash table instead (a
+/// frame's nodes fill their levels' boxes far more densely).
+const GRID_CELLS_PER_NODE: u64 = 64;
+
+/// One level's grid: cells over `[x0, x0 + w) × [y0, y0 + h)`.
+struct LevelGrid {
+    x0: u32,
+    y0: u32,
+    w: u32,
+    h: u32,
+    cells: Vec<u32>,
+}
+
+/// Cell values: a node's index, or one of these.
+const EMPTY: u32 = u32::MAX;
+const SPLIT: u32 = u32::MAX - 1;
+
+struct LevelGrids {
+    levels: Vec<LevelGrid>,
+    /// A drawn node lies inside another: walks go on through split cells.
+    overlap: bool,
+}
+
+impl LevelGrids {
+    /// The grids of `nodes`, or `None` when they would take more than
+    /// [`GRID_CELLS_PER_NODE`] cells a node (or the list is too long for u32 indices).
+    fn of(nodes: &[(u32, u32, u32, f32)]) -> Option<Self> {
+        if nodes.is_empty() || nodes.len() >= SPLIT as usize {
+            return None;
+        }
+        let top = nodes.iter().map(|n| n.0).max()? as usize;
+        // Each level's box: its drawn nodes' and the finer level's box halved (the ancestors).
+        let mut boxes: Vec<Option<[u32; 4]>> = vec![None; top + 1];
+        for &(l, x, y, _) in nodes {
+            let b = &mut boxes[l as usize];
+            *b = Some(match *b {
+                None => [x, y, x, y],
+                Some([x0, y0, x1, y1]) => [x0.min(x), y0.min(y), x1.max(x), y1.max(y)],
+            });
+        }
+        for l in 1..=top {
+            if let Some([x0, y0, x1, y1]) = boxes[l - 1] {
+                let half = [x0 >> 1, y0 >> 1, x1 >> 1, y1 >> 1];
+                boxes[l] = Some(match boxes[l] {
+                    None => half,
+                    Some([a0, b0, a1, b1]) => [
+                        a0.min(half[0]),
+                        b0.min(half[1]),
+                        a1.max(half[2]),
+                        b1.max(half[3]),
+                    ],
+                });
+            }
+        }
+        let area = |b: &Option<[u32; 4]>| {
+            b.map_or(0, |[x0, y0, x1, y1]| {
+                ((x1 - x0) as u64 + 1).saturating_mul((y1 - y0) as u64 + 1)
+            })
+        };
+        let cells: u64 = boxes.iter().map(area).fold(0, u64::saturating_add);
+        if cells > GRID_CELLS_PER_NODE.saturating_mul(nodes.len() as u64) {
+            return None;
+        }
+        let mut levels: Vec<LevelGrid> = boxes
+            .iter()
+            .map(|b| match *b {
+                Some([x0, y0, x1, y1]) => LevelGrid {
+                    x0,
+                    y0,
+                    w: x1 - x0 + 1,
+                    h: y1 - y0 + 1,
+                    cells: vec![EMPTY; area(b) as usize],
+                },
+                None => LevelGrid {
+                    x0: 0,
+                    y0: 0,
+                    w: 0,
+                    h: 0,
+                    cells: Vec::new(),
+                },
+            })
+            .collect();
+        // Drawn nodes (a repeated node: the last one, as the hash table keeps it).
+        for (i, &(l, x, y, _)) in nodes.iter().enumerate() {
+            let g = &mut levels[l as usize];
+            let at = g.at(x, y).expect("inside its level's box");
+            g.cells[at] = i as u32;
+        }
+        // Their ancestors marked split, up to the first one marked already.
+        let mut overlap = false;
+        'nodes: for &(l, x, y, _) in nodes {
+            for m in l + 1..=top as u32 {
+                let k = m - l;
+                let g = &mut levels[m as usize];
+                let at = g.at(x >> k, y >> k).expect("inside its level's box");
+                match g.cells[at] {
+                    EMPTY => g.cells[at] = SPLIT,
+                    SPLIT => continue 'nodes,
+                    _ => {
+                        overlap = true;
+                        break 'nodes;
+                    }
+                }
+            }
+        }
+        Some(Self { levels, overlap })
+    }
+
+    fn get(&self, level: u32, x: u32, y: u32) -> Cell {
+        let Some(g) = self.levels.get(level as usize) else {
+            return Cell::Empty;
+        };
+        match g.at(x, y).map(|at| g.cells[at]) {
+            None | Some(EMPTY) => Cell::Empty,
+            Some(SPLIT) if self.overlap => Cell::Empty,
+            Some(SPLIT) => Cell::Split,
+            Some(j) => Cell::Drawn(j as usize),
+        }
+    }
+}
+
+impl LevelGrid {
+    #[inline]
+    fn at(&self, x: u32, y: u32) -> Option<usize> {
+        let (dx, dy) = (x.wrapping_sub(self.x0), y.wrapping_sub(self.y0));
+        (dx < self.w && dy < self.h).then(|| dy as usize * self.w as usize + dx as usize)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn xorshift(seed: &mut u64) -> u64 {
+        *seed ^= *seed << 13;
+        *seed ^= *seed >> 7;
+        *seed ^= *seed << 17;
+        *seed
+    }
+
+    /// A random quadtree cover of `top` levels at (x, y) (level-`top` coordinates), with
+    /// holes when `holes`.
+    fn cover(seed: &mut u64, top: u32, x: u32, y: u32, holes: bool) -> Vec<(u32, u32, u32, f32)> {
+        let mut nodes = Vec::new();
+        let mut stack = vec![(top, x, y)];
+        while let Some((l, x, y)) = stack.pop() {
+            if l > 0 && !xorshift(seed).is_multiple_of(3) {
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    stack.push((l - 1, 2 * x + dx, 2 * y + dy));
+                }
+            } else if !holes || !xorshift(seed).is_multiple_of(5) {
+                nodes.push((l, x, y, (xorshift(seed) % 1000) as f32 / 10.0));
+            }
+        }
+        nodes
+    }
+
+    /// The grids give what the hash table and the full walk give, on covers with and without
+    /// holes, several covers side by side, overlapping and repeated nodes (which take the
+    /// full walk through split cells), and on covers whose split cells end walks early.
+    #[test]
+    fn the_grids_walk_as_the_hash_table_does() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut stopped_early = 0;
+        for case in 0..200u32 {
+            let top = 1 + case % 6;
+            let base = (1u32 << (20 + case % 5)) + case;
+            let mut nodes = cover(&mut seed, top, base, base + 3, case % 2 == 1);
+            if case % 3 == 0 {
+                nodes.extend(cover(&mut seed, top, base + 1, base + 3, case % 4 == 1));
+            }
+            if case % 5 == 0 && nodes.len() > 2 {
+                // An overlap: a coarser node over one of the drawn ones.
+                let (l, x, y, _) = nodes[nodes.len() / 2];
+                if l < top {
+                    nodes.push((l + 1, x / 2, y / 2, 55.5));
+                }
+            }
+            if case % 7 == 0 {
+                let again = nodes[0];
+                nodes.push((again.0, again.1, again.2, again.3 + 1.0));
+            }
+            if nodes.is_empty() {
+                continue; // every part culled
+            }
+            let grids = LevelGrids::of(&nodes).expect("a cover fills its boxes");
+            let want = neighbour_eps_hashed(&nodes);
+            assert_eq!(neighbour_eps(&nodes), want, "case {case}: {nodes:?}");
+            if !grids.overlap {
+                stopped_early += grids
+                    .levels
+                    .iter()
+                    .flat_map(|g| &g.cells)
+                    .filter(|&&c| c == SPLIT)
+                    .count();
+            }
+        }
+        assert!(stopped_early > 0, "no split cell in any case");
+    }
+
+    /// Nodes spread far apart (a box of more cells than the nodes can justify) take the hash
+    /// table, with the same values; so do none.
+    #[test]
+    fn scattered_nodes_take_the_hash_table() {
+        let nodes = [
+            (0, 0, 0, 1.0),
+            (0, 1, 0, 2.0),
+            (0, 1 << 30, 1 << 30, 3.0),
+            (3, 9, 9, 4.0),
+        ];
+        assert!(LevelGrids::of(&nodes).is_none());
+        assert_eq!(neighbour_eps(&nodes), vec![2.0, 2.0, 3.0, 4.0]);
+        assert!(neighbour_eps(&[]).is_empty());
+    }
 }
