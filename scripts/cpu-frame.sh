@@ -2,8 +2,8 @@
 # The whole CPU frame of each flight, on the frame thread's own clock (FrameStats cpu_thread_us):
 # selection + plan from `fly --no-draw` (RUNS fresh runs, each frame's least: the runs do the
 # same work, so the least is that work with less of the machine's noise), staging + recording +
-# submission from one drawn `fly` (on lavapipe, whose rasteriser shares the cores, an upper
-# bound), summed frame by frame over the same poses. The first SKIP frames (start-up: empty
+# submission from DRAWN_RUNS drawn `fly` runs (each frame's least likewise; on lavapipe, whose
+# rasteriser shares the cores, an upper bound), summed frame by frame over the same poses. The first SKIP frames (start-up: empty
 # caches, the first uploads) are left out of the percentiles and reported apart.
 #
 #   scripts/cpu-frame.sh AERIE FLIGHTS OUT NAME=DEM [NAME=DEM ...]
@@ -11,7 +11,8 @@
 # AERIE: the aerie binary (a release build); FLIGHTS: a folder of waypoint files
 # NAME-<flight>.csv (a suite's flights/ folder); OUT: the output folder; NAME=DEM: a dataset
 # name and its elevation model, copied to a temporary folder first (its bake is written there).
-# Environment: SIZE (1280x720), TAU (1), FRAMES (122), FPS (30), RUNS (3), SKIP (2).
+# Environment: SIZE (1280x720), TAU (1), FRAMES (122), FPS (30), RUNS (3), DRAWN_RUNS (1),
+# SKIP (2).
 # Writes OUT/cpu_frame.csv and OUT/cpu_frame.md; prints a line per flight and a summary.
 set -uo pipefail
 if [ $# -lt 4 ]; then
@@ -21,12 +22,14 @@ fi
 aerie=$1 flights=$2 out=$3
 shift 3
 size=${SIZE:-1280x720} tau=${TAU:-1} frames=${FRAMES:-122} fps=${FPS:-30} runs=${RUNS:-3}
+drawn_runs=${DRAWN_RUNS:-1}
 skip=${SKIP:-2}
 if [ ! -x "$aerie" ]; then echo "cpu-frame: $aerie: not an executable" >&2; exit 2; fi
 if [ ! -d "$flights" ]; then echo "cpu-frame: $flights: no such folder" >&2; exit 2; fi
-for n in "$frames" "$runs" "$skip"; do
+for n in "$frames" "$runs" "$drawn_runs" "$skip"; do
   case $n in '' | *[!0-9]*) echo "cpu-frame: '$n' is not a whole number" >&2; exit 2 ;; esac
 done
+if [ "$runs" -lt 1 ] || [ "$drawn_runs" -lt 1 ]; then echo "cpu-frame: RUNS and DRAWN_RUNS must be at least 1" >&2; exit 2; fi
 if [ "$skip" -ge "$frames" ]; then echo "cpu-frame: SKIP $skip leaves no frame of $frames" >&2; exit 2; fi
 command -v python3 > /dev/null || { echo "cpu-frame: python3 is needed for the percentiles" >&2; exit 2; }
 mkdir -p "$out/runs" || exit 1
@@ -53,21 +56,26 @@ for pair in "$@"; do
     for r in $(seq 1 "$runs"); do
       "$aerie" fly --no-draw --pace 0 "${common[@]}" --out "$o-nodraw$r" > "$o-nodraw$r.log" 2>&1 || ok=0
     done
-    "$aerie" fly "${common[@]}" --every 100000 --out "$o-drawn" > "$o-drawn.log" 2>&1 || ok=0
+    for r in $(seq 1 "$drawn_runs"); do
+      "$aerie" fly "${common[@]}" --every 100000 --out "$o-drawn$r" > "$o-drawn$r.log" 2>&1 || ok=0
+    done
     if [ $ok = 0 ]; then
       echo "cpu-frame: $flight: a run failed (logs in $out/runs/)" >&2
       continue
     fi
-    python3 - "$flight" "$o" "$runs" "$skip" >> "$csv" << 'PY'
+    python3 - "$flight" "$o" "$runs" "$skip" "$drawn_runs" >> "$csv" << 'PY'
 import csv, sys
 flight, o, runs, skip = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+drawn_runs = int(sys.argv[5])
 def rows(d):
     return list(csv.DictReader(open(d + "/frames.csv")))
 nodraw = [rows(f"{o}-nodraw{r}") for r in range(1, runs + 1)]
-drawn = rows(f"{o}-drawn")
-n = min(len(drawn), *(len(r) for r in nodraw))
+drawns = [rows(f"{o}-drawn{r}") for r in range(1, drawn_runs + 1)]
+drawn = drawns[0]
+n = min(*(len(r) for r in drawns), *(len(r) for r in nodraw))
 plan = [min(float(r[i]["cpu_thread_plan_us"]) for r in nodraw) for i in range(n)]
-after = [float(drawn[i]["cpu_thread_us"]) - float(drawn[i]["cpu_thread_plan_us"]) for i in range(n)]
+after = [min(float(d[i]["cpu_thread_us"]) - float(d[i]["cpu_thread_plan_us"]) for d in drawns)
+         for i in range(n)]
 whole = [a + b for a, b in zip(plan, after)]
 def q(v, p):
     v = sorted(v[skip:])
