@@ -228,8 +228,7 @@ pub struct GeoNodeCache {
     /// Each node's place in `frames`, keyed by (south-west sample column << 32 | row,
     /// step << 16 | quads): two hashing rounds (sample indices of a grid at most 2^32 wide,
     /// steps and quads far below 2^16). The records sit apart from the table, so growing it
-    /// moves 20-byte entries, not 400-byte records (a table of records growing under a flight
-    /// made that frame one of its slowest).
+    /// moves 20-byte entries, not 400-byte records.
     index: std::collections::HashMap<(u64, u64), u32, FastHash>,
     frames: Vec<NodeFrame>,
 }

@@ -127,20 +127,10 @@ impl NodeCache {
         }
     }
 
-    /// The node's fixed values, computed by `compute` the first time they are asked for.
+    /// The node's fixed values, computed by `compute` the first time they are asked for; by
+    /// reference, so the caller reads the fields it needs in place instead of copying all ~170
+    /// bytes.
     pub(super) fn get(
-        &mut self,
-        level: u32,
-        tx: u32,
-        ty: u32,
-        compute: impl FnOnce() -> NodeFixed,
-    ) -> NodeFixed {
-        *self.get_ref(level, tx, ty, compute)
-    }
-
-    /// [`Self::get`] by reference: the caller reads the fields it needs in place instead of
-    /// copying all ~170 bytes.
-    pub(super) fn get_ref(
         &mut self,
         level: u32,
         tx: u32,
@@ -239,12 +229,12 @@ mod tests {
         ];
         let mut computed = Vec::new();
         for &(l, x, y) in &order {
-            let got = cache.get(l, x, y, || {
+            let got = *cache.get(l, x, y, || {
                 computed.push((l, x, y));
                 value_of(l, x, y)
             });
             assert_eq!(got, value_of(l, x, y), "node ({l}, {x}, {y})");
-            assert_eq!(*cache.get_ref(l, x, y, || unreachable!()), got);
+            assert_eq!(*cache.get(l, x, y, || unreachable!()), got);
         }
         let distinct: std::collections::HashSet<_> = order.iter().collect();
         assert_eq!(computed.len(), distinct.len(), "computed: {computed:?}");
@@ -252,7 +242,7 @@ mod tests {
         // A second pass computes nothing.
         for &(l, x, y) in order.iter().rev() {
             let got = cache.get(l, x, y, || panic!("({l}, {x}, {y}) computed again"));
-            assert_eq!(got, value_of(l, x, y));
+            assert_eq!(*got, value_of(l, x, y));
         }
     }
 

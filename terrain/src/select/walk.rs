@@ -176,16 +176,7 @@ impl Frame<'_> {
     /// The node's camera-independent values (from the cache after the first time on the
     /// ellipsoid; on the plane they are two table reads, cheaper than the cache's lookup).
     pub(super) fn fixed(&self, level: u32, tx: u32, ty: u32) -> NodeFixed {
-        #[cfg(test)]
-        if self.reference {
-            return self.compute_fixed(level, tx, ty);
-        }
-        if self.params.earth.is_none() {
-            return self.compute_fixed(level, tx, ty);
-        }
-        self.cache
-            .borrow_mut()
-            .get(level, tx, ty, || self.compute_fixed(level, tx, ty))
+        self.with_fixed(level, tx, ty, |node| *node)
     }
 
     /// `f` of [`Self::fixed`], read in place in the cache (no copy of the whole record). `f`
@@ -206,7 +197,7 @@ impl Frame<'_> {
             return f(&self.compute_fixed(level, tx, ty));
         }
         let mut cache = self.cache.borrow_mut();
-        f(cache.get_ref(level, tx, ty, || self.compute_fixed(level, tx, ty)))
+        f(cache.get(level, tx, ty, || self.compute_fixed(level, tx, ty)))
     }
 
     /// [`Self::fixed`] computed: ε of the level-ℓ surface over the level-ℓ tile (tx, ty) with
