@@ -2,13 +2,15 @@
 //! a generated 16385² dataset (`AERIE_BENCH_SIZE` overrides) on the flat plane and on the
 //! ellipsoid (a 1″ geographic grid). Besides criterion's figures, each frame of the flight is
 //! timed once more on its own (after criterion's passes; thread CPU time, the least of three
-//! runs) for the per-frame median and p99.
+//! runs) for the per-frame median and p99. Then how much of each frame's cut the cut of 1, 8
+//! and 30 frames before already drew (the same nodes in the same parts): what a selection
+//! carried across frames could keep.
 
 use std::hint::black_box;
 
 use aerie::camera::Camera;
 use aerie::terrain::clipmap::place_levels;
-use aerie::terrain::select::{select_tiles, SelectParams, Selection};
+use aerie::terrain::select::{select_tiles, DrawItem, SelectParams, Selection};
 use aerie_bench::{selection_size, thread_cpu_us, TargetScene};
 use criterion::{criterion_group, criterion_main, Criterion};
 
@@ -69,8 +71,51 @@ fn selection_target(c: &mut Criterion) {
             at(1.0),
             sel.items.len()
         );
+        let cuts: Vec<Vec<CutKey>> = cams
+            .iter()
+            .map(|cam| {
+                run(cam, &mut sel);
+                let mut keys: Vec<CutKey> = sel.items.iter().map(cut_key).collect();
+                keys.sort_unstable();
+                keys
+            })
+            .collect();
+        for lag in [1, 8, 30] {
+            let (kept, least) = cut_coherence(&cuts, lag);
+            eprintln!(
+                "select_target {}: nodes drawn {lag} frame(s) ({:.1} m) before, in the same parts: {:.2} % of a frame's, least {:.2} %",
+                scene.name,
+                lag as f64 * 100.0 / 60.0,
+                100.0 * kept,
+                100.0 * least
+            );
+        }
     }
     group.finish();
+}
+
+/// A drawn node and how it is drawn: ring tile, node, levels up it takes its mesh from.
+type CutKey = (u32, u32, u32, u32, u32, u32, u32);
+
+fn cut_key(i: &DrawItem) -> CutKey {
+    let (l, x, y) = (i.level, i.tx, i.ty);
+    let up = i.morph.levels_up();
+    (l, x, y, i.node_level, i.node_tx, i.node_ty, up)
+}
+
+/// Over every frame with one `lag` frames before it: the share of all its drawn nodes that the
+/// earlier cut drew the same way, and the least share of one frame. `cuts` are sorted.
+fn cut_coherence(cuts: &[Vec<CutKey>], lag: usize) -> (f64, f64) {
+    let (mut kept, mut total, mut least) = (0usize, 0usize, 1.0f64);
+    for (before, now) in cuts.iter().zip(cuts.iter().skip(lag)) {
+        let same = now
+            .iter()
+            .filter(|k| before.binary_search(k).is_ok())
+            .count();
+        (kept, total) = (kept + same, total + now.len());
+        least = least.min(same as f64 / now.len().max(1) as f64);
+    }
+    (kept as f64 / total.max(1) as f64, least)
 }
 
 criterion_group! {
