@@ -10,13 +10,14 @@
 #
 # AERIE: the aerie binary (a release build); FLIGHTS: a folder of waypoint files
 # NAME-<flight>.csv (a suite's flights/ folder); OUT: the output folder; NAME=DEM: a dataset
-# name and its elevation model, copied to a temporary folder first (its bake is written there).
+# name and its elevation model (with a raw grid's `<dem>.json` sidecar), copied to a temporary
+# folder first (its bake is written there).
 # Environment: SIZE (1280x720), TAU (1), FRAMES (122), FPS (30), RUNS (3), DRAWN_RUNS (1),
 # SKIP (2).
 # Writes OUT/cpu_frame.csv and OUT/cpu_frame.md; prints a line per flight and a summary.
 set -uo pipefail
 if [ $# -lt 4 ]; then
-  sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'
   exit 2
 fi
 aerie=$1 flights=$2 out=$3
@@ -43,6 +44,8 @@ for pair in "$@"; do
     echo "cpu-frame: '$pair' is not NAME=DEM with an existing DEM" >&2; exit 2
   fi
   mkdir -p "$data/$name" && cp -r "$dem" "$data/$name/" || exit 1
+  # A raw grid's sidecar (`aerie gen-dem` writes `<dem>.json`) goes with it.
+  if [ -f "$dem.json" ]; then cp "$dem.json" "$data/$name/" || exit 1; fi
   local_dem="$data/$name/$(basename "$dem")"
   found=0
   for path in "$flights/$name"-*.csv; do
