@@ -1,8 +1,9 @@
 //! Issue 15's selection target: one channel at 1280×720, τ = 1 px, 300 m above the ground, on
 //! a generated 16385² dataset (`AERIE_BENCH_SIZE` overrides) on the flat plane and on the
-//! ellipsoid (a 1″ geographic grid). Besides criterion's figures, each frame of the flight is
-//! timed once more on its own (after criterion's passes; thread CPU time, the least of three
-//! runs) for the per-frame median and p99. Then how much of each frame's cut the cut of 1, 8
+//! ellipsoid (a 1″ geographic grid), with ring tiles carried across frames where they may be
+//! (`SelectParams::carry`, the default: one view on the plane) and walked afresh every frame
+//! (`_walked_afresh`). Besides criterion's figures, the flight is flown three more times in
+//! order (thread CPU time, each frame's least) for the per-frame median and p99. Then how much of each frame's cut the cut of 1, 8
 //! and 30 frames before already drew (the same nodes in the same parts): what a selection
 //! carried across frames could keep.
 
@@ -22,59 +23,61 @@ fn selection_target(c: &mut Criterion) {
         eprintln!("generating and baking a {size}² dataset (geographic: {geographic})...");
         let scene = TargetScene::new(size, geographic);
         let cams = scene.flight_agl(600, viewport.0, viewport.1, 300.0);
+        for carry in [true, false] {
+            let params = SelectParams {
+                earth: scene.earth,
+                carry,
+                ..SelectParams::default()
+            };
+            let way = if carry { "" } else { "_walked_afresh" };
+            let mut sel = Selection::default();
+            let mut k = 0;
+            group.bench_function(format!("bounded_tau1_{}{way}", scene.name), |b| {
+                b.iter(|| {
+                    k += 1;
+                    black_box(run(&scene, &cams[k % cams.len()], &params, &mut sel))
+                })
+            });
+            // Thread CPU time, each frame's least over three passes of the flight in order,
+            // each from a fresh selection (a selection carries ring tiles from the frame
+            // before, so a frame is timed after the one before it, never after itself): on a
+            // loaded machine the wall clock's p99 is the scheduler's time slice, not the
+            // selection's.
+            let mut times = vec![f64::INFINITY; cams.len()];
+            let (mut carried, mut drawn) = (0u64, 0u64);
+            for _ in 0..3 {
+                let mut sel = Selection::default();
+                for (cam, least) in cams.iter().zip(times.iter_mut()) {
+                    let t = thread_cpu_us();
+                    black_box(run(&scene, cam, &params, &mut sel));
+                    *least = least.min(thread_cpu_us() - t);
+                    carried += sel.carry.stats.carried_nodes as u64;
+                    drawn += sel.items.len() as u64;
+                }
+            }
+            times.sort_by(f64::total_cmp);
+            let at = |q: f64| times[((times.len() - 1) as f64 * q).round() as usize];
+            eprintln!(
+                "select_target {}{way}: per frame (thread CPU time) median {:.1} µs, p99 {:.1} µs, max {:.1} µs, {} items, {:.1} % of the drawn nodes carried from the frame before",
+                scene.name,
+                at(0.5),
+                at(0.99),
+                at(1.0),
+                sel.items.len(),
+                100.0 * carried as f64 / drawn.max(1) as f64
+            );
+        }
+        // The cuts of fresh walks: what a carried selection can keep.
         let params = SelectParams {
             earth: scene.earth,
+            carry: false,
             ..SelectParams::default()
         };
         let mut sel = Selection::default();
-        let run = |cam: &Camera, sel: &mut Selection| {
-            let placements = place_levels(&scene.clip, scene.viewer(cam));
-            select_tiles(
-                &scene.bake,
-                &scene.clip,
-                &placements,
-                cam,
-                viewport,
-                &params,
-                sel,
-            );
-            sel.items.len()
-        };
-        let mut k = 0;
-        group.bench_function(format!("bounded_tau1_{}", scene.name), |b| {
-            b.iter(|| {
-                k += 1;
-                black_box(run(&cams[k % cams.len()], &mut sel))
-            })
-        });
-        // Thread CPU time, the least of three runs per frame: on a loaded machine the wall
-        // clock's p99 is the scheduler's time slice, not the selection's.
-        let mut times: Vec<f64> = cams
-            .iter()
-            .map(|cam| {
-                (0..3)
-                    .map(|_| {
-                        let t = thread_cpu_us();
-                        black_box(run(cam, &mut sel));
-                        thread_cpu_us() - t
-                    })
-                    .fold(f64::INFINITY, f64::min)
-            })
-            .collect();
-        times.sort_by(f64::total_cmp);
-        let at = |q: f64| times[((times.len() - 1) as f64 * q).round() as usize];
-        eprintln!(
-            "select_target {}: per frame (thread CPU time) median {:.1} µs, p99 {:.1} µs, max {:.1} µs, {} items",
-            scene.name,
-            at(0.5),
-            at(0.99),
-            at(1.0),
-            sel.items.len()
-        );
         let cuts: Vec<Vec<CutKey>> = cams
             .iter()
             .map(|cam| {
-                run(cam, &mut sel);
+                run(&scene, cam, &params, &mut sel);
                 let mut keys: Vec<CutKey> = sel.items.iter().map(cut_key).collect();
                 keys.sort_unstable();
                 keys
@@ -92,6 +95,22 @@ fn selection_target(c: &mut Criterion) {
         }
     }
     group.finish();
+}
+
+/// One frame's selection into `sel`; the nodes drawn.
+fn run(scene: &TargetScene, cam: &Camera, params: &SelectParams, sel: &mut Selection) -> usize {
+    let placements = place_levels(&scene.clip, scene.viewer(cam));
+    let viewport = (1280, 720);
+    select_tiles(
+        &scene.bake,
+        &scene.clip,
+        &placements,
+        cam,
+        viewport,
+        params,
+        sel,
+    );
+    sel.items.len()
 }
 
 /// A drawn node and how it is drawn: ring tile, node, levels up it takes its mesh from.

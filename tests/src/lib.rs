@@ -4,6 +4,7 @@
 pub mod bins;
 pub mod cigi_host;
 pub mod drape_fixtures;
+pub mod flat_oracle;
 pub mod imports;
 pub mod ridges;
 

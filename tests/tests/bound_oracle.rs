@@ -16,10 +16,10 @@ use aerie::terrain::geodesy::wgs84::{WGS84_A, WGS84_E2};
 use aerie::terrain::geodesy::{GeoGrid, Geodetic};
 use aerie::terrain::load::geographic_spacing_m;
 use aerie::terrain::load_dem;
-use aerie::terrain::select::{select_tiles, DrawItem, SelectParams, Selection, EARTH_RADIUS_M};
+use aerie::terrain::select::{select_tiles, DrawItem, SelectParams, Selection};
 use aerie::terrain::GeoReference;
 use aerie::terrain::Heightfield;
-use aerie_tests::demo_dem;
+use aerie_tests::{demo_dem, flat_oracle};
 use glam::{DVec2, DVec3};
 
 const W: u32 = 320;
@@ -171,60 +171,9 @@ fn select(s: &Scene, cam: &Camera, tau: f64) -> Selection {
     sel
 }
 
-/// Curvature drop of a point at horizontal offset `d` from the eye.
-fn drop(eye: DVec3, x: f64, y: f64) -> f64 {
-    (DVec2::new(x, y) - eye.truncate()).length_squared() / (2.0 * EARTH_RADIUS_M)
-}
-
-/// Largest on-screen distance (px) between true samples and the drawn surface of one tile,
-/// computed independently of the bake: own barycentric interpolation over the SW–NE diagonal
-/// at level L−r, vertices dropped by curvature and interpolated linearly as on the GPU.
-/// The worst projected distance between the true samples of level-`level` tile (tx, ty) and the
-/// surface drawn over it: the level-`drawn` grid (the tile's own level, or its parent's for a
-/// quadrant drawn at the parent's resolution).
+/// [`flat_oracle::tile_error_px`] at this file's viewport and tile size.
 fn tile_error_px(hf: &Heightfield, cam: &Camera, level: u32, tx: u32, ty: u32, drawn: u32) -> f64 {
-    let q = (M - 1) as usize;
-    let side = q << level;
-    let step = 1usize << drawn;
-    let (c0, r0) = (tx as usize * side, ty as usize * side);
-    let eye = cam.position;
-    let vertex = |c: usize, row: usize| {
-        let (x, y) = (c as f64 * hf.spacing_x, row as f64 * hf.spacing_y);
-        hf.at(c, row) as f64 - drop(eye, x, y)
-    };
-    let on_screen = |p: DVec2| p.x >= 0.0 && p.x <= W as f64 && p.y >= 0.0 && p.y <= H as f64;
-    let mut worst: f64 = 0.0;
-    for row in r0..=r0 + side {
-        for c in c0..=c0 + side {
-            let (x, y) = (c as f64 * hf.spacing_x, row as f64 * hf.spacing_y);
-            let truth = hf.at(c, row) as f64 - drop(eye, x, y);
-            // The drawn cell and the position inside it.
-            let (ci, ri) = (
-                ((c - c0) / step).min(side / step - 1),
-                ((row - r0) / step).min(side / step - 1),
-            );
-            let (vc, vr) = (c0 + ci * step, r0 + ri * step);
-            let u = (c - vc) as f64 / step as f64;
-            let v = (row - vr) as f64 / step as f64;
-            let sw = vertex(vc, vr);
-            let se = vertex(vc + step, vr);
-            let nw = vertex(vc, vr + step);
-            let ne = vertex(vc + step, vr + step);
-            let drawn = if u >= v {
-                sw * (1.0 - u) + se * (u - v) + ne * v
-            } else {
-                sw * (1.0 - v) + nw * (v - u) + ne * u
-            };
-            let a = cam.project_px(DVec3::new(x, y, truth), W, H);
-            let b = cam.project_px(DVec3::new(x, y, drawn), W, H);
-            if let (Some((pa, _)), Some((pb, _))) = (a, b) {
-                if on_screen(pa) || on_screen(pb) {
-                    worst = worst.max((pa - pb).length());
-                }
-            }
-        }
-    }
-    worst
+    flat_oracle::tile_error_px(hf, cam, (W, H), M, level, tx, ty, drawn)
 }
 
 #[test]
@@ -310,47 +259,18 @@ fn every_drawn_tile_is_within_tau_for_a_thousand_random_cameras() {
 fn drawn_tiles_cover_the_visible_ground_exactly_once() {
     let s = scene("alpine", alpine());
     let hf = &s.ds.hf;
-    let cells = (hf.width - 1) * (hf.height - 1);
-    let q = (M - 1) as usize;
     let mut rng = Rng(7);
     for k in 0..24 {
         let cam = random_camera(&mut rng, &s);
         let sel = select(&s, &cam, 1.0);
-        let mut count = vec![0u8; cells];
-        for item in &sel.items {
-            let side = q << item.node_level;
-            let (c0, r0) = (item.node_tx as usize * side, item.node_ty as usize * side);
-            for row in r0..(r0 + side).min(hf.height - 1) {
-                for c in c0..(c0 + side).min(hf.width - 1) {
-                    count[row * (hf.width - 1) + c] += 1;
-                }
-            }
-        }
-        assert!(
-            count.iter().all(|&n| n <= 1),
-            "camera {k}: overlapping tiles"
+        let visible = flat_oracle::assert_covered_once(
+            hf,
+            &cam,
+            (W, H),
+            M,
+            &sel.items,
+            &format!("camera {k}"),
         );
-        let mut visible = 0;
-        for row in 0..hf.height - 1 {
-            for c in 0..hf.width - 1 {
-                let (x, y) = (
-                    (c as f64 + 0.5) * hf.spacing_x,
-                    (row as f64 + 0.5) * hf.spacing_y,
-                );
-                let z = hf.height_at_m(x, y) - drop(cam.position, x, y);
-                let Some((p, _)) = cam.project_px(DVec3::new(x, y, z), W, H) else {
-                    continue;
-                };
-                if p.x >= 0.0 && p.x <= W as f64 && p.y >= 0.0 && p.y <= H as f64 {
-                    visible += 1;
-                    assert_eq!(
-                        count[row * (hf.width - 1) + c],
-                        1,
-                        "camera {k}: visible cell ({c}, {row}) is not drawn"
-                    );
-                }
-            }
-        }
         assert!(visible > 0 || k > 0);
     }
 }

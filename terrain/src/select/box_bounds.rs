@@ -134,7 +134,10 @@ impl Frame<'_> {
                 }
             };
             match self.evaluate_quadrant(node, Some(parent), level - 1, cx, cy) {
-                None => *quad = Quadrant::Unseen,
+                None => {
+                    self.note_culled(level - 1, cx, cy);
+                    *quad = Quadrant::Unseen
+                }
                 Some((eq, _, es)) => {
                     tighter(q, eq);
                     if let Some(es) = es {

@@ -8,6 +8,7 @@ use crate::camera::Camera;
 use crate::clipmap::{ring_tiles, ClipmapDesc, LevelPlacement};
 
 use super::bound::{frustum_gain_floor, frustum_vertical_gain};
+use super::carry::{carry_key, Carry, FrustumPlanes, Optics, ViewNow};
 use super::cdlod_morph::Morph;
 use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant, Upgrade};
 use super::selection::{
@@ -115,6 +116,40 @@ pub fn select_tiles_multi_ready(
     };
     #[cfg(test)]
     let gain_floor = gain_floor.filter(|_| !super::walk::reference::every_hybrid());
+    let mut carry = std::mem::take(&mut out.carry);
+    let v = &views[0];
+    let f = v.camera.frustum;
+    let optics = [
+        v.focal,
+        v.tau,
+        v.camera.near,
+        f.tan_left,
+        f.tan_right,
+        f.tan_down,
+        f.tan_up,
+    ];
+    let key = carry_key(bake, params, views.len(), optics);
+    #[cfg(test)]
+    let key = key.filter(|_| !super::walk::reference::active());
+    let floor = frustum_gain_floor(&f, v.up);
+    let key = key.filter(|_| floor > 0.0);
+    carry.begin(key);
+    let carrying = key.map(|_| Carrying {
+        now: ViewNow {
+            eye: v.camera.position,
+            rotation: v.rotation,
+        },
+        optics: Optics {
+            tau: v.tau,
+            near: v.camera.near,
+            a: f.tan_left.abs().max(f.tan_right.abs()),
+            b: f.tan_up.abs().max(f.tan_down.abs()),
+            obliquity: f.max_obliquity(),
+            floor,
+            w_z: v.up.z.abs(),
+        },
+        planes: FrustumPlanes::of(&f, v.camera.near),
+    });
     let frame = Frame {
         split_prev: distance.then_some(&split_prev),
         split_now: distance.then_some(&split_now),
@@ -132,20 +167,28 @@ pub fn select_tiles_multi_ready(
         horizon: cull_hidden.then_some(&horizon),
         hidden: std::cell::Cell::new(0),
         quadrants: std::cell::RefCell::new(Vec::new()),
+        culled: carrying
+            .as_ref()
+            .map(|_| std::cell::RefCell::new(Vec::new())),
         costs: MeshCosts::of(grid.q),
         tau_max,
         gain_floor,
     };
 
     if params.mode == LodMode::Bounded && params.coarsen {
-        select_coarsest_first(&frame, placements, out);
+        let mut carried = carrying.map(|c| (c, &mut carry));
+        select_coarsest_first(&frame, placements, carried.as_mut(), out);
         out.hidden = frame.hidden.get();
         drop(frame);
         out.split = split_now.into_inner();
         out.node_cache = cache;
         out.horizon = horizon;
+        carry.end();
+        out.carry = carry;
         return;
     }
+    carry.end();
+    out.carry = carry;
     let finest = if params.mode == LodMode::Bounded {
         finest_needed_level(&frame, placements)
     } else {
@@ -239,7 +282,13 @@ fn refine_ring_tile(
 /// is a ring tile of its level and is refined from the pools. The result covers the same ground
 /// as the ring-by-ring selection, each part by one node meeting τ (or unbounded at the cap),
 /// at the coarsest level that does.
-fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut Selection) {
+fn select_coarsest_first(
+    frame: &Frame,
+    placements: &[LevelPlacement],
+    mut carry: Option<&mut (Carrying, &mut Carry)>,
+    out: &mut Selection,
+) {
+    let mut morphs = Vec::new();
     let Some(coarsest) = placements.last() else {
         return;
     };
@@ -422,7 +471,42 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
             parent,
             kids: kids.as_ref(),
         });
-        let missed = refine_ring_tile(frame, level, tx, ty, eval, retry, i, &mut nodes, out);
+        let missed = match carry.as_deref_mut() {
+            Some((c, carry)) if !waiting => {
+                let key = (level, tx, ty);
+                nodes.clear();
+                morphs.clear();
+                if carry.take(key, &c.now, &c.optics, &mut nodes, &mut morphs) {
+                    let first = out.items.len();
+                    out.push_refined(i, level, tx, ty, &nodes);
+                    for &(k, morph) in &morphs {
+                        out.items[first + k].morph = morph;
+                    }
+                    0
+                } else {
+                    if let Some(culled) = &frame.culled {
+                        culled.borrow_mut().clear();
+                    }
+                    let missed =
+                        refine_ring_tile(frame, level, tx, ty, eval, retry, i, &mut nodes, out);
+                    if missed == 0 {
+                        let culled = frame.culled.as_ref().map(|c| c.borrow());
+                        carry.record(
+                            key,
+                            &c.now,
+                            &c.optics,
+                            &nodes,
+                            &frame.quadrants.borrow(),
+                            culled.as_deref().map_or(&[], |v| v.as_slice()),
+                            &c.planes,
+                            |l, x, y| frame.carried_box(l, x, y),
+                        );
+                    }
+                    missed
+                }
+            }
+            _ => refine_ring_tile(frame, level, tx, ty, eval, retry, i, &mut nodes, out),
+        };
         if waiting {
             out.stream_late += (missed > 0) as u32;
         } else {
@@ -434,6 +518,13 @@ fn select_coarsest_first(frame: &Frame, placements: &[LevelPlacement], out: &mut
     for s in out.levels.iter_mut() {
         s.skipped = s.drawn == 0;
     }
+}
+
+/// What carrying ring tiles across frames reads of the one view (`carry.rs`).
+struct Carrying {
+    now: ViewNow,
+    optics: Optics,
+    planes: FrustumPlanes,
 }
 
 /// Whether a node on the coarsest-first walk's stack, evaluated as its parent's quadrant, may

@@ -73,6 +73,10 @@ pub struct SelectParams {
     /// resolution, the bake's [`ErrorBake::fine_eps`](crate::bake::ErrorBake::fine_eps) — and
     /// drawn in the fewest triangles that meet τ (`walk::choose_parts`).
     pub sixteenths: bool,
+    /// `Bounded` with one view on the flat plane: a ring tile refined in an earlier frame is
+    /// drawn again while its certificate says every node still meets τ (`carry.rs`), instead
+    /// of walked afresh.
+    pub carry: bool,
 }
 
 impl Default for SelectParams {
@@ -90,6 +94,7 @@ impl Default for SelectParams {
             horizon_cull: false,
             parent_quadrants: true,
             sixteenths: true,
+            carry: true,
         }
     }
 }
@@ -182,10 +187,13 @@ pub struct Selection {
     pub hidden: u32,
     /// The horizons of the last frame (reused allocations, corner positions).
     pub horizon: super::horizon::HorizonSet,
+    /// The ring tiles refined in earlier frames, drawn again while they hold
+    /// ([`SelectParams::carry`]); like the node cache, never copied with a selection.
+    pub carry: super::carry::Carry,
 }
 
 /// Field by field, so that `clone_from` reuses the target's vectors and keeps its own node
-/// cache (the derived one would replace the target whole, cache included).
+/// cache and carried tiles (the derived one would replace the target whole, cache included).
 impl Clone for Selection {
     fn clone(&self) -> Self {
         let mut s = Self::default();
@@ -206,6 +214,7 @@ impl Clone for Selection {
             node_cache,
             hidden,
             horizon: _,
+            carry: _,
         } = source;
         self.items.clone_from(items);
         self.levels.clone_from(levels);

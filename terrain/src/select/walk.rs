@@ -111,6 +111,9 @@ pub(super) struct Frame<'a> {
     /// [`Grid::cell_diagonal`] of every level of the bake, formed once a frame (a square root
     /// per node evaluation otherwise).
     pub(super) diagonals: Vec<f64>,
+    /// Carrying ([`SelectParams::carry`]): the parts the walk of the ring tile being refined
+    /// found outside the frustum (level, tx, ty), for its record's certificate; `None` else.
+    pub(super) culled: Option<std::cell::RefCell<Vec<(u32, u32, u32)>>>,
     /// The ring tile being refined: which of its nodes are quadrants drawn at their parent's
     /// resolution ([`SelectParams::parent_quadrants`]) or sixteenths at their grandparent's,
     /// by index in its node list.
@@ -161,6 +164,28 @@ impl Frame<'_> {
             return None;
         }
         kids
+    }
+
+    /// Node (level, tx, ty) was found outside every view: kept for the carried record.
+    #[inline]
+    pub(super) fn note_culled(&self, level: u32, tx: u32, ty: u32) {
+        if let Some(c) = &self.culled {
+            c.borrow_mut().push((level, tx, ty));
+        }
+    }
+
+    /// The one view's corners (view space) and world box of node (level, tx, ty), its bottom
+    /// carrying the sag of cells two levels up (the most any of its parts is drawn with).
+    pub(super) fn carried_box(
+        &self,
+        level: u32,
+        tx: u32,
+        ty: u32,
+    ) -> (super::bound::ViewCorners, Aabb) {
+        let v = &self.views[0];
+        let node = self.compute_fixed(level, tx, ty);
+        let aabb = self.aabb(level + 2, &node, v.camera.position);
+        (view_corners(&v.to_view, &aabb), aabb)
     }
 
     /// On the plane, the curvature slack of a level-`level` cell (0 without curvature).
@@ -424,7 +449,10 @@ impl Frame<'_> {
             let (cx, cy) = child_of(tx, ty, k);
             if has_terrain(self.bake, level - 1, cx, cy) {
                 *q = match self.evaluate_quadrant(parent, grand, level - 1, cx, cy) {
-                    None => Quadrant::Unseen,
+                    None => {
+                        self.note_culled(level - 1, cx, cy);
+                        Quadrant::Unseen
+                    }
                     Some((q, own, sub)) => Quadrant::Seen { q, own, sub },
                 };
             }

@@ -1,0 +1,199 @@
+//! A selection carried across frames (`SelectParams::carry`, `terrain/src/select/carry.rs`),
+//! checked by brute force on flights over the flat plane: in every frame the drawn nodes cover
+//! the visible ground exactly once and each, carried or walked, lies within τ of the true
+//! surface and within the bound it reports (`flat_oracle`); the flights carry most nodes, and
+//! carrying draws about the nodes a fresh walk does.
+
+use aerie::camera::{Attitude, Camera, Frustum};
+use aerie::terrain::bake::{bake, BakeParams, ErrorBake};
+use aerie::terrain::clipmap::{place_levels, ClipmapDesc};
+use aerie::terrain::dataset::Dataset;
+use aerie::terrain::gen::{generate, DemKind, GenParams};
+use aerie::terrain::load_dem;
+use aerie::terrain::select::{select_tiles, SelectParams, Selection};
+use aerie::terrain::Heightfield;
+use aerie_tests::{demo_dem, flat_oracle};
+use glam::DVec3;
+
+const W: u32 = 320;
+const H: u32 = 180;
+const M: u32 = 17;
+
+/// splitmix64, so failures reproduce.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+}
+
+struct Scene {
+    name: &'static str,
+    ds: Dataset,
+    bake: ErrorBake,
+    clip: ClipmapDesc,
+}
+
+fn scene(name: &'static str, hf: Heightfield) -> Scene {
+    let ds = Dataset::from_heightfield(hf, name.into());
+    let bake = bake(
+        &ds,
+        BakeParams {
+            tile_size: M,
+            levels: 0,
+        },
+        &|_, _| {},
+    );
+    let clip = ClipmapDesc {
+        tile_quads: M - 1,
+        patch_tiles: 8,
+        margin_tiles: 2,
+        width: ds.hf.width as u32,
+        height: ds.hf.height as u32,
+    };
+    Scene {
+        name,
+        ds,
+        bake,
+        clip,
+    }
+}
+
+/// A 1025² crop of the Inn valley tile.
+fn alpine() -> Heightfield {
+    let full = load_dem(&demo_dem()).expect("demo DEM");
+    let (n, c0, r0) = (1025usize, 88usize, 88usize);
+    let mut heights = Vec::with_capacity(n * n);
+    for r in 0..n {
+        heights.extend_from_slice(&full.heights[(r0 + r) * full.width + c0..][..n]);
+    }
+    Heightfield {
+        width: n,
+        height: n,
+        heights,
+        ..full
+    }
+}
+
+/// One flight: a straight line at a steady speed, turning steadily or not at all.
+fn flight(rng: &mut Rng, s: &Scene, frames: usize) -> Vec<Camera> {
+    let hf = &s.ds.hf;
+    let (ex, ey) = hf.extent_m();
+    let (x, y) = (rng.range(0.3, 0.7) * ex, rng.range(0.3, 0.7) * ey);
+    let z = hf.height_at_m(x, y) + rng.range(100.0, 2000.0);
+    let heading = rng.range(0.0, 360.0);
+    let pitch = rng.range(-45.0, -3.0);
+    let speed = rng.range(30.0, 250.0) / 30.0;
+    // Half the flights turn (up to 0.3° a frame in heading, 0.1° in pitch).
+    let turns = rng.next() < 0.5;
+    let (yaw_rate, pitch_rate) = if turns {
+        (rng.range(-0.3, 0.3), rng.range(-0.1, 0.1))
+    } else {
+        (0.0, 0.0)
+    };
+    let climb = rng.range(-0.1, 0.1);
+    let frustum = Frustum::symmetric(rng.range(50.0, 100.0).to_radians(), W, H);
+    let dir = heading.to_radians();
+    (0..frames)
+        .map(|k| {
+            let t = k as f64;
+            let p = DVec3::new(x, y, z) + DVec3::new(dir.sin(), dir.cos(), climb) * speed * t;
+            let att = Attitude::from_degrees(heading + yaw_rate * t, pitch + pitch_rate * t, 0.0);
+            Camera::new(p, att, frustum)
+        })
+        .collect()
+}
+
+fn select(s: &Scene, cam: &Camera, carry: bool, sel: &mut Selection) {
+    let hf = &s.ds.hf;
+    let viewer = [cam.position.x / hf.spacing_x, cam.position.y / hf.spacing_y];
+    let placements = place_levels(&s.clip, viewer);
+    let params = SelectParams {
+        tau_px: 1.0,
+        max_refinement: 6,
+        carry,
+        ..SelectParams::default()
+    };
+    select_tiles(&s.bake, &s.clip, &placements, cam, (W, H), &params, sel);
+}
+
+#[test]
+fn carried_nodes_cover_the_ground_once_and_stay_within_tau() {
+    let scenes = [
+        scene("alpine", alpine()),
+        scene(
+            "cliffs",
+            generate(&GenParams {
+                size: 1025,
+                spacing: 30.0,
+                kind: DemKind::Cliffs,
+                seed: 7,
+            }),
+        ),
+    ];
+    let mut rng = Rng(0x15_0c);
+    let (mut carried, mut drawn, mut fresh_drawn, mut checked) = (0u64, 0u64, 0u64, 0u64);
+    let mut worst_ratio: f64 = 0.0;
+    for f in 0..8 {
+        let s = &scenes[f % scenes.len()];
+        let hf = &s.ds.hf;
+        let (mut sel, mut fresh) = (Selection::default(), Selection::default());
+        for (k, cam) in flight(&mut rng, s, 30).iter().enumerate() {
+            let what = format!("{} flight {f} frame {k}", s.name);
+            select(s, cam, true, &mut sel);
+            select(s, cam, false, &mut fresh);
+            assert_eq!(sel.unbounded, 0, "{what}: unbounded nodes");
+            carried += sel.carry.stats.carried_nodes as u64;
+            drawn += sel.items.len() as u64;
+            fresh_drawn += fresh.items.len() as u64;
+            if k % 3 == 2 {
+                flat_oracle::assert_covered_once(hf, cam, (W, H), M, &sel.items, &what);
+            }
+            if sel.carry.stats.carried_nodes == 0 {
+                continue;
+            }
+            // The nodes nearest τ and a few more at random, each against the true surface.
+            let mut order: Vec<usize> = (0..sel.items.len()).collect();
+            order.sort_by(|&a, &b| sel.items[b].rho_px.total_cmp(&sel.items[a].rho_px));
+            let mut pick: Vec<usize> = order.iter().take(3).copied().collect();
+            for _ in 0..3 {
+                pick.push((rng.next() * sel.items.len() as f64) as usize % sel.items.len());
+            }
+            for i in pick {
+                let item = sel.items[i];
+                let up = item.morph.levels_up();
+                let (l, x, y) = (item.node_level, item.node_tx, item.node_ty);
+                let err = flat_oracle::tile_error_px(hf, cam, (W, H), M, l, x, y, l + up);
+                assert!(
+                    err <= 1.0 + 1e-6 && err <= item.rho_px as f64 + 1e-6,
+                    "{what}: node L{l} ({x}, {y}) +{up} projects {err:.4} px (bound {:.4})",
+                    item.rho_px
+                );
+                if item.rho_px > 0.0 {
+                    worst_ratio = worst_ratio.max(err / item.rho_px as f64);
+                }
+                checked += 1;
+            }
+        }
+    }
+    eprintln!(
+        "carried selection: {carried} of {drawn} nodes carried; {fresh_drawn} drawn by fresh walks; {checked} nodes checked, tightest measured/bound {worst_ratio:.3}"
+    );
+    assert!(
+        carried * 2 > drawn,
+        "too little carried to tell: {carried} of {drawn}"
+    );
+    assert!(checked > 200, "{checked} nodes checked");
+    // Carried nodes are those of an earlier frame's walk: never far more than a fresh walk's.
+    assert!(
+        drawn * 100 <= fresh_drawn * 110,
+        "carrying drew {drawn} nodes, fresh walks {fresh_drawn}"
+    );
+}
