@@ -10,18 +10,21 @@
 //!
 //! **Why a record still holds** (DESIGN.md's bound `ρ = ε·f·g / (z_min − ε)`). Every bound the
 //! walk formed for a drawn node is, for some parts i of it, `max εᵢ·(f/τ)·gᵢ / (zᵢ − εᵢ)`:
-//! zᵢ the smallest view depth of a box within the node's box (its bottom carrying at most the
-//! sag of cells two levels up), gᵢ the vertical gain over a box within the ring tile's
-//! box, εᵢ ≤ the node's ε. When the eye moves by m and turns (‖R₁ − R₀‖ = k, Frobenius), a
-//! point at distance D moves in view space by at most m + k·D, and a box's curvature drop on
-//! the plane by at most (2D + m)·m / 2R: together μ(D). Then:
-//! - a depth falls by at most μ: `(z − ε)/(z − μ − ε)` bounds the growth of the first factor;
-//! - a gain grows by at most `(|w_z| + k)·(2 + A + B)·μ_R/(z_R − μ_R) + k·O`: the box's view
-//!   ratios a = x/z, b = y/z (clamped to the frustum's tangents, at most A and B) each move by
-//!   at most μ_R·(1 + A)/(z_R − μ_R) (resp. B) while the corners stay in front, the gain is
-//!   |w_z|-Lipschitz in them, and O·|Δw| bounds the turn of the world vertical w (O the
-//!   frustum's largest obliquity); over the least gain of the frustum (no gain is below it)
-//!   that is the relative growth.
+//! zᵢ the smallest view depth (clamped to the near plane) of a box within the node's box (its
+//! bottom carrying at most the sag of cells two levels up), gᵢ the vertical gain over a box
+//! within the ring tile's box R, never below the frustum's least gain g₀. Each part's ρᵢ ≤ ρ,
+//! so εᵢ ≤ zᵢ·ρ/(f·g₀/τ + ρ). When the eye moves by m and turns (‖R₁ − R₀‖ = k, Frobenius),
+//! a point at distance D moves in view space by at most m + k·D, and a box's curvature drop
+//! on the plane by at most (2D + m)·m / 2R: together μ(D). Then:
+//! - a depth falls by at most μ, so a part's first factor grows by at most
+//!   `(z − ε)/(z − μ − ε)`, largest for the node's own depth z and ε its own or
+//!   z·ρ/(f·g₀/τ + ρ), whichever is larger;
+//! - a gain grows by at most `(|w_z| + k)·(2 + A + B)·μ_R/(z_R − μ_R) + k·√(2 + A² + B²)`
+//!   while R stays wholly in front of the eye (z_R its smallest depth, unclamped): the view
+//!   ratios a = x/z, b = y/z of a box in R, clamped to the frustum's tangents (at most A and
+//!   B), each move by at most μ_R·(1 + A)/(z_R − μ_R) (resp. B), the gain is |w_z|-Lipschitz
+//!   in them, and √(2 + A² + B²)·|Δw| bounds what the turn of the world vertical w does; over
+//!   g₀ that is the relative growth.
 //!
 //! So each node's bound times the two factors bounds its error now; a record is drawn again
 //! while every node's stays ≤ τ (with a margin far beyond rounding), every part the walk
@@ -73,9 +76,9 @@ pub(super) struct ViewNow {
     pub rotation: DMat3,
 }
 
-/// A drawn node's certificate: its bound when the record was made, its ε, the smallest view
-/// depth of its box (sag of cells two levels up; clamped to the near plane as the bound
-/// clamps it) and the farthest distance from the eye to that box.
+/// A drawn node's certificate: its bound when the record was made, an ε no part of it exceeds,
+/// the smallest view depth of its box (sag of cells two levels up; clamped to the near plane
+/// as the bound clamps it) and the farthest distance from the eye to that box.
 #[derive(Debug, Clone, Copy)]
 struct NodeCert {
     rho_norm: f64,
@@ -102,7 +105,8 @@ struct CarriedTile {
     morphs: Vec<(usize, Morph)>,
     certs: Vec<NodeCert>,
     culled: Vec<CulledCert>,
-    /// The ring tile's box: smallest depth and reach (every gain came from a box within it).
+    /// The ring tile's box: smallest depth (unclamped) and reach (every gain came from a box
+    /// within it).
     ring_z: f64,
     ring_reach: f64,
 }
@@ -111,12 +115,14 @@ struct CarriedTile {
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Optics {
     pub tau: f64,
+    /// Focal length (px).
+    pub focal: f64,
     pub near: f64,
     /// Largest |tangent| across (A) and up or down (B).
     pub a: f64,
     pub b: f64,
-    /// Largest obliquity sqrt(1 + a² + b²) in the frustum.
-    pub obliquity: f64,
+    /// √(2 + A² + B²): bounds what a turn of the world vertical does to a gain.
+    pub turn: f64,
     /// The least vertical gain in the frustum (`frustum_gain_floor`), > 0.
     pub floor: f64,
     /// |w_z| of the world vertical in view space.
@@ -199,8 +205,7 @@ impl Carry {
             return false;
         }
         let lip = (optics.w_z + k) * (2.0 + optics.a + optics.b);
-        let gain =
-            1.0 + (lip * mu_ring / (t.ring_z - mu_ring) + k * optics.obliquity) / optics.floor;
+        let gain = 1.0 + (lip * mu_ring / (t.ring_z - mu_ring) + k * optics.turn) / optics.floor;
         if t.culled
             .iter()
             .any(|c| mu(c.reach) >= c.margin * (1.0 - ROOM))
@@ -250,24 +255,27 @@ impl Carry {
         if self.key.is_none() {
             return;
         }
+        // Smallest depth (unclamped) and reach of a box, and its corners.
         let depth_reach = |l: u32, x: u32, y: u32| {
             let (c, b) = corners(l, x, y);
-            let z =
-                c.z.iter()
-                    .fold(f64::INFINITY, |a, &z| a.min(z))
-                    .max(optics.near);
+            let z = c.z.iter().fold(f64::INFINITY, |a, &z| a.min(z));
             (z, reach(&b, now.eye), c)
         };
         let (ring_z, ring_reach, _) = depth_reach(key.0, key.1, key.2);
         // Stored ε and ρ are f32: rounded up by more than their rounding.
         let up = |v: f32| v as f64 * (1.0 + ROOM);
+        let least_gain = optics.floor * optics.focal / optics.tau;
         let certs = nodes
             .iter()
             .map(|n| {
                 let (z, reach, _) = depth_reach(n.0, n.1, n.2);
+                // As the bound clamps it.
+                let z = z.max(optics.near);
+                let rho_norm = up(n.4) / optics.tau;
+                let eps_parts = z * rho_norm / (least_gain + rho_norm) * (1.0 + ROOM);
                 NodeCert {
-                    rho_norm: up(n.4) / optics.tau,
-                    eps: up(n.3),
+                    rho_norm,
+                    eps: up(n.3).max(eps_parts),
                     z,
                     reach,
                 }

@@ -139,14 +139,19 @@ pub fn select_tiles_multi_ready(
             eye: v.camera.position,
             rotation: v.rotation,
         },
-        optics: Optics {
-            tau: v.tau,
-            near: v.camera.near,
-            a: f.tan_left.abs().max(f.tan_right.abs()),
-            b: f.tan_up.abs().max(f.tan_down.abs()),
-            obliquity: f.max_obliquity(),
-            floor,
-            w_z: v.up.z.abs(),
+        optics: {
+            let a = f.tan_left.abs().max(f.tan_right.abs());
+            let b = f.tan_up.abs().max(f.tan_down.abs());
+            Optics {
+                tau: v.tau,
+                focal: v.focal,
+                near: v.camera.near,
+                a,
+                b,
+                turn: (2.0 + a * a + b * b).sqrt(),
+                floor,
+                w_z: v.up.z.abs(),
+            }
         },
         planes: FrustumPlanes::of(&f, v.camera.near),
     });
