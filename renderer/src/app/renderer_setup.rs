@@ -71,6 +71,8 @@ pub struct RendererChoice {
     pub normal_source: NormalSource,
     /// Bounded: drop tiles hidden behind nearer terrain.
     pub horizon_cull: bool,
+    /// Bounded, one view on the plane: carry refined ring tiles across frames.
+    pub carry: bool,
 }
 
 /// The offscreen renderer for `c`: validation always on in debug builds; `full` gets pools
@@ -106,6 +108,7 @@ pub fn renderer_desc(c: &RendererChoice) -> RendererDesc {
                 SelectParams::default().max_refinement
             },
             horizon_cull: c.horizon_cull,
+            carry: c.carry,
             ..SelectParams::default()
         },
         ..defaults
@@ -149,6 +152,7 @@ pub fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
         normal_maps: g.normal_maps.on(),
         normal_source: g.normals.source(),
         horizon_cull: g.horizon_cull.on(),
+        carry: g.carry_selection.on(),
     });
     desc.drape = drape_input(&g.drape)?;
     desc.drape_budget_bytes = drape_budget(&g.drape)?;
@@ -299,6 +303,7 @@ mod tests {
             normal_maps: false,
             normal_source: NormalSource::Cpu,
             horizon_cull: true,
+            carry: false,
         }
     }
 
@@ -317,6 +322,7 @@ mod tests {
         assert_eq!(d.select.tau_px, 0.5);
         assert!(!d.select.curvature);
         assert!(d.select.horizon_cull);
+        assert!(!d.select.carry && SelectParams::default().carry);
         assert_eq!(d.pool_capacity, defaults.pool_capacity);
         assert_eq!(
             d.select.max_refinement,

@@ -37,13 +37,11 @@ use std::collections::HashMap;
 
 use glam::{DMat3, DVec3};
 
-use crate::bake::ErrorBake;
 use crate::fast_hash::FastHash;
 use crate::tiles::Aabb;
 
 use super::bound::{ViewCorners, EARTH_RADIUS_M};
 use super::cdlod_morph::Morph;
-use super::selection::SelectParams;
 
 /// A node as `refine_ring_tile` lists it: (level, tx, ty, ε, ρ px).
 pub(super) type Node = (u32, u32, u32, f32, f32);
@@ -58,13 +56,13 @@ pub(super) fn max_age(level: u32, tx: u32, ty: u32) -> u64 {
     16 + (tx.wrapping_mul(3) ^ ty.wrapping_mul(5) ^ level.wrapping_mul(7)) as u64 % 8
 }
 
-/// What every record of a frame shares: the dataset, the parameters and the view's optics.
-/// A frame with other ones drops the records.
+/// What every record of a frame shares: the dataset, the selection's parameters `P` and the
+/// view's optics. A frame with other ones drops the records.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct CarryKey {
+pub(super) struct CarryKey<P> {
     pub bake: usize,
     pub checksum: u32,
-    pub params: SelectParams,
+    pub params: P,
     /// focal (px), τ, near and the four tangents, bit for bit.
     pub optics: [u64; 7],
 }
@@ -139,19 +137,19 @@ pub struct CarryStats {
     pub walked_tiles: u32,
 }
 
-/// The records of the ring tiles of the last frame.
+/// The records of the ring tiles of the last frame, for selections with parameters `P`.
 #[derive(Debug, Default)]
-pub struct Carry {
-    key: Option<CarryKey>,
+pub struct Carry<P> {
+    key: Option<CarryKey<P>>,
     frame: u64,
     tiles: HashMap<(u32, u32, u32), CarriedTile, FastHash>,
     /// This frame's counts.
     pub stats: CarryStats,
 }
 
-impl Carry {
+impl<P: PartialEq> Carry<P> {
     /// A frame begins: records of another key are dropped.
-    pub(super) fn begin(&mut self, key: Option<CarryKey>) {
+    pub(super) fn begin(&mut self, key: Option<CarryKey<P>>) {
         self.frame += 1;
         self.stats = CarryStats::default();
         if key.is_none() || key != self.key {
@@ -360,29 +358,6 @@ fn reach(b: &Aabb, eye: DVec3) -> f64 {
 /// ‖M‖_F, which bounds ‖M·v‖ / ‖v‖.
 fn frobenius(m: DMat3) -> f64 {
     (m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()).sqrt()
-}
-
-/// [`CarryKey`] of a frame that may carry: one view on the flat plane, no horizon culling,
-/// the bounded quadtree with parts; `None` else.
-pub(super) fn carry_key(
-    bake: &ErrorBake,
-    params: &SelectParams,
-    views: usize,
-    optics: [f64; 7],
-) -> Option<CarryKey> {
-    let fits = params.carry
-        && views == 1
-        && params.earth.is_none()
-        && !params.horizon_cull
-        && params.mode == super::selection::LodMode::Bounded
-        && params.coarsen
-        && params.parent_quadrants;
-    fits.then(|| CarryKey {
-        bake: bake as *const ErrorBake as usize,
-        checksum: bake.source_checksum,
-        params: *params,
-        optics: optics.map(f64::to_bits),
-    })
 }
 
 #[cfg(test)]

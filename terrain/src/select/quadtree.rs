@@ -8,7 +8,7 @@ use crate::camera::Camera;
 use crate::clipmap::{ring_tiles, ClipmapDesc, LevelPlacement};
 
 use super::bound::{frustum_gain_floor, frustum_vertical_gain};
-use super::carry::{carry_key, Carry, FrustumPlanes, Optics, ViewNow};
+use super::carry::{Carry, CarryKey, FrustumPlanes, Optics, ViewNow};
 use super::cdlod_morph::Morph;
 use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant, Upgrade};
 use super::selection::{
@@ -290,7 +290,7 @@ fn refine_ring_tile(
 fn select_coarsest_first(
     frame: &Frame,
     placements: &[LevelPlacement],
-    mut carry: Option<&mut (Carrying, &mut Carry)>,
+    mut carry: Option<&mut (Carrying, &mut Carry<SelectParams>)>,
     out: &mut Selection,
 ) {
     let mut morphs = Vec::new();
@@ -523,6 +523,29 @@ fn select_coarsest_first(
     for s in out.levels.iter_mut() {
         s.skipped = s.drawn == 0;
     }
+}
+
+/// [`CarryKey`] of a frame that may carry: one view on the flat plane, no horizon culling,
+/// the bounded quadtree with parts; `None` else.
+fn carry_key(
+    bake: &ErrorBake,
+    params: &SelectParams,
+    views: usize,
+    optics: [f64; 7],
+) -> Option<CarryKey<SelectParams>> {
+    let fits = params.carry
+        && views == 1
+        && params.earth.is_none()
+        && !params.horizon_cull
+        && params.mode == LodMode::Bounded
+        && params.coarsen
+        && params.parent_quadrants;
+    fits.then(|| CarryKey {
+        bake: bake as *const ErrorBake as usize,
+        checksum: bake.source_checksum,
+        params: *params,
+        optics: optics.map(f64::to_bits),
+    })
 }
 
 /// What carrying ring tiles across frames reads of the one view (`carry.rs`).

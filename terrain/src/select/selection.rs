@@ -189,7 +189,7 @@ pub struct Selection {
     pub horizon: super::horizon::HorizonSet,
     /// The ring tiles refined in earlier frames, drawn again while they hold
     /// ([`SelectParams::carry`]); like the node cache, never copied with a selection.
-    pub carry: super::carry::Carry,
+    pub carry: super::carry::Carry<SelectParams>,
 }
 
 /// Field by field, so that `clone_from` reuses the target's vectors and keeps its own node

@@ -142,6 +142,7 @@ fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> RendererDesc {
         normal_maps: a.normal_maps.on(),
         normal_source: a.normals.source(),
         horizon_cull: a.horizon_cull.on(),
+        carry: a.carry_selection.on(),
     });
     match (config.mode, config.knob) {
         (LodMode::Distance, Some(k)) => desc.select.distance_factor *= k,
