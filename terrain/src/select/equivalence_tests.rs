@@ -294,3 +294,71 @@ fn a_node_whose_every_quadrant_meets_tau_is_drawn_whole() {
         "of {parents} nodes with quadrants drawn, {apart} had all four drawn apart"
     );
 }
+
+/// Ring tiles are carried across frames only where the certificate holds (`carry.rs`): one
+/// view on the flat plane, no horizon culling, `carry` asked for. A short straight flight
+/// carries there; on the ellipsoid, with two views, with horizon culling or with `carry` off
+/// nothing is carried and no record is kept (the ground a carried tile draws is checked by
+/// `tests/tests/carried_selection.rs`).
+#[test]
+fn ring_tiles_are_carried_only_where_the_certificate_holds() {
+    let (flat, geo) = (scene(false), scene(true));
+    // A camera over the scene's middle, then the same camera moved 2 m a frame.
+    let flight = |s: &Scene| -> Vec<Camera> {
+        let mut rng = Rng(0x15_0d);
+        let start = loop {
+            let c = random_camera(&mut rng, s);
+            let (ex, ey) = s.ds.hf.extent_m();
+            let g = match &s.earth {
+                Some(e) => e.grid_of_world(c.position),
+                None => c.position,
+            };
+            if (0.3 * ex..0.7 * ex).contains(&g.x) && (0.3 * ey..0.7 * ey).contains(&g.y) {
+                break c;
+            }
+        };
+        let pitched = Camera::new(
+            start.position,
+            Attitude::from_degrees(40.0, -20.0, 0.0),
+            start.frustum,
+        );
+        (0..12)
+            .map(|k| Camera {
+                position: pitched.position + DVec3::new(2.0 * k as f64, 0.0, 0.0),
+                ..pitched
+            })
+            .collect()
+    };
+    let carried = |s: &Scene, params: &SelectParams, views: usize| {
+        let mut sel = Selection::default();
+        let mut carried = 0;
+        for cam in flight(s) {
+            let cams = vec![cam; views];
+            select(s, &cams, params, &mut sel);
+            carried += sel.carry.stats.carried_tiles;
+        }
+        (carried, sel.carry.len())
+    };
+    let plane = SelectParams::default();
+    let (n, kept) = carried(&flat, &plane, 1);
+    assert!(
+        n > 0 && kept > 0,
+        "a straight flight on the plane carried {n}"
+    );
+    let off = SelectParams {
+        carry: false,
+        ..plane
+    };
+    assert_eq!(carried(&flat, &off, 1), (0, 0), "carry off");
+    assert_eq!(carried(&flat, &plane, 2), (0, 0), "two views");
+    let horizon = SelectParams {
+        horizon_cull: true,
+        ..plane
+    };
+    assert_eq!(carried(&flat, &horizon, 1), (0, 0), "horizon culling");
+    let ellipsoid = SelectParams {
+        earth: geo.earth,
+        ..plane
+    };
+    assert_eq!(carried(&geo, &ellipsoid, 1), (0, 0), "the ellipsoid");
+}
