@@ -1,12 +1,71 @@
 //! Brute-force oracles of a selection on the flat plane, independent of the bake and of the
 //! selection's bound (DESIGN.md "What within τ means when tested"): the largest on-screen
 //! distance between a drawn node's true samples and the surface drawn over it, and whether the
-//! drawn nodes cover the visible ground exactly once.
+//! drawn nodes cover the visible ground exactly once; and the scenes they are run on.
 
 use aerie::camera::Camera;
+use aerie::terrain::bake::{bake, BakeParams, ErrorBake};
+use aerie::terrain::clipmap::ClipmapDesc;
+use aerie::terrain::dataset::Dataset;
+use aerie::terrain::load_dem;
 use aerie::terrain::select::{DrawItem, EARTH_RADIUS_M};
 use aerie::terrain::Heightfield;
 use glam::{DVec2, DVec3};
+
+/// A dataset baked for `m`-vertex tiles, with the renderer's default clipmap over it.
+pub struct Scene {
+    pub name: &'static str,
+    pub ds: Dataset,
+    pub bake: ErrorBake,
+    pub clip: ClipmapDesc,
+}
+
+/// [`Scene`] of `hf` (2^K + 1 samples a side: the oracles assume no padding).
+pub fn scene(name: &'static str, hf: Heightfield, m: u32) -> Scene {
+    let ds = Dataset::from_heightfield(hf, name.into());
+    assert_eq!(
+        (ds.valid_width, ds.valid_height),
+        (ds.hf.width, ds.hf.height),
+        "oracle scenes are 2^K+1: no padding"
+    );
+    let bake = bake(
+        &ds,
+        BakeParams {
+            tile_size: m,
+            levels: 0,
+        },
+        &|_, _| {},
+    );
+    let clip = ClipmapDesc {
+        tile_quads: m - 1,
+        patch_tiles: 8,
+        margin_tiles: 2,
+        width: ds.hf.width as u32,
+        height: ds.hf.height as u32,
+    };
+    Scene {
+        name,
+        ds,
+        bake,
+        clip,
+    }
+}
+
+/// A 1025² crop of the Inn valley tile (Karwendel, Nordkette, Innsbruck).
+pub fn alpine() -> Heightfield {
+    let full = load_dem(&crate::demo_dem()).expect("demo DEM");
+    let (n, c0, r0) = (1025usize, 88usize, 88usize);
+    let mut heights = Vec::with_capacity(n * n);
+    for r in 0..n {
+        heights.extend_from_slice(&full.heights[(r0 + r) * full.width + c0..][..n]);
+    }
+    Heightfield {
+        width: n,
+        height: n,
+        heights,
+        ..full
+    }
+}
 
 /// Curvature drop of the point (x, y) seen from `eye`: d²/2R for its horizontal distance d.
 pub fn curvature_drop(eye: DVec3, x: f64, y: f64) -> f64 {

@@ -8,18 +8,15 @@
 //! at 47°N, 70°N and over a 10° region at 60°N.
 
 use aerie::camera::{Attitude, Camera, Frustum};
-use aerie::terrain::bake::{bake, BakeParams, ErrorBake};
-use aerie::terrain::clipmap::{place_levels, ClipmapDesc};
-use aerie::terrain::dataset::Dataset;
+use aerie::terrain::clipmap::place_levels;
 use aerie::terrain::gen::{generate, DemKind, GenParams};
 use aerie::terrain::geodesy::wgs84::{WGS84_A, WGS84_E2};
 use aerie::terrain::geodesy::{GeoGrid, Geodetic};
 use aerie::terrain::load::geographic_spacing_m;
-use aerie::terrain::load_dem;
 use aerie::terrain::select::{select_tiles, DrawItem, SelectParams, Selection};
 use aerie::terrain::GeoReference;
 use aerie::terrain::Heightfield;
-use aerie_tests::{demo_dem, flat_oracle};
+use aerie_tests::flat_oracle::{self, alpine, Scene};
 use glam::{DVec2, DVec3};
 
 const W: u32 = 320;
@@ -62,57 +59,9 @@ impl Rng {
     }
 }
 
-struct Scene {
-    name: &'static str,
-    ds: Dataset,
-    bake: ErrorBake,
-    clip: ClipmapDesc,
-}
-
+/// The shared flat scene at this file's tile size.
 fn scene(name: &'static str, hf: Heightfield) -> Scene {
-    let ds = Dataset::from_heightfield(hf, name.into());
-    assert_eq!(
-        (ds.valid_width, ds.valid_height),
-        (ds.hf.width, ds.hf.height),
-        "oracle scenes are 2^K+1: no padding"
-    );
-    let bake = bake(
-        &ds,
-        BakeParams {
-            tile_size: M,
-            levels: 0,
-        },
-        &|_, _| {},
-    );
-    let clip = ClipmapDesc {
-        tile_quads: M - 1,
-        patch_tiles: 8,
-        margin_tiles: 2,
-        width: ds.hf.width as u32,
-        height: ds.hf.height as u32,
-    };
-    Scene {
-        name,
-        ds,
-        bake,
-        clip,
-    }
-}
-
-/// A 1025² crop of the Inn valley tile (Karwendel, Nordkette, Innsbruck).
-fn alpine() -> Heightfield {
-    let full = load_dem(&demo_dem()).expect("demo DEM");
-    let (n, c0, r0) = (1025usize, 88usize, 88usize);
-    let mut heights = Vec::with_capacity(n * n);
-    for r in 0..n {
-        heights.extend_from_slice(&full.heights[(r0 + r) * full.width + c0..][..n]);
-    }
-    Heightfield {
-        width: n,
-        height: n,
-        heights,
-        ..full
-    }
+    flat_oracle::scene(name, hf, M)
 }
 
 fn generated(kind: DemKind, seed: u64) -> Heightfield {

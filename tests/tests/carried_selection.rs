@@ -5,14 +5,10 @@
 //! carrying draws about the nodes a fresh walk does.
 
 use aerie::camera::{Attitude, Camera, Frustum};
-use aerie::terrain::bake::{bake, BakeParams, ErrorBake};
-use aerie::terrain::clipmap::{place_levels, ClipmapDesc};
-use aerie::terrain::dataset::Dataset;
+use aerie::terrain::clipmap::place_levels;
 use aerie::terrain::gen::{generate, DemKind, GenParams};
-use aerie::terrain::load_dem;
 use aerie::terrain::select::{select_tiles, SelectParams, Selection};
-use aerie::terrain::Heightfield;
-use aerie_tests::{demo_dem, flat_oracle};
+use aerie_tests::flat_oracle::{self, alpine, scene, Scene};
 use glam::DVec3;
 
 const W: u32 = 320;
@@ -31,54 +27,6 @@ impl Rng {
     }
     fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.next()
-    }
-}
-
-struct Scene {
-    name: &'static str,
-    ds: Dataset,
-    bake: ErrorBake,
-    clip: ClipmapDesc,
-}
-
-fn scene(name: &'static str, hf: Heightfield) -> Scene {
-    let ds = Dataset::from_heightfield(hf, name.into());
-    let bake = bake(
-        &ds,
-        BakeParams {
-            tile_size: M,
-            levels: 0,
-        },
-        &|_, _| {},
-    );
-    let clip = ClipmapDesc {
-        tile_quads: M - 1,
-        patch_tiles: 8,
-        margin_tiles: 2,
-        width: ds.hf.width as u32,
-        height: ds.hf.height as u32,
-    };
-    Scene {
-        name,
-        ds,
-        bake,
-        clip,
-    }
-}
-
-/// A 1025² crop of the Inn valley tile.
-fn alpine() -> Heightfield {
-    let full = load_dem(&demo_dem()).expect("demo DEM");
-    let (n, c0, r0) = (1025usize, 88usize, 88usize);
-    let mut heights = Vec::with_capacity(n * n);
-    for r in 0..n {
-        heights.extend_from_slice(&full.heights[(r0 + r) * full.width + c0..][..n]);
-    }
-    Heightfield {
-        width: n,
-        height: n,
-        heights,
-        ..full
     }
 }
 
@@ -127,7 +75,7 @@ fn select(s: &Scene, cam: &Camera, carry: bool, sel: &mut Selection) {
 #[test]
 fn carried_nodes_cover_the_ground_once_and_stay_within_tau() {
     let scenes = [
-        scene("alpine", alpine()),
+        scene("alpine", alpine(), M),
         scene(
             "cliffs",
             generate(&GenParams {
@@ -136,6 +84,7 @@ fn carried_nodes_cover_the_ground_once_and_stay_within_tau() {
                 kind: DemKind::Cliffs,
                 seed: 7,
             }),
+            M,
         ),
     ];
     let mut rng = Rng(0x15_0c);

@@ -263,46 +263,47 @@ impl<P: PartialEq> Carry<P> {
         // Stored ε and ρ are f32: rounded up by more than their rounding.
         let up = |v: f32| v as f64 * (1.0 + ROOM);
         let least_gain = optics.floor * optics.focal / optics.tau;
-        let certs = nodes
-            .iter()
-            .map(|n| {
-                let (z, reach, _) = depth_reach(n.0, n.1, n.2);
-                // As the bound clamps it.
-                let z = z.max(optics.near);
-                let rho_norm = up(n.4) / optics.tau;
-                let eps_parts = z * rho_norm / (least_gain + rho_norm) * (1.0 + ROOM);
-                NodeCert {
-                    rho_norm,
-                    eps: up(n.3).max(eps_parts),
-                    z,
-                    reach,
-                }
-            })
-            .collect();
-        let culled = culled
-            .iter()
-            .map(|&(l, x, y)| {
-                let (_, reach, c) = depth_reach(l, x, y);
-                CulledCert {
-                    margin: planes.outside_margin(&c),
-                    reach,
-                }
-            })
-            .collect();
-        self.tiles.insert(
-            key,
-            CarriedTile {
-                made_at: self.frame,
-                used_at: self.frame,
-                view: *now,
-                nodes: nodes.to_vec(),
-                morphs: morphs.to_vec(),
-                certs,
-                culled,
-                ring_z,
-                ring_reach,
-            },
-        );
+        // The tile's earlier record, if any, lends its vectors (walked again, it is replaced).
+        let frame = self.frame;
+        let t = self.tiles.entry(key).or_insert_with(|| CarriedTile {
+            made_at: frame,
+            used_at: frame,
+            view: *now,
+            nodes: Vec::new(),
+            morphs: Vec::new(),
+            certs: Vec::new(),
+            culled: Vec::new(),
+            ring_z,
+            ring_reach,
+        });
+        (t.made_at, t.used_at, t.view) = (frame, frame, *now);
+        (t.ring_z, t.ring_reach) = (ring_z, ring_reach);
+        t.nodes.clear();
+        t.nodes.extend_from_slice(nodes);
+        t.morphs.clear();
+        t.morphs.extend_from_slice(morphs);
+        t.certs.clear();
+        t.certs.extend(nodes.iter().map(|n| {
+            let (z, reach, _) = depth_reach(n.0, n.1, n.2);
+            // As the bound clamps it.
+            let z = z.max(optics.near);
+            let rho_norm = up(n.4) / optics.tau;
+            let eps_parts = z * rho_norm / (least_gain + rho_norm) * (1.0 + ROOM);
+            NodeCert {
+                rho_norm,
+                eps: up(n.3).max(eps_parts),
+                z,
+                reach,
+            }
+        }));
+        t.culled.clear();
+        t.culled.extend(culled.iter().map(|&(l, x, y)| {
+            let (_, reach, c) = depth_reach(l, x, y);
+            CulledCert {
+                margin: planes.outside_margin(&c),
+                reach,
+            }
+        }));
     }
 }
 
