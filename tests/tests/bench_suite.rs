@@ -389,3 +389,56 @@ fn settle_fills_every_configuration_before_the_first_frame() {
         );
     }
 }
+
+/// `--replays`: every configuration flies the measured frames again by fresh renderers; the
+/// plans do not depend on timing, so every replay does each frame's work again (none differs),
+/// and each frame keeps the least of its times, never more than its first flight's.
+#[test]
+fn replays_fly_the_same_frames_again_and_keep_each_frames_least_time() {
+    let (_dir, out) = bench_demo(&[
+        "--modes",
+        "bounded,clipmap,cdlod",
+        "--tau",
+        "1",
+        "--frames",
+        "3",
+        "--warmup",
+        "1",
+        "--settle",
+        "8",
+        "--replays",
+        "3",
+        "--no-image-error",
+    ]);
+    let rows = table(&out.join("results.csv"));
+    assert_eq!(rows.len(), 12, "3 configurations × 4 frames: {rows:?}");
+    let mut from_replay = 0;
+    for r in &rows {
+        assert_eq!(
+            (r["replays_same"].as_str(), r["replays_differed"].as_str()),
+            ("3", "0"),
+            "every replay drew the same selection, triangles and uploads: {r:?}"
+        );
+        let kept: u32 = r["replay_kept"].parse().unwrap();
+        assert!(kept < 3, "{r:?}");
+        let (ms, first): (f64, f64) = (
+            r["frame_ms"].parse().unwrap(),
+            r["frame_ms_first"].parse().unwrap(),
+        );
+        // frame_ms_first is written to 3 decimals, frame_ms too.
+        assert!(ms <= first + 1e-3, "the least time kept: {r:?}");
+        if kept > 0 && r["warmup"] == "0" {
+            from_replay += 1;
+        }
+    }
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    let line = md
+        .lines()
+        .find(|l| l.contains("replays: the measured frames flown 3 times"))
+        .unwrap_or_else(|| panic!("no replays line: {md}"));
+    assert!(
+        line.contains(&format!("{from_replay} of 9 frames timed by a replay"))
+            && line.contains("0 with a replay that did other work"),
+        "{line}"
+    );
+}

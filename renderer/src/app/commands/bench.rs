@@ -28,7 +28,9 @@ mod config;
 pub mod curves;
 mod features;
 mod flights;
+mod lanes;
 mod plot;
+mod replays;
 mod report;
 mod rows;
 mod settle;
@@ -43,13 +45,13 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::app::args::read_waypoints;
-use crate::app::failure::{bad_input, renderer_failure, runtime, Failure};
+use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::flight_plan::FlightPlan;
 use crate::app::out_path::{prepare_run_folder, WriteFailures, BENCH_FILES};
 use crate::app::prepare::{prepare_source, prepare_terrain, Terrain};
 use crate::app::progress::count_bar;
-use crate::app::renderer_setup::{parse_view, patch_tiles, renderer_desc, RendererChoice, View};
-use crate::render::frame::{FrameStats, RendererDesc, TerrainRenderer};
+use crate::app::renderer_setup::{parse_view, patch_tiles, View};
+use crate::render::frame::{FrameStats, RendererDesc};
 use crate::sim::flight::Waypoints;
 use crate::tools::image_error::{
     heatmap_rgba, measure, oracle_selection, ImageError, MeasureParams,
@@ -58,13 +60,15 @@ use crate::tools::output::{write_png, write_text};
 use aerie_terrain::camera::Camera;
 use aerie_terrain::clipmap::{place_levels, ClipmapDesc};
 use aerie_terrain::dataset::Dataset;
-use aerie_terrain::select::{select_tiles, LodMode, Selection};
+use aerie_terrain::select::{select_tiles, LodMode};
 use aerie_terrain::source::{InMemoryTerrain, TerrainSource};
 
 pub use args::BenchArgs;
 pub use config::{
     configurations, mode_name, parse_modes, parse_positive_list, parse_taus, BenchConfig, Sweeps,
 };
+use lanes::Lane;
+use replays::{FrameReplays, ReplayTally};
 pub use report::{pareto_front, Quantiles};
 use rows::{FrameRow, ImageRow};
 
@@ -117,58 +121,6 @@ fn plan(a: &BenchArgs) -> Result<Plan, Failure> {
         patch_tiles,
         waypoints,
     })
-}
-
-/// The renderer of one configuration: `full` gets pools large enough to draw every visible
-/// tile at full resolution (as `aerie render --lod full`).
-/// A swept baseline's knob sets its patch side, split-distance scale or LOD range.
-fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> RendererDesc {
-    let patch = match (config.mode, config.knob) {
-        // Checked in `plan`.
-        (LodMode::Clipmap, Some(n)) => patch_tiles(n as u32).unwrap_or(p.patch_tiles),
-        _ => p.patch_tiles,
-    };
-    let mut desc = renderer_desc(&RendererChoice {
-        gpu: a.gpu.clone(),
-        validate: a.validate,
-        width: p.view.width,
-        height: p.view.height,
-        patch_tiles: patch,
-        mode: config.mode,
-        tau_px: config.tau_px.unwrap_or(1.0),
-        curvature: !a.no_curvature,
-        debug_tiles: false,
-        look: a.look.look(),
-        normal_maps: a.normal_maps.on(),
-        normal_source: a.normals.source(),
-        horizon_cull: a.horizon_cull.on(),
-        carry: a.carry_selection.on(),
-    });
-    match (config.mode, config.knob) {
-        (LodMode::Distance, Some(k)) => desc.select.distance_factor *= k,
-        (LodMode::Cdlod, Some(k)) => desc.select.cdlod_range = k,
-        (LodMode::Tessellation, Some(k)) => desc.select.tess_density *= k,
-        _ => {}
-    }
-    desc
-}
-
-/// A configuration's renderer with its CPU mirror of the selection (for the oracle) and its
-/// worst frame so far.
-struct Lane {
-    config: BenchConfig,
-    renderer: TerrainRenderer,
-    /// Reported in the summaries (false for a `full` renderer made only as the reference, and
-    /// for the feature-cost variants).
-    reported: bool,
-    /// `--feature-costs`: which feature this renderer has off (an index of the costs' list).
-    variant: Option<usize>,
-    selection: Selection,
-    depth: Vec<f32>,
-    heat: Vec<f32>,
-    worst_heat: Vec<f32>,
-    worst: Option<(u32, f64)>,
-    image_total: ImageError,
 }
 
 pub fn run(a: BenchArgs) -> Result<(), Failure> {
@@ -241,6 +193,7 @@ fn suite_flight(
     args.frames = r.frames;
     args.warmup = r.warmup;
     args.settle = r.settle;
+    args.replays = r.replays;
     args.fps = r.fps;
     args.modes = r.modes.clone();
     args.tau = join(&r.tau);
@@ -328,39 +281,23 @@ fn run_flight(
     let drape = crate::app::renderer_setup::drape_input(&a.drape)?;
     // `--drape-mb` also bounds a store's imagery layer (what is held whole, what streams).
     let drape_budget = crate::app::renderer_setup::drape_budget(&a.drape)?;
+    let inputs = lanes::LaneInputs {
+        a,
+        p,
+        drape,
+        drape_budget,
+        bake,
+        eye0,
+    };
     for &(config, reported) in &lane_configs {
-        let mut desc = lane_desc(a, p, config);
-        desc.drape = drape.clone();
-        desc.drape_budget_bytes = drape_budget;
-        let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
         // Measured configurations draw from the source given; the reference from memory.
         let source = if reported {
             input.source.clone()
         } else {
             in_memory.clone()
         };
-        renderer
-            .load_source(source, bake.clone(), eye0)
-            .map_err(|e| {
-                let mut f = renderer_failure(e);
-                f.message = format!("{}: {}", config.label(), f.message);
-                f
-            })?;
-        lanes.push(Lane {
-            config,
-            renderer,
-            reported,
-            variant: None,
-            selection: Selection::default(),
-            depth: Vec::new(),
-            heat: Vec::new(),
-            worst_heat: Vec::new(),
-            worst: None,
-            image_total: ImageError {
-                tau_px: config.tau_for_error(),
-                ..Default::default()
-            },
-        });
+        let renderer = inputs.open(config, source, |_| {})?;
+        lanes.push(Lane::new(config, renderer, reported, None));
     }
     if lanes.is_empty() {
         return Err(bad_input(format!(
@@ -374,26 +311,8 @@ fn run_flight(
         let r = &lanes[0].renderer;
         let features = features::features_on(r.desc(), r.draped().0.is_some());
         for (v, f) in features.iter().enumerate() {
-            let mut desc = lane_desc(a, p, base);
-            desc.drape = drape.clone();
-            desc.drape_budget_bytes = drape_budget;
-            f.apply(&mut desc);
-            let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
-            renderer
-                .load_source(input.source.clone(), bake.clone(), eye0)
-                .map_err(renderer_failure)?;
-            lanes.push(Lane {
-                config: base,
-                renderer,
-                reported: false,
-                variant: Some(v),
-                selection: Selection::default(),
-                depth: Vec::new(),
-                heat: Vec::new(),
-                worst_heat: Vec::new(),
-                worst: None,
-                image_total: ImageError::default(),
-            });
+            let renderer = inputs.open(base, input.source.clone(), |d| f.apply(d))?;
+            lanes.push(Lane::new(base, renderer, false, Some(v)));
         }
         costs = Some(features::FeatureCosts::new(base.label(), &features));
     }
@@ -423,7 +342,7 @@ fn run_flight(
         .iter()
         .position(|l| l.config.mode == LodMode::Full && l.variant.is_none())
         .filter(|_| image_error);
-    let startup = settle_lanes(&mut lanes, flight, p, a.settle)?;
+    let startup = lanes::settle_lanes(&mut lanes, flight, p, a.settle, false)?;
     let bar = count_bar(total_frames as u64 * lanes.len() as u64, "renders", "");
     let mut rows: Vec<FrameRow> = Vec::new();
     let size = (p.view.width, p.view.height);
@@ -543,6 +462,7 @@ fn run_flight(
                     stats,
                     image,
                     oracle,
+                    replays: FrameReplays::first(wall_ms),
                 });
             }
         }
@@ -550,6 +470,18 @@ fn run_flight(
     bar.finish_and_clear();
 
     let mut validation = Vec::new();
+    lanes::replay(
+        &mut lanes,
+        &inputs,
+        &input.source,
+        flight,
+        &mut rows,
+        &mut validation,
+    )?;
+    let replayed = ReplayTally::of(
+        a.replays,
+        rows.iter().filter(|r| !r.warmup).map(|r| &r.replays),
+    );
     for lane in &mut lanes {
         let counters = lane.renderer.validation_counters();
         lane.renderer.destroy();
@@ -581,6 +513,7 @@ fn run_flight(
         image_error,
         oracle_nodes: a.oracle_nodes,
         startup,
+        replays: replayed.describe(),
     };
     // Every output is tried even when one fails; the charts and heat maps go first so that
     // summary.md can list what is missing.
@@ -650,41 +583,6 @@ fn run_flight(
         device: meta.device,
         summaries,
     })
-}
-
-/// The start-up fill (`--settle`, [`settle`]): each lane renders the flight's first pose until
-/// a frame leaves nothing late or pending, at most `max` frames; summary.md's line on it.
-fn settle_lanes(
-    lanes: &mut [Lane],
-    flight: &FlightPlan,
-    p: &Plan,
-    max: u32,
-) -> Result<Option<String>, Failure> {
-    if max == 0 {
-        return Ok(None);
-    }
-    let (pos, att) = flight.pose_at(0.0);
-    let camera = Camera::new(pos, att, p.view.frustum);
-    let started = Instant::now();
-    let mut fills = Vec::new();
-    for lane in lanes.iter_mut() {
-        let mut settler = settle::Settler::new(max);
-        while settler.wants_frame() {
-            let stats = lane
-                .renderer
-                .render(&camera)
-                .map_err(|e| runtime(format!("{} start-up frame: {e}", lane.config.label())))?;
-            settler.rendered(&stats);
-        }
-        if lane.reported {
-            fills.push((lane.config.label(), settler.fill()));
-        }
-    }
-    let line = settle::describe(max, &fills);
-    if let Some(l) = &line {
-        eprintln!("{l} ({:.1} s)", started.elapsed().as_secs_f64());
-    }
-    Ok(line)
 }
 
 /// Measures one lane's frame, accumulates it (outside warm-up) and keeps its worst heat map.

@@ -53,6 +53,13 @@ pub struct BenchArgs {
     /// database to load. Those frames are not measured; summary.md says how many each took.
     #[arg(long, default_value_t = 0)]
     pub settle: u32,
+    /// Fly the measured frames this many times, each time by fresh renderers after the same
+    /// start-up fill, and time each frame by its fastest flight that did the same work (the
+    /// same selection, triangles, uploads): on a shared machine the least of several times
+    /// holds less of the machine's noise. 1: fly once. The image error is measured on the
+    /// first flight.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=20))]
+    pub replays: u32,
     /// Simulated frame rate: frame k is the pose at k / fps seconds.
     #[arg(long, default_value_t = 30.0)]
     pub fps: f64,

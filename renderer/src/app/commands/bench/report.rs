@@ -68,6 +68,8 @@ pub(crate) struct RunInfo {
     pub oracle_nodes: u32,
     /// The start-up fill's line (`--settle`), if there was one.
     pub startup: Option<String>,
+    /// The replays' line (`--replays`), if the frames were flown more than once.
+    pub replays: Option<String>,
 }
 
 /// Image error of one configuration over the measured frames.
@@ -218,7 +220,7 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 /// `results.csv`: one row per frame per configuration (warm-up frames included, marked).
 pub(crate) fn results_csv(configs: &[BenchConfig], rows: &[FrameRow]) -> String {
     let mut s = format!(
-        "bench_frame,warmup,config,mode,tau_px,time_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg,frame_ms,cpu_ms,gpu_ms,{},img_confirmed_max_px,img_max_px,img_p99_px,img_mean_px,img_frac_over_tau,img_measured_px,img_holes_px,img_hole_max_px,img_extra_px,img_max_x,img_max_y,oracle_max_px,oracle_nodes,bound_max_px\n",
+        "bench_frame,warmup,config,mode,tau_px,time_s,x_m,y_m,z_m,heading_deg,pitch_deg,roll_deg,frame_ms,cpu_ms,gpu_ms,{},img_confirmed_max_px,img_max_px,img_p99_px,img_mean_px,img_frac_over_tau,img_measured_px,img_holes_px,img_hole_max_px,img_extra_px,img_max_x,img_max_y,oracle_max_px,oracle_nodes,bound_max_px,frame_ms_first,replay_kept,replays_same,replays_differed\n",
         FrameStats::CSV_HEADER
     );
     for r in rows {
@@ -265,10 +267,12 @@ pub(crate) fn results_csv(configs: &[BenchConfig], rows: &[FrameRow]) -> String 
         }
         match r.oracle {
             Some(o) => {
-                let _ = writeln!(s, "{:.4},{},{:.4}", o.max_px, o.nodes, o.max_bound_px);
+                let _ = write!(s, "{:.4},{},{:.4},", o.max_px, o.nodes, o.max_bound_px);
             }
-            None => s.push_str(",,\n"),
+            None => s.push_str(",,,"),
         }
+        let p = &r.replays;
+        let _ = writeln!(s, "{:.3},{},{},{}", p.first_ms, p.kept, p.same, p.differed);
     }
     s
 }
@@ -517,6 +521,9 @@ pub(crate) fn summary_md(info: &RunInfo, summaries: &[Summary]) -> String {
         info.size.0, info.size.1, info.fov_deg, info.frames, info.warmup, info.flight
     );
     if let Some(line) = &info.startup {
+        let _ = writeln!(s, "- {line}");
+    }
+    if let Some(line) = &info.replays {
         let _ = writeln!(s, "- {line}");
     }
     let _ = writeln!(

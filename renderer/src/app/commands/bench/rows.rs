@@ -2,6 +2,7 @@
 
 use glam::DVec3;
 
+use super::replays::FrameReplays;
 use crate::render::frame::FrameStats;
 use crate::tools::image_error::{ImageError, OracleResult};
 use aerie_terrain::camera::Attitude;
@@ -19,6 +20,8 @@ pub(crate) struct FrameRow {
     pub stats: FrameStats,
     pub image: Option<ImageRow>,
     pub oracle: Option<OracleResult>,
+    /// `--replays`: the first flight's time and which flight's timings the row keeps.
+    pub replays: FrameReplays,
 }
 
 /// The image error of one frame, reduced to what a CSV row holds.

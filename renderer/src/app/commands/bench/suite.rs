@@ -196,6 +196,7 @@ fn run_pairs(
         frames: r.frames,
         warmup: r.warmup,
         fps: r.fps,
+        replays: r.replays,
     };
     write_report(out, &info, &results)
 }

@@ -9,6 +9,7 @@
 //! frames = 24                 # measured frames per flight (+ warmup)
 //! warmup = 3
 //! settle = 30                 # start-up fill: at most 30 frames at the first pose (default 0)
+//! replays = 3                 # fly the measured frames 3 times, each frame's fastest kept (default 1)
 //! fps = 10.0
 //! modes = ["bounded", "clipmap", "distance", "cdlod"]
 //! tau = [0.5, 1, 2, 5]
@@ -52,6 +53,7 @@ struct RawRun {
     frames: Option<u32>,
     warmup: Option<u32>,
     settle: Option<u32>,
+    replays: Option<u32>,
     fps: Option<f64>,
     modes: Option<Vec<String>>,
     tau: Option<Vec<f64>>,
@@ -115,6 +117,8 @@ pub struct RunSettings {
     pub warmup: u32,
     /// `--settle`: at most this many start-up frames at the first pose.
     pub settle: u32,
+    /// `--replays`: the measured frames flown this many times (1 to 20).
+    pub replays: u32,
     pub fps: f64,
     /// As `--modes`, `--tau` take them.
     pub modes: String,
@@ -228,6 +232,13 @@ pub fn parse_suite(text: &str, source: &str) -> Result<Suite, String> {
     if frames == 0 {
         return Err(f("run.frames", "must be at least 1".into()));
     }
+    let replays = r.replays.unwrap_or(1);
+    if !(1..=20).contains(&replays) {
+        return Err(f(
+            "run.replays",
+            format!("{replays} is outside 1..=20 (1: fly the frames once)"),
+        ));
+    }
     let fps = positive(r.fps.unwrap_or(10.0), "the frame rate").map_err(|e| f("run.fps", e))?;
     let modes = r
         .modes
@@ -268,6 +279,7 @@ pub fn parse_suite(text: &str, source: &str) -> Result<Suite, String> {
         frames,
         warmup: r.warmup.unwrap_or(3),
         settle: r.settle.unwrap_or(0),
+        replays,
         fps,
         modes,
         tau,
@@ -493,6 +505,10 @@ datasets = ["mixed"]
         let settled = parse_suite(&GOOD.replace("frames = 4", "frames = 4\nsettle = 12"), "s")
             .expect("settle parses");
         assert_eq!(settled.run.settle, 12);
+        assert_eq!(s.run.replays, 1, "the frames flown once unless asked");
+        let replayed = parse_suite(&GOOD.replace("frames = 4", "frames = 4\nreplays = 3"), "s")
+            .expect("replays parses");
+        assert_eq!(replayed.run.replays, 3);
         assert_eq!(
             s.datasets[1].source,
             DatasetSource::Generate {
@@ -534,6 +550,10 @@ datasets = ["mixed"]
                 "run.clipmap_n[0]",
             ),
             (GOOD.replace("\"160x90\"", "\"160\""), "run.size"),
+            (
+                GOOD.replace("frames = 4", "frames = 4\nreplays = 0"),
+                "s.toml:5:11: run.replays",
+            ),
             (
                 GOOD.replace("frames = 4", "frames = 4\nsettle = -3"),
                 "s.toml:5:10: invalid value: integer `-3`",

@@ -34,6 +34,8 @@ pub(crate) struct SuiteInfo {
     pub frames: u32,
     pub warmup: u32,
     pub fps: f64,
+    /// `run.replays`: the measured frames flown this many times, each frame's fastest kept.
+    pub replays: u32,
 }
 
 /// A cost read against an error.
@@ -216,7 +218,7 @@ pub(crate) fn suite_md(info: &SuiteInfo, results: &[FlightResult]) -> String {
     let mut md = format!(
         "# Bench suite {}\n\n{} flights on {}, {} px, {}° horizontal field of view, {} measured frames \
          after {} warm-up at {} fps per flight. Every mode renders the same frames; errors are \
-         measured in the image against a full-resolution render of the same camera.\n\n",
+         measured in the image against a full-resolution render of the same camera.{}\n\n",
         info.source,
         results.len(),
         info.device,
@@ -224,7 +226,17 @@ pub(crate) fn suite_md(info: &SuiteInfo, results: &[FlightResult]) -> String {
         info.fov,
         info.frames,
         info.warmup,
-        info.fps
+        info.fps,
+        if info.replays > 1 {
+            format!(
+                " The measured frames were flown {} times, each time by fresh renderers after the \
+                 same start-up fill; each frame is timed by its fastest flight that did the same \
+                 work (the errors are those of the first).",
+                info.replays
+            )
+        } else {
+            String::new()
+        }
     );
     md.push_str(
         "## Ratios: bounded over each baseline at equal measured error\n\n\
