@@ -44,15 +44,12 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-use crate::app::args::read_waypoints;
 use crate::app::failure::{bad_input, runtime, Failure};
 use crate::app::flight_plan::FlightPlan;
 use crate::app::out_path::{prepare_run_folder, WriteFailures, BENCH_FILES};
 use crate::app::prepare::{prepare_source, prepare_terrain, Terrain};
 use crate::app::progress::count_bar;
-use crate::app::renderer_setup::{parse_view, patch_tiles, View};
 use crate::render::frame::{FrameStats, RendererDesc};
-use crate::sim::flight::Waypoints;
 use crate::tools::image_error::{
     heatmap_rgba, measure, oracle_selection, ImageError, MeasureParams,
 };
@@ -64,6 +61,7 @@ use aerie_terrain::select::{select_tiles, LodMode};
 use aerie_terrain::source::{InMemoryTerrain, TerrainSource};
 
 pub use args::BenchArgs;
+use args::{plan, Plan};
 pub use config::{
     configurations, mode_name, parse_modes, parse_positive_list, parse_taus, BenchConfig, Sweeps,
 };
@@ -71,57 +69,6 @@ use lanes::Lane;
 use replays::{FrameReplays, ReplayTally};
 pub use report::{pareto_front, Quantiles};
 use rows::{FrameRow, ImageRow};
-
-/// Validated arguments.
-struct Plan {
-    view: View,
-    configs: Vec<BenchConfig>,
-    patch_tiles: u32,
-    waypoints: Option<Waypoints>,
-}
-
-fn plan(a: &BenchArgs) -> Result<Plan, Failure> {
-    let view = parse_view(&a.size, a.fov)?;
-    let modes = parse_modes(&a.modes).map_err(bad_input)?;
-    let taus = parse_taus(&a.tau).map_err(bad_input)?;
-    let sweeps = Sweeps {
-        clipmap_n: parse_positive_list("--clipmap-n", &a.clipmap_n)
-            .map_err(bad_input)?
-            .into_iter()
-            .map(|n| {
-                patch_tiles(n as u32).map(|_| n as u32).map_err(|e| {
-                    bad_input(format!(
-                        "--clipmap-n {}: {}",
-                        a.clipmap_n,
-                        e.message.trim_start_matches("--patch: ")
-                    ))
-                })
-            })
-            .collect::<Result<_, _>>()?,
-        distance_scale: parse_positive_list("--distance-scale", &a.distance_scale)
-            .map_err(bad_input)?,
-        cdlod_range: parse_positive_list("--cdlod-range", &a.cdlod_range).map_err(bad_input)?,
-        tess_density: parse_positive_list("--tess-density", &a.tess_density).map_err(bad_input)?,
-    };
-    if a.frames == 0 {
-        return Err(bad_input("--frames: must be at least 1"));
-    }
-    if a.oracle_nodes > 4096 {
-        return Err(bad_input(format!(
-            "--oracle-nodes: {} is more than 4096",
-            a.oracle_nodes
-        )));
-    }
-    a.pass.check(a.fps)?;
-    let patch_tiles = patch_tiles(a.patch)?;
-    let waypoints = read_waypoints("--flight", a.flight.as_ref())?;
-    Ok(Plan {
-        view,
-        configs: configurations(&modes, &taus, &sweeps),
-        patch_tiles,
-        waypoints,
-    })
-}
 
 pub fn run(a: BenchArgs) -> Result<(), Failure> {
     if let Some(file) = &a.suite {

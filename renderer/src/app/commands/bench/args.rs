@@ -4,7 +4,13 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::app::args::{LookArg, NormalsArg, PassArgs, StoreArgs, Switch};
+use super::config::{
+    configurations, parse_modes, parse_positive_list, parse_taus, BenchConfig, Sweeps,
+};
+use crate::app::args::{read_waypoints, LookArg, NormalsArg, PassArgs, StoreArgs, Switch};
+use crate::app::failure::{bad_input, Failure};
+use crate::app::renderer_setup::{parse_view, patch_tiles, View};
+use crate::sim::flight::Waypoints;
 
 #[derive(Debug, Clone, Args)]
 pub struct BenchArgs {
@@ -141,4 +147,55 @@ pub struct BenchArgs {
     /// table in summary.md give the terrain pass's GPU time of each.
     #[arg(long)]
     pub feature_costs: bool,
+}
+
+/// Validated arguments.
+pub(crate) struct Plan {
+    pub view: View,
+    pub configs: Vec<BenchConfig>,
+    pub patch_tiles: u32,
+    pub waypoints: Option<Waypoints>,
+}
+
+pub(crate) fn plan(a: &BenchArgs) -> Result<Plan, Failure> {
+    let view = parse_view(&a.size, a.fov)?;
+    let modes = parse_modes(&a.modes).map_err(bad_input)?;
+    let taus = parse_taus(&a.tau).map_err(bad_input)?;
+    let sweeps = Sweeps {
+        clipmap_n: parse_positive_list("--clipmap-n", &a.clipmap_n)
+            .map_err(bad_input)?
+            .into_iter()
+            .map(|n| {
+                patch_tiles(n as u32).map(|_| n as u32).map_err(|e| {
+                    bad_input(format!(
+                        "--clipmap-n {}: {}",
+                        a.clipmap_n,
+                        e.message.trim_start_matches("--patch: ")
+                    ))
+                })
+            })
+            .collect::<Result<_, _>>()?,
+        distance_scale: parse_positive_list("--distance-scale", &a.distance_scale)
+            .map_err(bad_input)?,
+        cdlod_range: parse_positive_list("--cdlod-range", &a.cdlod_range).map_err(bad_input)?,
+        tess_density: parse_positive_list("--tess-density", &a.tess_density).map_err(bad_input)?,
+    };
+    if a.frames == 0 {
+        return Err(bad_input("--frames: must be at least 1"));
+    }
+    if a.oracle_nodes > 4096 {
+        return Err(bad_input(format!(
+            "--oracle-nodes: {} is more than 4096",
+            a.oracle_nodes
+        )));
+    }
+    a.pass.check(a.fps)?;
+    let patch_tiles = patch_tiles(a.patch)?;
+    let waypoints = read_waypoints("--flight", a.flight.as_ref())?;
+    Ok(Plan {
+        view,
+        configs: configurations(&modes, &taus, &sweeps),
+        patch_tiles,
+        waypoints,
+    })
 }

@@ -5,9 +5,11 @@ use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::args::{BenchArgs, Plan};
 use super::config::BenchConfig;
+use super::replays;
 use super::rows::FrameRow;
-use super::{replays, settle, BenchArgs, Plan};
+use super::settle;
 use crate::app::failure::{renderer_failure, runtime, Failure};
 use crate::app::flight_plan::FlightPlan;
 use crate::app::renderer_setup::{patch_tiles, renderer_desc, RendererChoice};
