@@ -398,3 +398,30 @@ pub(crate) fn write_report(
     println!("{md}");
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn info(replays: u32) -> SuiteInfo {
+        SuiteInfo {
+            source: "s.toml".into(),
+            device: "llvmpipe".into(),
+            size: "160x90".into(),
+            fov: 90.0,
+            frames: 4,
+            warmup: 1,
+            fps: 5.0,
+            replays,
+        }
+    }
+
+    #[test]
+    fn the_head_says_how_often_the_frames_were_flown() {
+        let md = suite_md(&info(3), &[]);
+        assert!(md.contains("flown 3 times"), "{md}");
+        assert!(md.contains("timed by its fastest flight that did the same work"));
+        let once = suite_md(&info(1), &[]);
+        assert!(!once.contains("flown"), "{once}");
+    }
+}
