@@ -442,3 +442,35 @@ fn replays_fly_the_same_frames_again_and_keep_each_frames_least_time() {
         "{line}"
     );
 }
+
+/// `--replays` takes 1 to 20 flights; 0 or 21 is refused by the command line, naming the flag.
+#[test]
+fn replays_outside_one_to_twenty_are_refused_naming_the_flag() {
+    use clap::Parser as _;
+    for bad in ["0", "21", "two"] {
+        let err = aerie::app::cli::Cli::try_parse_from([
+            "aerie",
+            "bench",
+            "--dem",
+            "x.hgt",
+            "--out",
+            "o",
+            "--replays",
+            bad,
+        ])
+        .map(|_| ())
+        .expect_err(bad);
+        assert!(err.to_string().contains("--replays"), "{bad}: {err}");
+    }
+    aerie::app::cli::Cli::try_parse_from([
+        "aerie",
+        "bench",
+        "--dem",
+        "x.hgt",
+        "--out",
+        "o",
+        "--replays",
+        "20",
+    ])
+    .expect("20 replays parse");
+}

@@ -174,8 +174,10 @@ impl Lane {
 
 /// Flies the measured frames again, `a.replays − 1` times (`--replays`, [`replays`]): each
 /// reported lane's renderer is replaced by a fresh one (the old one's validation verdict kept
-/// in `validation`), filled at the first pose as before and rendering every frame in the
-/// first flight's order of configurations; a frame's row takes a faster replay of the same work.
+/// in `validation`), filled at the first pose as before and rendering every frame, the
+/// configurations' order rotated by one per frame as in the first flight (the reference and the
+/// feature-cost variants are not flown again); a frame's row takes a faster replay of the same
+/// work.
 pub(super) fn replay(
     lanes: &mut [Lane],
     inputs: &LaneInputs,

@@ -10,7 +10,7 @@
 //! replay did other work (another selection, other uploads) never takes that replay's time:
 //! work that varies is measured, not averaged away.
 //!
-//! Pure: which timings a frame keeps, the tally and summary.md's line; `bench.rs` renders.
+//! Pure: which timings a frame keeps, the tally and summary.md's line; `lanes::replay` renders.
 
 use crate::render::stats::FrameStats;
 
