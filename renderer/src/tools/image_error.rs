@@ -607,8 +607,10 @@ fn hole_distance(depth: &[f32], w: u32, h: u32, px: u32, py: usize, limit: u32) 
 
 /// Brute-force error (px) of one drawn node, DESIGN.md's definition: for full-resolution
 /// samples p of the level-`level` tile (tx, ty) (tiles of `tile_quads` quads), the distance on
-/// screen between the true point (x, y, h(p) − drop) and the point of the level surface drawn
-/// there (its vertices dropped, interpolated over the SW–NE diagonal); samples where either
+/// screen between the true point (x, y, h(p) − drop) and the point of the level-`drawn` surface
+/// drawn there — the node's own level, its parent's for a quadrant drawn at the parent's
+/// resolution, its grandparent's for a sixteenth — (its vertices dropped, interpolated over the
+/// SW–NE diagonal); samples where either
 /// projects inside the viewport count. Samples are taken every `stride` (1 = all; larger
 /// strides vary the offset inside each cell so that every position in a cell is visited
 /// across the tile).
@@ -619,12 +621,13 @@ pub fn node_error_px(
     size: (u32, u32),
     tile_quads: u32,
     (level, tx, ty): (u32, u32, u32),
+    drawn: u32,
     curvature: bool,
     stride: usize,
 ) -> f64 {
     let hf = &ds.hf;
     let side = (tile_quads as usize) << level;
-    let step = 1usize << level;
+    let step = 1usize << drawn.max(level);
     let (c0, r0) = (tx as usize * side, ty as usize * side);
     let surf = TrueSurface::new(ds, camera.position, curvature);
     let proj = Projector::new(camera, size.0, size.1);
@@ -749,6 +752,8 @@ pub fn oracle_selection(
                         size,
                         tile_quads,
                         (it.node_level, it.node_tx, it.node_ty),
+                        // A quadrant or sixteenth is drawn at a coarser level's resolution.
+                        it.node_level + it.morph.levels_up(),
                         curvature,
                         stride,
                     )

@@ -152,3 +152,39 @@ fn heatmap_colours() {
     assert_eq!(&img[12..16], &[255, 0, 255, 255]);
     assert_eq!(&img[16..20], &[0, 255, 255, 255]);
 }
+
+/// A node drawn at a coarser level's resolution is measured on that level's surface: one
+/// raised odd sample is exact on the level-0 node's own mesh, and the quadrant drawn at its
+/// parent's resolution (or the sixteenth at its grandparent's) misses it by the projected
+/// height of the bump.
+#[test]
+fn node_error_is_measured_at_the_resolution_drawn() {
+    let mut ds = plane(65, 10.0, 0.0);
+    let w = ds.hf.width;
+    // Sample (5, 5): odd, so no vertex of the level-1 or level-2 grid.
+    ds.hf.heights[5 * w + 5] = 4.0;
+    let (vw, vh) = (320u32, 180u32);
+    let cam = Camera::new(
+        DVec3::new(50.0, -200.0, 150.0),
+        Attitude::from_degrees(0.0, -30.0, 0.0),
+        Frustum::symmetric(90f64.to_radians(), vw, vh),
+    );
+    let node = (0, 0, 0);
+    let own = node_error_px(&ds, &cam, (vw, vh), 8, node, 0, false, 1);
+    let quadrant = node_error_px(&ds, &cam, (vw, vh), 8, node, 1, false, 1);
+    let sixteenth = node_error_px(&ds, &cam, (vw, vh), 8, node, 2, false, 1);
+    assert_eq!(own, 0.0);
+    // The bump's 4 m on screen, independently: its top and its foot projected.
+    let top = cam
+        .project_px(DVec3::new(50.0, 50.0, 4.0), vw, vh)
+        .unwrap()
+        .0;
+    let foot = cam
+        .project_px(DVec3::new(50.0, 50.0, 0.0), vw, vh)
+        .unwrap()
+        .0;
+    let bump = (top - foot).length();
+    assert!(bump > 1.0, "{bump}");
+    assert!((quadrant - bump).abs() < 1e-9, "{quadrant} vs {bump}");
+    assert!((sixteenth - bump).abs() < 1e-9, "{sixteenth} vs {bump}");
+}
