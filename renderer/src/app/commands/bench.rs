@@ -4,7 +4,8 @@
 //! One renderer per configuration, all alive at once, so each keeps its own clipmap caches,
 //! refined-tile pools and (for `distance`) hysteresis exactly as in a real flight. Every frame's
 //! camera is rendered by every configuration before the next frame, in an order rotated by one
-//! per frame so that no configuration always runs first or last; the first `--warmup` frames
+//! per frame so that no configuration always runs first or last (each replay in another order:
+//! `replays::lane_order`); the first `--warmup` frames
 //! are rendered and written to `results.csv` (marked) but left out of the summaries.
 //!
 //! Per frame and configuration: wall time of `TerrainRenderer::render` (select, upload, record,
@@ -317,8 +318,7 @@ fn run_flight(
         let (pos, att) = flight.pose_at(t);
         let camera = Camera::new(pos, att, p.view.frustum);
         let mut results: Vec<Option<(f64, FrameStats)>> = vec![None; n];
-        for j in 0..n {
-            let i = (j + k as usize) % n;
+        for i in replays::lane_order(n, 0, k) {
             let lane = &mut lanes[i];
             let t0 = Instant::now();
             let stats = lane

@@ -174,10 +174,10 @@ impl Lane {
 
 /// Flies the measured frames again, `a.replays − 1` times (`--replays`, [`replays`]): each
 /// reported lane's renderer is replaced by a fresh one (the old one's validation verdict kept
-/// in `validation`), filled at the first pose as before and rendering every frame, the
-/// configurations' order rotated by one per frame as in the first flight (the reference and the
-/// feature-cost variants are not flown again); a frame's row takes a faster replay of the same
-/// work.
+/// in `validation`), filled at the first pose as before and rendering every frame, each
+/// replay in its own order of the configurations ([`replays::lane_order`]; the reference and
+/// the feature-cost variants are not flown again); a frame's row takes a faster replay of the
+/// same work.
 pub(super) fn replay(
     lanes: &mut [Lane],
     inputs: &LaneInputs,
@@ -211,8 +211,8 @@ pub(super) fn replay(
         for k in 0..total_frames {
             let (pos, att) = flight.pose_at(k as f64 / a.fps);
             let camera = Camera::new(pos, att, p.view.frustum);
-            for j in 0..m {
-                let i = measured[(j + k as usize) % m];
+            for j in replays::lane_order(m, replay, k) {
+                let i = measured[j];
                 let lane = &mut lanes[i];
                 let t0 = Instant::now();
                 let stats = lane.renderer.render(&camera).map_err(|e| {

@@ -10,7 +10,14 @@
 //! replay did other work (another selection, other uploads) never takes that replay's time:
 //! work that varies is measured, not averaged away.
 //!
-//! Pure: which timings a frame keeps, the tally and summary.md's line; `lanes::replay` renders.
+//! Each flight renders a frame's configurations in its own order ([`lane_order`]): what one
+//! configuration renders just before another can slow it (on a software rasteriser, a frame of
+//! half a million tessellated triangles left the next configuration's 22 k-triangle frame 30.7
+//! against 21 ms without it, in each of three flights), so each flight puts another
+//! configuration before each one, and the least time is not always taken after the same one.
+//!
+//! Pure: the order, which timings a frame keeps, the tally and summary.md's line;
+//! `lanes::replay` renders.
 
 use crate::render::stats::FrameStats;
 
@@ -26,6 +33,32 @@ pub(crate) fn same_work(a: &FrameStats, b: &FrameStats) -> bool {
         && a.bytes_uploaded == b.bytes_uploaded
         && a.tiles_late == b.tiles_late
         && a.tiles_late_stream == b.tiles_late_stream
+}
+
+/// The order in which flight `flight` (0: the first, then each replay) renders frame `frame`'s
+/// `m` configurations: position j renders configuration `(frame + j·s) mod m`, the stride `s`
+/// 1 on the first flight (each frame's order rotated by one, as the bench always did), m − 1
+/// (the reverse) on the second, then each stride in 2..m − 1 prime to m, in turn. Every order
+/// is a permutation; a configuration not first in its frame follows configuration i − s, so
+/// flights with different strides put different configurations before it.
+pub(crate) fn lane_order(m: usize, flight: u32, frame: u32) -> Vec<usize> {
+    if m == 0 {
+        return Vec::new();
+    }
+    let gcd = |mut a: usize, mut b: usize| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let mut strides = vec![1usize];
+    if m > 2 {
+        strides.push(m - 1);
+        strides.extend((2..m - 1).filter(|&s| gcd(s, m) == 1));
+    }
+    let s = strides[flight as usize % strides.len()];
+    let k = frame as usize % m;
+    (0..m).map(|j| (k + j * s) % m).collect()
 }
 
 /// One frame's timings across its replays.
@@ -131,6 +164,56 @@ mod tests {
             gpu_terrain_ms: gpu_ms,
             ..FrameStats::default()
         }
+    }
+
+    #[test]
+    fn each_flight_renders_every_configuration_once_after_another_predecessor() {
+        for m in [1usize, 2, 3, 4, 6, 23, 24] {
+            for frame in 0..30 {
+                // The first flight's order is the rotation by one per frame.
+                let first = lane_order(m, 0, frame);
+                assert_eq!(
+                    first,
+                    (0..m).map(|j| (j + frame as usize) % m).collect::<Vec<_>>()
+                );
+                let flights: Vec<Vec<usize>> = (0..3).map(|f| lane_order(m, f, frame)).collect();
+                for order in &flights {
+                    let mut sorted = order.clone();
+                    sorted.sort_unstable();
+                    assert_eq!(sorted, (0..m).collect::<Vec<_>>(), "m {m}: a permutation");
+                }
+                if m < 3 {
+                    continue;
+                }
+                // Three strides where one in 2..m − 1 is prime to m (m = 23, 24), else the
+                // reverse comes back (m = 4, 6: strides 1 and m − 1 only).
+                let third = matches!(m, 23 | 24);
+                assert_ne!(flights[0], flights[1]);
+                assert_eq!(flights[2] == flights[0], !third, "m {m}");
+                // Each configuration not first in its frame has another predecessor in each
+                // flight of another order.
+                for lane in 0..m {
+                    let before: Vec<Option<usize>> = flights
+                        .iter()
+                        .map(|o| {
+                            let at = o.iter().position(|&x| x == lane).unwrap();
+                            (at > 0).then(|| o[at - 1])
+                        })
+                        .collect();
+                    for a in 0..3 {
+                        for b in a + 1..3 {
+                            if flights[a] == flights[b] {
+                                continue;
+                            }
+                            if let (Some(x), Some(y)) = (before[a], before[b]) {
+                                assert_ne!(x, y, "m {m} frame {frame} lane {lane}");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(lane_order(0, 1, 3).is_empty());
     }
 
     #[test]
