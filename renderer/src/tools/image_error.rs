@@ -610,10 +610,9 @@ fn hole_distance(depth: &[f32], w: u32, h: u32, px: u32, py: usize, limit: u32) 
 /// screen between the true point (x, y, h(p) − drop) and the point of the level-`drawn` surface
 /// drawn there — the node's own level, its parent's for a quadrant drawn at the parent's
 /// resolution, its grandparent's for a sixteenth — (its vertices dropped, interpolated over the
-/// SW–NE diagonal); samples where either
-/// projects inside the viewport count. Samples are taken every `stride` (1 = all; larger
-/// strides vary the offset inside each cell so that every position in a cell is visited
-/// across the tile).
+/// SW–NE diagonal); samples where either projects inside the viewport count. Samples are taken
+/// every `stride` (1 = all; larger strides vary the offset inside each cell so that every
+/// position in a cell is visited across the tile).
 #[allow(clippy::too_many_arguments)]
 pub fn node_error_px(
     ds: &Dataset,

@@ -5,8 +5,8 @@
 //! refined-tile pools and (for `distance`) hysteresis exactly as in a real flight. Every frame's
 //! camera is rendered by every configuration before the next frame, in an order rotated by one
 //! per frame so that no configuration always runs first or last (each replay in another order:
-//! `replays::lane_order`); the first `--warmup` frames
-//! are rendered and written to `results.csv` (marked) but left out of the summaries.
+//! `replays::lane_order`); the first `--warmup` frames are rendered and written to
+//! `results.csv` (marked) but left out of the summaries.
 //!
 //! Per frame and configuration: wall time of `TerrainRenderer::render` (select, upload, record,
 //! submit, wait — the read-back copy is recorded in the same submission), its CPU stages and GPU
