@@ -466,3 +466,112 @@ fn replays_outside_one_to_twenty_are_refused_naming_the_flag() {
     }
     parse("20").expect("20 replays parse");
 }
+
+/// `--tile-sizes`: every tiled mode is drawn once per tile size (tessellation once), each
+/// renderer with its own tiles (more, smaller nodes over the same ground) and its own bake,
+/// bounded within τ + 0.5 px and every node the oracle checks within its bound at either size;
+/// a size the renderer cannot draw, or a patch that does not divide into it, is refused naming
+/// the flag.
+#[test]
+fn tile_sizes_draw_every_tiled_mode_with_each_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = dir.path().join("N47E011.hgt.zip");
+    std::fs::copy(aerie_tests::demo_dem(), &dem).unwrap();
+    let out = dir.path().join("out");
+    let run = |extra: &[&str]| {
+        let mut all = vec!["bench", "--dem", dem.to_str().unwrap()];
+        all.extend_from_slice(&["--size", "160x90", "--frames", "2", "--warmup", "0"]);
+        all.extend_from_slice(&["--out", out.to_str().unwrap(), "--overwrite"]);
+        all.extend_from_slice(extra);
+        aerie(&all)
+    };
+    run(&[
+        "--modes",
+        "bounded,cdlod,tess",
+        "--tau",
+        "1",
+        "--cdlod-range",
+        "4",
+        "--tess-density",
+        "0.5",
+        "--tile-sizes",
+        "17,9",
+        "--oracle-nodes",
+        "64",
+    ])
+    .map_err(|f| f.message)
+    .expect("bench runs");
+    let rows = table(&out.join("results.csv"));
+    let mut configs: Vec<&str> = Vec::new();
+    for r in &rows {
+        if !configs.contains(&r["config"].as_str()) {
+            configs.push(&r["config"]);
+        }
+    }
+    assert_eq!(
+        configs,
+        [
+            "bounded_tau1",
+            "bounded_tau1_m9",
+            "cdlod_k4",
+            "cdlod_k4_m9",
+            "tess_x0.5"
+        ],
+        "{rows:?}"
+    );
+    let instances = |config: &str| -> Vec<u64> {
+        rows.iter()
+            .filter(|r| r["config"] == config)
+            .map(|r| r["instances"].parse().unwrap())
+            .collect()
+    };
+    // A node of 9 vertices covers a quarter of one of 17: the same ground takes more of them.
+    for (whole, small) in [
+        ("bounded_tau1", "bounded_tau1_m9"),
+        ("cdlod_k4", "cdlod_k4_m9"),
+    ] {
+        for (a, b) in instances(whole).iter().zip(instances(small)) {
+            assert!(b > *a, "{small} {b} instances, {whole} {a}");
+        }
+    }
+    for r in rows.iter().filter(|r| r["mode"] == "bounded") {
+        let max: f64 = r["img_confirmed_max_px"].parse().unwrap();
+        assert!(max <= 1.5, "within τ + 0.5 px: {r:?}");
+        let (oracle, bound): (f64, f64) = (
+            r["oracle_max_px"].parse().unwrap(),
+            r["bound_max_px"].parse().unwrap(),
+        );
+        assert!(r["oracle_nodes"].parse::<u32>().unwrap() > 0, "{r:?}");
+        assert!(
+            oracle <= bound * (1.0 + 1e-6) + 1e-9 && bound <= 1.0 + 1e-9,
+            "{r:?}"
+        );
+    }
+    for (args, flag) in [
+        (
+            &["--modes", "bounded", "--tile-sizes", "17,12"][..],
+            "--tile-sizes",
+        ),
+        (
+            &["--modes", "bounded", "--tile-sizes", "33"][..],
+            "--patch 129: with tiles of 33",
+        ),
+        (
+            &[
+                "--modes",
+                "clipmap",
+                "--clipmap-n",
+                "129,257",
+                "--patch",
+                "257",
+                "--tile-sizes",
+                "33",
+            ][..],
+            "--clipmap-n 129,257: with tiles of 33",
+        ),
+    ] {
+        let e = run(args).expect_err(flag);
+        assert_eq!(e.code, 2, "{}", e.message);
+        assert!(e.message.starts_with(flag), "{flag}: {}", e.message);
+    }
+}

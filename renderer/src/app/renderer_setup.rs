@@ -45,10 +45,17 @@ pub fn parse_view(size: &str, fov_deg: f64) -> Result<View, Failure> {
 
 /// Tiles per clipmap patch side for `--patch n`: n must be P·(m−1)+1 with P even and ≥ 8.
 pub fn patch_tiles(patch: u32) -> Result<u32, Failure> {
-    let q = RendererDesc::default().tile_size - 1;
+    patch_tiles_of(patch, RendererDesc::default().tile_size)
+}
+
+/// [`patch_tiles`] for tiles of `tile_size` vertices a side (m).
+pub fn patch_tiles_of(patch: u32, tile_size: u32) -> Result<u32, Failure> {
+    let q = tile_size.saturating_sub(1).max(1);
     if patch < 8 * q + 1 || !(patch - 1).is_multiple_of(2 * q) {
         return Err(bad_input(format!(
-            "--patch: {patch} must be P·{q}+1 with P even and ≥ 8 (e.g. 129 or 257)"
+            "--patch: {patch} must be P·{q}+1 with P even and ≥ 8 (e.g. {} or {})",
+            8 * q + 1,
+            16 * q + 1
         )));
     }
     Ok((patch - 1) / q)
@@ -354,6 +361,10 @@ mod tests {
             assert_eq!(e.code, 2);
             assert!(e.message.starts_with(flag), "{}", e.message);
         }
+        assert_eq!(patch_tiles_of(129, 9).unwrap(), 16);
+        assert_eq!(patch_tiles_of(513, 33).unwrap(), 16);
+        // 129 = 4·32 + 1: too few tiles of 33 (P ≥ 8).
+        assert!(patch_tiles_of(129, 33).is_err());
         assert_eq!(patch_tiles(129).unwrap(), 8);
         assert_eq!(patch_tiles(257).unwrap(), 16);
         for bad in [0, 1, 65, 130, 145] {

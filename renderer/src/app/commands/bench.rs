@@ -55,6 +55,7 @@ use crate::tools::image_error::{
     heatmap_rgba, measure, oracle_selection, ImageError, MeasureParams,
 };
 use crate::tools::output::{write_png, write_text};
+use aerie_terrain::bake::{BakeParams, ErrorBake};
 use aerie_terrain::camera::Camera;
 use aerie_terrain::clipmap::{place_levels, ClipmapDesc};
 use aerie_terrain::dataset::Dataset;
@@ -92,6 +93,13 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
         ..RendererDesc::default()
     };
     let terrain = prepare_source(&dem, &source_desc, &a.store)?;
+    if terrain.dataset.is_none() && p.configs.iter().any(|c| c.tile_size.is_some()) {
+        return Err(bad_input(format!(
+            "--tile-sizes {}: a streamed store is drawn with the tiles it was imported with \
+             ({tile_size}); bench other tile sizes on the dataset in memory",
+            a.tile_sizes
+        )));
+    }
     // The truth the measurements need: the samples themselves, whole.
     let (ds, bake) = match &terrain.dataset {
         Some(ds) => (ds.clone(), terrain.bake.clone()),
@@ -150,6 +158,8 @@ fn suite_flight(
     args.distance_scale = join(&r.sweeps.distance_scale);
     args.cdlod_range = join(&r.sweeps.cdlod_range);
     args.tess_density = join(&r.sweeps.tess_density);
+    let tile_sizes: Vec<f64> = r.sweeps.tile_sizes.iter().map(|&m| m as f64).collect();
+    args.tile_sizes = join(&tile_sizes);
     args.oracle_nodes = r.oracle_nodes;
     args.flight = None;
     // A flight flown again under --resume replaces what an interrupted run left in its folder.
@@ -219,11 +229,13 @@ fn run_flight(
                 mode: LodMode::Full,
                 tau_px: None,
                 knob: None,
+                tile_size: None,
             },
             false,
         ));
     }
     let eye0 = flight.pose_at(0.0).0;
+    let bakes = bakes_for_tile_sizes(ds, bake, &p.configs)?;
     let t_setup = Instant::now();
     let mut lanes: Vec<Lane> = Vec::new();
     let drape = crate::app::renderer_setup::drape_input(&a.drape)?;
@@ -234,7 +246,7 @@ fn run_flight(
         p,
         drape,
         drape_budget,
-        bake,
+        bakes: &bakes,
         eye0,
     };
     for &(config, reported) in &lane_configs {
@@ -369,14 +381,15 @@ fn run_flight(
             let tiles = lane.config.mode != LodMode::Tessellation;
             let oracle = if a.oracle_nodes > 0 && tiles {
                 let desc = lane.renderer.desc();
-                // Each lane's own patch (a swept clipmap has its own).
+                // Each lane's own patch (a swept clipmap has its own) and tiles.
                 let clip = ClipmapDesc {
                     patch_tiles: desc.patch_tiles,
+                    tile_quads: desc.tile_size - 1,
                     ..clip
                 };
                 let placements = place_levels(&clip, viewer);
                 select_tiles(
-                    bake,
+                    lanes::bake_for(&bakes, desc.tile_size)?,
                     &clip,
                     &placements,
                     &camera,
@@ -530,6 +543,38 @@ fn run_flight(
         device: meta.device,
         summaries,
     })
+}
+
+/// The given bake (of the default tile size) and one more, made in memory, for each other
+/// tile size among `configs` (`--tile-sizes`).
+fn bakes_for_tile_sizes(
+    ds: &Arc<Dataset>,
+    bake: &Arc<ErrorBake>,
+    configs: &[BenchConfig],
+) -> Result<Vec<Arc<ErrorBake>>, Failure> {
+    let mut bakes = vec![bake.clone()];
+    for c in configs {
+        let m = c.tile_size_or_default();
+        if bakes.iter().any(|b| b.params.tile_size == m) {
+            continue;
+        }
+        let params = BakeParams {
+            tile_size: m,
+            levels: 0,
+        };
+        params
+            .resolve_levels(ds)
+            .map_err(|e| bad_input(format!("--tile-sizes: tiles of {m}: {e}")))?;
+        let t = Instant::now();
+        let b = aerie_terrain::bake::bake(ds, params, &|_: u64, _: u64| {});
+        eprintln!(
+            "baked tiles of {m} in memory ({} levels, {:.2} s)",
+            b.levels.len(),
+            t.elapsed().as_secs_f64()
+        );
+        bakes.push(Arc::new(b));
+    }
+    Ok(bakes)
 }
 
 /// Measures one lane's frame, accumulates it (outside warm-up) and keeps its worst heat map.

@@ -5,11 +5,13 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::config::{
-    configurations, parse_modes, parse_positive_list, parse_taus, BenchConfig, Sweeps,
+    check_tile_sizes, configurations, parse_modes, parse_positive_list, parse_taus, BenchConfig,
+    Sweeps,
 };
 use crate::app::args::{read_waypoints, LookArg, NormalsArg, PassArgs, StoreArgs, Switch};
 use crate::app::failure::{bad_input, Failure};
-use crate::app::renderer_setup::{parse_view, patch_tiles, View};
+use crate::app::renderer_setup::{parse_view, patch_tiles, patch_tiles_of, View};
+use crate::render::frame::DEFAULT_TILE_SIZE;
 use crate::sim::flight::Waypoints;
 
 #[derive(Debug, Clone, Args)]
@@ -92,6 +94,12 @@ pub struct BenchArgs {
     /// e.g. 129,257,513); empty: once at --patch.
     #[arg(long, default_value = "")]
     pub clipmap_n: String,
+    /// Draw every tiled mode (all but `tess` and `full`) with each of these tile sizes m
+    /// (vertices a side, 2^j + 1: e.g. 9,17), so the tile size is one more knob of every
+    /// mode's curve; empty: the default (17) only. --patch and each --clipmap-n must then be
+    /// P·(m−1)+1 with P even ≥ 8 for every m.
+    #[arg(long, default_value = "")]
+    pub tile_sizes: String,
     /// Sweep `distance` over these scales of its split distance (e.g. 0.5,1,2,4); empty: once
     /// at scale 1.
     #[arg(long, default_value = "")]
@@ -161,24 +169,48 @@ pub(crate) fn plan(a: &BenchArgs) -> Result<Plan, Failure> {
     let view = parse_view(&a.size, a.fov)?;
     let modes = parse_modes(&a.modes).map_err(bad_input)?;
     let taus = parse_taus(&a.tau).map_err(bad_input)?;
+    let tile_sizes: Vec<u32> = parse_positive_list("--tile-sizes", &a.tile_sizes)
+        .map_err(bad_input)?
+        .into_iter()
+        .map(|m| {
+            if m.fract() == 0.0 && m <= u32::MAX as f64 {
+                Ok(m as u32)
+            } else {
+                Err(bad_input(format!(
+                    "--tile-sizes {}: {m} is not a whole number of vertices",
+                    a.tile_sizes
+                )))
+            }
+        })
+        .collect::<Result<_, _>>()?;
+    check_tile_sizes("--tile-sizes", &tile_sizes).map_err(bad_input)?;
+    // Every patch side must divide into tiles of every size drawn.
+    let sizes: Vec<u32> = if tile_sizes.is_empty() {
+        vec![DEFAULT_TILE_SIZE]
+    } else {
+        tile_sizes.clone()
+    };
+    let fits = |flag: &str, given: &str, n: u32| -> Result<(), Failure> {
+        for &m in &sizes {
+            patch_tiles_of(n, m).map_err(|e| {
+                let why = e.message.trim_start_matches("--patch: ");
+                bad_input(format!("{flag} {given}: with tiles of {m}: {why}"))
+            })?;
+        }
+        Ok(())
+    };
+    fits("--patch", &a.patch.to_string(), a.patch)?;
     let sweeps = Sweeps {
         clipmap_n: parse_positive_list("--clipmap-n", &a.clipmap_n)
             .map_err(bad_input)?
             .into_iter()
-            .map(|n| {
-                patch_tiles(n as u32).map(|_| n as u32).map_err(|e| {
-                    bad_input(format!(
-                        "--clipmap-n {}: {}",
-                        a.clipmap_n,
-                        e.message.trim_start_matches("--patch: ")
-                    ))
-                })
-            })
+            .map(|n| fits("--clipmap-n", &a.clipmap_n, n as u32).map(|_| n as u32))
             .collect::<Result<_, _>>()?,
         distance_scale: parse_positive_list("--distance-scale", &a.distance_scale)
             .map_err(bad_input)?,
         cdlod_range: parse_positive_list("--cdlod-range", &a.cdlod_range).map_err(bad_input)?,
         tess_density: parse_positive_list("--tess-density", &a.tess_density).map_err(bad_input)?,
+        tile_sizes,
     };
     if a.frames == 0 {
         return Err(bad_input("--frames: must be at least 1"));

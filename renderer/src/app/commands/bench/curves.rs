@@ -198,6 +198,72 @@ fn span(lo: f64, hi: f64) -> String {
     }
 }
 
+/// The curve of a mode with several families of settings (the tile sizes of `--tile-sizes`,
+/// each family a curve over the mode's own knob): at every error, the cheapest family that
+/// reaches it — the pointwise minimum of the families' readings, where any covers the error.
+/// Made of every family's errors and, where the cheapest family changes between two of them,
+/// the error where the two cross (both are linear in log–log between consecutive errors), so
+/// its own log–log reading is that minimum at every error a family covers. Taking the union
+/// of the families' points instead would let a point of one family, above another family's
+/// line, raise the curve there, and would draw a line from one family's point to the first
+/// point of another that begins further on, below every setting either has between them.
+/// Where a family ends and a dearer one goes on, the curve goes on from the last cheap point
+/// as one family's curve does past a dominated setting. One family: that family's curve.
+pub fn lower_envelope(families: &[Curve]) -> Curve {
+    let live: Vec<&Curve> = families.iter().filter(|c| !c.points.is_empty()).collect();
+    if live.len() <= 1 {
+        return live.first().map(|c| (*c).clone()).unwrap_or_default();
+    }
+    let mut errors: Vec<f64> = live
+        .iter()
+        .flat_map(|c| c.points.iter().map(|p| p.0))
+        .collect();
+    errors.sort_by(f64::total_cmp);
+    errors.dedup();
+    let value = |k: usize, e: f64| match live[k].at(e) {
+        Reading::Value(v) => Some(v),
+        _ => None,
+    };
+    let cheapest = |e: f64| {
+        (0..live.len())
+            .filter_map(|k| value(k, e).map(|v| (v, k)))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+    };
+    let mut pts: Vec<CurvePoint> = Vec::new();
+    let mut prev: Option<(f64, usize)> = None;
+    for &e in &errors {
+        let Some((v, k)) = cheapest(e) else {
+            prev = None;
+            continue;
+        };
+        if let Some((pe, pk)) = prev.filter(|&(_, pk)| pk != k) {
+            // Family pk was the cheaper at pe, k is at e: where both cover [pe, e], the
+            // difference of their log costs is linear in log error there and changes sign once.
+            if let (Some(a0), Some(a1), Some(b0), Some(b1)) =
+                (value(pk, pe), value(pk, e), value(k, pe), value(k, e))
+            {
+                let (d0, d1) = (a0.ln() - b0.ln(), a1.ln() - b1.ln());
+                if d0 < 0.0 && d1 > 0.0 {
+                    let t = d0 / (d0 - d1);
+                    let at = (pe.ln() + t * (e.ln() - pe.ln())).exp();
+                    let cost = (a0.ln() + t * (a1.ln() - a0.ln())).exp();
+                    pts.push((at, cost));
+                }
+            } else if value(k, pe).is_none() {
+                // Family k begins at e: up to it only pk reaches these errors, so the curve
+                // follows pk to just short of e and drops there, not along a line from pe.
+                let before = e * (1.0 - 1e-9);
+                if let Some(c) = value(pk, before) {
+                    pts.push((before, c));
+                }
+            }
+        }
+        pts.push((e, v));
+        prev = Some((e, k));
+    }
+    Curve::new(&pts)
+}
+
 /// Geometric mean of the positive finite values; None when there is none.
 pub fn geometric_mean(values: &[f64]) -> Option<f64> {
     let v: Vec<f64> = values
@@ -319,6 +385,47 @@ mod tests {
             ratio_at_equal_error(&ours, &Curve::new(&[(1.0, 500.0), (4.0, 100.0)])),
             Ratio::Value { .. }
         ));
+    }
+
+    #[test]
+    fn the_envelope_of_families_reads_their_cheapest_at_every_error() {
+        // Family a: 1000 at 1 px … 10 at 100 px (cost = 1000 / e). Family b: 200 at 2 px,
+        // 100 at 8 px, 60 at 32 px: cheaper than a from 2 px up to where they cross.
+        let a = Curve::new(&[(1.0, 1000.0), (10.0, 100.0), (100.0, 10.0)]);
+        let b = Curve::new(&[(2.0, 200.0), (8.0, 100.0), (32.0, 60.0)]);
+        let env = lower_envelope(&[a.clone(), b.clone()]);
+        let read = |c: &Curve, e: f64| match c.at(e) {
+            Reading::Value(v) => Some(v),
+            _ => None,
+        };
+        let mut e = 1.0;
+        while e <= 100.0 {
+            let want = [read(&a, e), read(&b, e)]
+                .into_iter()
+                .flatten()
+                .fold(f64::INFINITY, f64::min);
+            let got = read(&env, e).unwrap();
+            assert!(
+                (got / want - 1.0).abs() < 1e-9,
+                "at {e} px: {got} against {want}"
+            );
+            e *= 1.07;
+        }
+        // The union of the points reads too much where a point of one family drops another's
+        // (a's (10, 100) behind b's (8, 100): the line from 8 to 32 px lies over a's 50 at
+        // 20 px) and too little before b begins (the line from a's 1 px to b's 2 px).
+        let union = Curve::new(&[a.points.clone(), b.points.clone()].concat());
+        let at20 = (read(&union, 20.0).unwrap(), read(&env, 20.0).unwrap());
+        assert!(at20.0 > 70.0 && (at20.1 - 50.0).abs() < 1e-6, "{at20:?}");
+        let at1_5 = (read(&union, 1.5).unwrap(), read(&env, 1.5).unwrap());
+        assert!(
+            at1_5.0 < 400.0 && (at1_5.1 - 1000.0 / 1.5).abs() < 1e-6,
+            "{at1_5:?}"
+        );
+        // One family, or one with empty others: that family.
+        assert_eq!(lower_envelope(std::slice::from_ref(&a)), a);
+        assert_eq!(lower_envelope(&[Curve::default(), b.clone()]), b);
+        assert_eq!(lower_envelope(&[]), Curve::default());
     }
 
     #[test]

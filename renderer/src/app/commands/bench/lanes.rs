@@ -12,7 +12,7 @@ use super::rows::FrameRow;
 use super::settle;
 use crate::app::failure::{renderer_failure, runtime, Failure};
 use crate::app::flight_plan::FlightPlan;
-use crate::app::renderer_setup::{patch_tiles, renderer_desc, RendererChoice};
+use crate::app::renderer_setup::{patch_tiles_of, renderer_desc, RendererChoice};
 use crate::render::frame::{RendererDesc, TerrainRenderer};
 use crate::tools::image_error::ImageError;
 use aerie_terrain::bake::ErrorBake;
@@ -24,12 +24,18 @@ use glam::DVec3;
 /// The renderer of one configuration: `full` gets pools large enough to draw every visible
 /// tile at full resolution (as `aerie render --lod full`).
 /// A swept baseline's knob sets its patch side, split-distance scale or LOD range.
+/// A configuration with another tile size (`--tile-sizes`) has tiles of that size, its patch
+/// side divided into them, and pools of as many bytes as the default's: (q₀/q)² times the
+/// slots (a slot holds a tile's samples), so a quarter-size tile is not held back by a pool
+/// sized for fewer, larger ones.
 pub(super) fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> RendererDesc {
-    let patch = match (config.mode, config.knob) {
-        // Checked in `plan`.
-        (LodMode::Clipmap, Some(n)) => patch_tiles(n as u32).unwrap_or(p.patch_tiles),
-        _ => p.patch_tiles,
+    let m = config.tile_size_or_default();
+    let n = match (config.mode, config.knob) {
+        (LodMode::Clipmap, Some(n)) => n as u32,
+        _ => a.patch,
     };
+    // Checked in `plan` for every tile size.
+    let patch = patch_tiles_of(n, m).unwrap_or(p.patch_tiles);
     let mut desc = renderer_desc(&RendererChoice {
         gpu: a.gpu.clone(),
         validate: a.validate,
@@ -46,6 +52,8 @@ pub(super) fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> Rendere
         horizon_cull: a.horizon_cull.on(),
         carry: a.carry_selection.on(),
     });
+    desc.pool_capacity = pools_for_tile_size(desc.pool_capacity, desc.tile_size, m);
+    desc.tile_size = m;
     match (config.mode, config.knob) {
         (LodMode::Distance, Some(k)) => desc.select.distance_factor *= k,
         (LodMode::Cdlod, Some(k)) => desc.select.cdlod_range = k,
@@ -53,6 +61,21 @@ pub(super) fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> Rendere
         _ => {}
     }
     desc
+}
+
+/// Pool slots for tiles of `to` vertices a side holding the bytes `slots` hold for tiles of
+/// `from`: a slot of refinement r holds ((q << r) + 1)² samples, so the count scales by
+/// about (q_from / q_to)² (rounded up; an empty pool stays empty).
+pub(super) fn pools_for_tile_size<const N: usize>(slots: [u32; N], from: u32, to: u32) -> [u32; N] {
+    let (qf, qt) = (u64::from(from.max(2) - 1), u64::from(to.max(2) - 1));
+    let mut out = slots;
+    for (r, s) in out.iter_mut().enumerate() {
+        let side = |q: u64| ((q << r) + 1).pow(2);
+        *s = (u64::from(*s) * side(qf))
+            .div_ceil(side(qt))
+            .min(u64::from(u32::MAX)) as u32;
+    }
+    out
 }
 
 /// A configuration's renderer with its CPU mirror of the selection (for the oracle) and its
@@ -117,8 +140,20 @@ pub(super) struct LaneInputs<'a> {
     pub p: &'a Plan,
     pub drape: Option<crate::render::drape_textures::SharedDrapeInput>,
     pub drape_budget: u64,
-    pub bake: &'a Arc<ErrorBake>,
+    /// The error bakes, one per tile size drawn (`bake_for` picks a renderer's).
+    pub bakes: &'a [Arc<ErrorBake>],
     pub eye0: DVec3,
+}
+
+/// The bake of tiles of `tile_size` among `bakes` (one is made for every size a run draws).
+pub(super) fn bake_for(
+    bakes: &[Arc<ErrorBake>],
+    tile_size: u32,
+) -> Result<&Arc<ErrorBake>, Failure> {
+    bakes
+        .iter()
+        .find(|b| b.params.tile_size == tile_size)
+        .ok_or_else(|| runtime(format!("no error bake with tiles of {tile_size} was made")))
 }
 
 impl LaneInputs<'_> {
@@ -134,14 +169,13 @@ impl LaneInputs<'_> {
         desc.drape = self.drape.clone();
         desc.drape_budget_bytes = self.drape_budget;
         edit(&mut desc);
+        let bake = bake_for(self.bakes, desc.tile_size)?.clone();
         let mut renderer = TerrainRenderer::new(&desc).map_err(runtime)?;
-        renderer
-            .load_source(source, self.bake.clone(), self.eye0)
-            .map_err(|e| {
-                let mut f = renderer_failure(e);
-                f.message = format!("{}: {}", config.label(), f.message);
-                f
-            })?;
+        renderer.load_source(source, bake, self.eye0).map_err(|e| {
+            let mut f = renderer_failure(e);
+            f.message = format!("{}: {}", config.label(), f.message);
+            f
+        })?;
         Ok(renderer)
     }
 }
@@ -244,4 +278,28 @@ pub(super) fn replay(
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::pools_for_tile_size;
+
+    #[test]
+    fn pools_keep_their_bytes_across_tile_sizes() {
+        let slots = [256u32, 128, 96, 32, 40, 0];
+        assert_eq!(pools_for_tile_size(slots, 17, 17), slots);
+        let small = pools_for_tile_size(slots, 17, 9);
+        for (r, (&a, &b)) in slots.iter().zip(&small).enumerate() {
+            let bytes = |n: u32, q: u64| u64::from(n) * ((q << r) + 1).pow(2);
+            // At least the bytes of before, less than one more slot above them.
+            assert!(bytes(b, 8) >= bytes(a, 16), "r = {r}: {b} slots");
+            assert!(
+                b == 0 || bytes(b - 1, 8) < bytes(a, 16),
+                "r = {r}: {b} slots"
+            );
+        }
+        assert_eq!(small[5], 0, "an empty pool stays empty");
+        // About four quarter-size tiles to a slot of the default at r = 0 (289 / 81 samples).
+        assert_eq!(small[0], (256 * 289u32).div_ceil(81));
+    }
 }

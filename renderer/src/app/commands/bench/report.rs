@@ -633,6 +633,7 @@ mod tests {
                 mode,
                 tau_px: tau,
                 knob: None,
+                tile_size: None,
             },
             frames: 1,
             frame_ms: q(ms),

@@ -16,6 +16,7 @@
 //! clipmap_n = [129, 257, 513]
 //! distance_scale = [0.5, 1, 2, 4]
 //! cdlod_range = [2, 4, 8, 16]
+//! tile_sizes = [17, 9]        # every tiled mode at each tile size (default: 17 only)
 //! oracle_nodes = 0
 //!
 //! [[dataset]]
@@ -41,9 +42,10 @@ use serde::Deserialize;
 
 use aerie_config::key_location;
 
-use super::config::{parse_modes, Sweeps};
+use super::config::{check_tile_sizes, parse_modes, Sweeps};
 use super::flights::{FlightKind, FlightSpec};
-use crate::app::renderer_setup::{parse_view, patch_tiles};
+use crate::app::renderer_setup::{parse_view, patch_tiles_of};
+use crate::render::frame::DEFAULT_TILE_SIZE;
 
 #[derive(Debug, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
@@ -61,6 +63,7 @@ struct RawRun {
     distance_scale: Option<Vec<f64>>,
     cdlod_range: Option<Vec<f64>>,
     tess_density: Option<Vec<f64>>,
+    tile_sizes: Option<Vec<u32>>,
     oracle_nodes: Option<u32>,
 }
 
@@ -260,18 +263,34 @@ pub fn parse_suite(text: &str, source: &str) -> Result<Suite, String> {
     if tau.is_empty() {
         return Err(f("run.tau", "needs at least one τ".into()));
     }
+    let tile_sizes = r.tile_sizes.unwrap_or_default();
+    check_tile_sizes("run.tile_sizes", &tile_sizes).map_err(|e| {
+        let (key, why) = e.split_once(": ").unwrap_or(("run.tile_sizes", &e));
+        f(key, why.to_string())
+    })?;
+    let sizes = if tile_sizes.is_empty() {
+        vec![DEFAULT_TILE_SIZE]
+    } else {
+        tile_sizes.clone()
+    };
     let clipmap_n = r.clipmap_n.unwrap_or_else(|| vec![129, 257, 513]);
     for (i, &n) in clipmap_n.iter().enumerate() {
-        patch_tiles(n).map_err(|e| {
-            let why = e.message.trim_start_matches("--patch: ").to_string();
-            f(&format!("run.clipmap_n[{i}]"), why)
-        })?;
+        for &m in &sizes {
+            patch_tiles_of(n, m).map_err(|e| {
+                let why = e.message.trim_start_matches("--patch: ");
+                f(
+                    &format!("run.clipmap_n[{i}]"),
+                    format!("with tiles of {m}: {why}"),
+                )
+            })?;
+        }
     }
     let sweeps = Sweeps {
         clipmap_n,
         distance_scale: list(r.distance_scale, "distance_scale", &[0.5, 1.0, 2.0, 4.0])?,
         cdlod_range: list(r.cdlod_range, "cdlod_range", &[2.0, 4.0, 8.0, 16.0])?,
         tess_density: list(r.tess_density, "tess_density", &[0.25, 0.5, 1.0, 2.0, 4.0])?,
+        tile_sizes,
     };
     let run = RunSettings {
         size,
@@ -509,6 +528,16 @@ datasets = ["mixed"]
         let replayed = parse_suite(&GOOD.replace("frames = 4", "frames = 4\nreplays = 3"), "s")
             .expect("replays parses");
         assert_eq!(replayed.run.replays, 3);
+        assert!(
+            s.run.sweeps.tile_sizes.is_empty(),
+            "the default tiles only unless asked"
+        );
+        let tiled = parse_suite(
+            &GOOD.replace("frames = 4", "frames = 4\ntile_sizes = [17, 9]"),
+            "s",
+        )
+        .expect("tile_sizes parses");
+        assert_eq!(tiled.run.sweeps.tile_sizes, vec![17, 9]);
         assert_eq!(
             s.datasets[1].source,
             DatasetSource::Generate {
@@ -550,6 +579,15 @@ datasets = ["mixed"]
                 "run.clipmap_n[0]",
             ),
             (GOOD.replace("\"160x90\"", "\"160\""), "run.size"),
+            (
+                GOOD.replace("frames = 4", "frames = 4\ntile_sizes = [17, 12]"),
+                "run.tile_sizes[1]: tile size 12",
+            ),
+            (
+                // 129 = 4·32 + 1: too few tiles of 33 for a patch.
+                GOOD.replace("frames = 4", "frames = 4\ntile_sizes = [33]"),
+                "run.clipmap_n[0]: with tiles of 33",
+            ),
             (
                 GOOD.replace("frames = 4", "frames = 4\nreplays = 0"),
                 "s.toml:5:11: run.replays",
@@ -627,6 +665,12 @@ datasets = ["mixed"]
             // Late tiles are counted in flight, after the caches filled at the first pose.
             assert!(s.run.settle >= 10, "{name}");
         }
+        // The tile-size study: the four real datasets' 16 flights, every tiled mode at 17 and 9.
+        let text = include_str!("../../../../../bench/suites/lavapipe-tiles.toml");
+        let s = parse_suite(text, "lavapipe-tiles.toml").unwrap();
+        assert_eq!(s.pairs().len(), 16);
+        assert_eq!(s.run.sweeps.tile_sizes, vec![17, 9]);
+        assert!(!s.run.modes.contains("tess"), "{}", s.run.modes);
         // The CPU-frame measurement's flights: the four real datasets' 16, 4 s at 30 fps.
         let text = include_str!("../../../../../bench/suites/cpu-frame.toml");
         let s = parse_suite(text, "cpu-frame.toml").unwrap();

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use super::curves::{geometric_mean, ratio_at_equal_error, Curve, Ratio};
+use super::curves::{geometric_mean, lower_envelope, ratio_at_equal_error, Curve, Ratio};
 use super::report::Summary;
 use crate::app::failure::{runtime, Failure};
 use crate::tools::output::write_text;
@@ -87,14 +87,27 @@ pub(crate) const BASELINES: [LodMode; 4] = [
     LodMode::Tessellation,
 ];
 
-/// The curve of `mode` in one flight for `metric`.
+/// The curve of `mode` in one flight for `metric`: with several tile sizes (`--tile-sizes`),
+/// the lower envelope of each size's curve.
 pub(crate) fn curve_of(summaries: &[Summary], mode: LodMode, metric: &Metric) -> Curve {
-    let pts: Vec<(f64, f64)> = summaries
+    let mut sizes: Vec<Option<u32>> = Vec::new();
+    for s in summaries.iter().filter(|s| s.config.mode == mode) {
+        if !sizes.contains(&s.config.tile_size) {
+            sizes.push(s.config.tile_size);
+        }
+    }
+    let families: Vec<Curve> = sizes
         .iter()
-        .filter(|s| s.config.mode == mode)
-        .map(|s| ((metric.error)(s), (metric.cost)(s)))
+        .map(|&size| {
+            let pts: Vec<(f64, f64)> = summaries
+                .iter()
+                .filter(|s| s.config.mode == mode && s.config.tile_size == size)
+                .map(|s| ((metric.error)(s), (metric.cost)(s)))
+                .collect();
+            Curve::new(&pts)
+        })
         .collect();
-    Curve::new(&pts)
+    lower_envelope(&families)
 }
 
 /// `bounded` over `base` for `metric` in one flight; None when the flight ran no `base`.
