@@ -168,18 +168,31 @@ where
                     continue;
                 }
                 mine.sort_by(|a, b| a.0.total_cmp(&b.0));
-                if mine.len() > 1 {
-                    c.draw_series(LineSeries::new(
-                        mine.iter().map(|p| (p.0, p.1)),
-                        col.stroke_width(2),
-                    ))
-                    .map_err(|e| err(&e))?;
+                // One line per tile size (`--tile-sizes`): the default's thick, others thin.
+                let mut sizes: Vec<Option<u32>> = Vec::new();
+                for p in &mine {
+                    if !sizes.contains(&summaries[p.2].config.tile_size) {
+                        sizes.push(summaries[p.2].config.tile_size);
+                    }
+                }
+                for size in sizes {
+                    let family: Vec<(f64, f64)> = mine
+                        .iter()
+                        .filter(|p| summaries[p.2].config.tile_size == size)
+                        .map(|p| (p.0, p.1))
+                        .collect();
+                    if family.len() > 1 {
+                        let width = if size.is_none() { 2 } else { 1 };
+                        c.draw_series(LineSeries::new(family, col.stroke_width(width)))
+                            .map_err(|e| err(&e))?;
+                    }
                 }
                 c.draw_series(mine.iter().map(|p| {
                     let s = &summaries[p.2];
-                    let label = match s.config.tau_px {
-                        Some(t) => format!("τ={t}"),
-                        None => s.config.label(),
+                    let label = match (s.config.tau_px, s.config.tile_size) {
+                        (Some(t), None) => format!("τ={t}"),
+                        (Some(t), Some(m)) => format!("τ={t} m={m}"),
+                        (None, _) => s.config.label(),
                     };
                     let label = if s.error_px() < ERROR_FLOOR_PX {
                         format!("{label} (≤{ERROR_FLOOR_PX} px)")
