@@ -63,17 +63,22 @@ pub(super) fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> Rendere
     desc
 }
 
+/// Most slots a pool gets here: a pool is one array image, and 2048 layers is what common
+/// devices (lavapipe among them) allow; past it a smaller tile's pool holds fewer bytes than
+/// the default's, and what that costs shows as late tiles.
+pub(super) const MAX_POOL_SLOTS: u32 = 2048;
+
 /// Pool slots for tiles of `to` vertices a side holding the bytes `slots` hold for tiles of
 /// `from`: a slot of refinement r holds ((q << r) + 1)² samples, so the count scales by
-/// about (q_from / q_to)² (rounded up; an empty pool stays empty).
+/// about (q_from / q_to)² (rounded up; an empty pool stays empty), at most
+/// [`MAX_POOL_SLOTS`] (or as many as given, if more).
 pub(super) fn pools_for_tile_size<const N: usize>(slots: [u32; N], from: u32, to: u32) -> [u32; N] {
     let (qf, qt) = (u64::from(from.max(2) - 1), u64::from(to.max(2) - 1));
     let mut out = slots;
     for (r, s) in out.iter_mut().enumerate() {
         let side = |q: u64| ((q << r) + 1).pow(2);
-        *s = (u64::from(*s) * side(qf))
-            .div_ceil(side(qt))
-            .min(u64::from(u32::MAX)) as u32;
+        let scaled = (u64::from(*s) * side(qf)).div_ceil(side(qt));
+        *s = scaled.min(u64::from(MAX_POOL_SLOTS.max(*s))) as u32;
     }
     out
 }
@@ -282,7 +287,7 @@ pub(super) fn replay(
 
 #[cfg(test)]
 mod tests {
-    use super::pools_for_tile_size;
+    use super::{pools_for_tile_size, MAX_POOL_SLOTS};
 
     #[test]
     fn pools_keep_their_bytes_across_tile_sizes() {
@@ -301,5 +306,12 @@ mod tests {
         assert_eq!(small[5], 0, "an empty pool stays empty");
         // About four quarter-size tiles to a slot of the default at r = 0 (289 / 81 samples).
         assert_eq!(small[0], (256 * 289u32).div_ceil(81));
+        // Tiles of 5: r = 0 would want 256 · 289 / 25 slots, more than an array image holds.
+        let tiny = pools_for_tile_size(slots, 17, 5);
+        assert_eq!(tiny[0], MAX_POOL_SLOTS);
+        assert!(tiny.iter().all(|&n| n <= MAX_POOL_SLOTS), "{tiny:?}");
+        // Larger tiles: fewer slots, never more than given.
+        let large = pools_for_tile_size(slots, 17, 33);
+        assert!(large.iter().zip(&slots).all(|(a, b)| a <= b), "{large:?}");
     }
 }
