@@ -553,6 +553,10 @@ fn tile_sizes_draw_every_tiled_mode_with_each_size() {
             "--tile-sizes",
         ),
         (
+            &["--modes", "bounded", "--tile-sizes", "9.5"][..],
+            "--tile-sizes 9.5: 9.5 is not a whole number",
+        ),
+        (
             &["--modes", "bounded", "--tile-sizes", "33"][..],
             "--patch 129: with tiles of 33",
         ),

@@ -5,13 +5,12 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::config::{
-    check_tile_sizes, configurations, parse_modes, parse_positive_list, parse_taus, BenchConfig,
-    Sweeps,
+    check_tile_sizes, configurations, parse_modes, parse_positive_list, parse_taus, sizes_drawn,
+    BenchConfig, Sweeps,
 };
 use crate::app::args::{read_waypoints, LookArg, NormalsArg, PassArgs, StoreArgs, Switch};
 use crate::app::failure::{bad_input, Failure};
 use crate::app::renderer_setup::{parse_view, patch_tiles, patch_tiles_of, View};
-use crate::render::frame::DEFAULT_TILE_SIZE;
 use crate::sim::flight::Waypoints;
 
 #[derive(Debug, Clone, Args)]
@@ -185,11 +184,7 @@ pub(crate) fn plan(a: &BenchArgs) -> Result<Plan, Failure> {
         .collect::<Result<_, _>>()?;
     check_tile_sizes("--tile-sizes", &tile_sizes).map_err(bad_input)?;
     // Every patch side must divide into tiles of every size drawn.
-    let sizes: Vec<u32> = if tile_sizes.is_empty() {
-        vec![DEFAULT_TILE_SIZE]
-    } else {
-        tile_sizes.clone()
-    };
+    let sizes = sizes_drawn(&tile_sizes);
     let fits = |flag: &str, given: &str, n: u32| -> Result<(), Failure> {
         for &m in &sizes {
             patch_tiles_of(n, m).map_err(|e| {

@@ -217,6 +217,15 @@ pub fn configurations(modes: &[LodMode], taus: &[f64], sweeps: &Sweeps) -> Vec<B
     out
 }
 
+/// The tile sizes a run draws: `sizes`, or the default alone when none are given.
+pub fn sizes_drawn(sizes: &[u32]) -> Vec<u32> {
+    if sizes.is_empty() {
+        vec![DEFAULT_TILE_SIZE]
+    } else {
+        sizes.to_vec()
+    }
+}
+
 /// Checks `--tile-sizes` (or the suite's `run.tile_sizes`, named by `flag`): each m is 2^j + 1
 /// in 3..=257, as the renderer takes it.
 pub fn check_tile_sizes(flag: &str, sizes: &[u32]) -> Result<(), String> {

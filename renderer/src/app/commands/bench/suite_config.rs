@@ -42,10 +42,9 @@ use serde::Deserialize;
 
 use aerie_config::key_location;
 
-use super::config::{check_tile_sizes, parse_modes, Sweeps};
+use super::config::{check_tile_sizes, parse_modes, sizes_drawn, Sweeps};
 use super::flights::{FlightKind, FlightSpec};
 use crate::app::renderer_setup::{parse_view, patch_tiles_of};
-use crate::render::frame::DEFAULT_TILE_SIZE;
 
 #[derive(Debug, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
@@ -268,11 +267,7 @@ pub fn parse_suite(text: &str, source: &str) -> Result<Suite, String> {
         let (key, why) = e.split_once(": ").unwrap_or(("run.tile_sizes", &e));
         f(key, why.to_string())
     })?;
-    let sizes = if tile_sizes.is_empty() {
-        vec![DEFAULT_TILE_SIZE]
-    } else {
-        tile_sizes.clone()
-    };
+    let sizes = sizes_drawn(&tile_sizes);
     let clipmap_n = r.clipmap_n.unwrap_or_else(|| vec![129, 257, 513]);
     for (i, &n) in clipmap_n.iter().enumerate() {
         for &m in &sizes {
