@@ -351,8 +351,8 @@ fn import_refuses_inputs_that_do_not_make_one_grid_naming_files_and_reason() {
 }
 
 /// `--dem region.aerie`: a store draws exactly what its source draws (the store is read whole
-/// into the renderer's in-memory path, checked against its checksum), and a store imported with
-/// another tile size is refused naming both sizes.
+/// into the renderer's in-memory path, checked against its checksum), a store imported with
+/// another tile size is refused naming both sizes, and so is a bench sweep over other sizes.
 #[test]
 fn render_from_a_store_draws_the_same_image_as_its_source() {
     let dir = tempfile::tempdir().unwrap();
@@ -391,6 +391,25 @@ fn render_from_a_store_draws_the_same_image_as_its_source() {
     assert!(ia == ib, "the store's frame differs from its source's");
     let sky = ia.pixels().filter(|p| p.0 == ia.get_pixel(0, 0).0).count();
     assert!(sky < ia.pixels().len(), "the frame shows terrain");
+    // The bench draws a store with the tiles it was imported with: a sweep over other tile
+    // sizes is refused before anything is drawn, naming the flag and the store's size.
+    let b = aerie(&[
+        "bench",
+        "--dem",
+        &s(&store),
+        "--tile-sizes",
+        "17,9",
+        "--frames",
+        "1",
+        "--out",
+        &s(&dir.path().join("bench")),
+    ]);
+    assert_eq!(b.status.code(), Some(2), "{}", text(&b));
+    let msg = text(&b);
+    assert!(
+        msg.contains("--tile-sizes 17,9") && msg.contains("(17)"),
+        "{msg}"
+    );
     // The renderer's tile size (17 by default) must be the store's.
     let other = dir.path().join("inn33.aerie");
     let o = aerie(&["import", &s(&dem), "--out", &s(&other), "--tile-size", "33"]);
