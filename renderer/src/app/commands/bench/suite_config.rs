@@ -666,6 +666,14 @@ datasets = ["mixed"]
         assert_eq!(s.pairs().len(), 16);
         assert_eq!(s.run.sweeps.tile_sizes, vec![17, 9]);
         assert!(!s.run.modes.contains("tess"), "{}", s.run.modes);
+        // The denser sweeps: four flights, every knob at 7 settings or more, both tile sizes.
+        let text = include_str!("../../../../../bench/suites/lavapipe-dense.toml");
+        let s = parse_suite(text, "lavapipe-dense.toml").unwrap();
+        assert_eq!(s.pairs().len(), 4);
+        let w = &s.run.sweeps;
+        assert!(w.clipmap_n.len() >= 7 && w.distance_scale.len() >= 7 && w.cdlod_range.len() >= 7);
+        assert!(s.run.tau.len() >= 13);
+        assert_eq!(w.tile_sizes, vec![17, 9]);
         // The CPU-frame measurement's flights: the four real datasets' 16, 4 s at 30 fps.
         let text = include_str!("../../../../../bench/suites/cpu-frame.toml");
         let s = parse_suite(text, "cpu-frame.toml").unwrap();
