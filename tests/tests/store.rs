@@ -393,6 +393,7 @@ fn render_from_a_store_draws_the_same_image_as_its_source() {
     assert!(sky < ia.pixels().len(), "the frame shows terrain");
     // The bench draws a store with the tiles it was imported with: a sweep over other tile
     // sizes is refused before anything is drawn, naming the flag and the store's size.
+    let bench_out = dir.path().join("bench");
     let b = aerie(&[
         "bench",
         "--dem",
@@ -402,13 +403,18 @@ fn render_from_a_store_draws_the_same_image_as_its_source() {
         "--frames",
         "1",
         "--out",
-        &s(&dir.path().join("bench")),
+        &s(&bench_out),
     ]);
     assert_eq!(b.status.code(), Some(2), "{}", text(&b));
     let msg = text(&b);
     assert!(
         msg.contains("--tile-sizes 17,9") && msg.contains("(17)"),
         "{msg}"
+    );
+    assert!(
+        !bench_out.exists(),
+        "the refused bench wrote {}",
+        bench_out.display()
     );
     // The renderer's tile size (17 by default) must be the store's.
     let other = dir.path().join("inn33.aerie");
