@@ -591,6 +591,52 @@ pub(crate) fn summary_md(info: &RunInfo, summaries: &[Summary]) -> String {
     s
 }
 
+/// A summary of one frame at `err` px measured, `tris` triangles and `ms` ms, none late: the
+/// report tests' point.
+#[cfg(test)]
+pub(crate) fn test_summary(
+    mode: LodMode,
+    tau: Option<f64>,
+    err: f64,
+    tris: f64,
+    ms: f64,
+) -> Summary {
+    let q = |v: f64| Quantiles {
+        median: v,
+        p95: v,
+        p99: v,
+        max: v,
+    };
+    Summary {
+        config: BenchConfig {
+            mode,
+            tau_px: tau,
+            knob: None,
+            tile_size: None,
+        },
+        frames: 1,
+        frame_ms: q(ms),
+        cpu_ms: q(0.0),
+        gpu_ms: q(ms),
+        triangles: q(tris),
+        instances: q(1.0),
+        draw_calls: q(1.0),
+        bytes_uploaded: q(0.0),
+        bytes_uploaded_mean: 0.0,
+        tiles_drawn: 1,
+        tiles_late: 0,
+        tiles_late_stream: 0,
+        terrain_data_us_max: 0.0,
+        tiles_unbounded: 0,
+        image: Some(ImageSummary {
+            max_px: err,
+            ..Default::default()
+        }),
+        oracle_max_px: None,
+        bound_max_px: None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -621,50 +667,13 @@ mod tests {
         );
     }
 
-    fn summary(mode: LodMode, tau: Option<f64>, err: f64, tris: f64, ms: f64) -> Summary {
-        let q = |v: f64| Quantiles {
-            median: v,
-            p95: v,
-            p99: v,
-            max: v,
-        };
-        Summary {
-            config: BenchConfig {
-                mode,
-                tau_px: tau,
-                knob: None,
-                tile_size: None,
-            },
-            frames: 1,
-            frame_ms: q(ms),
-            cpu_ms: q(0.0),
-            gpu_ms: q(ms),
-            triangles: q(tris),
-            instances: q(1.0),
-            draw_calls: q(1.0),
-            bytes_uploaded: q(0.0),
-            bytes_uploaded_mean: 0.0,
-            tiles_drawn: 1,
-            tiles_late: 0,
-            tiles_late_stream: 0,
-            terrain_data_us_max: 0.0,
-            tiles_unbounded: 0,
-            image: Some(ImageSummary {
-                max_px: err,
-                ..Default::default()
-            }),
-            oracle_max_px: None,
-            bound_max_px: None,
-        }
-    }
-
     #[test]
     fn bounded_work_is_interpolated_log_log_at_the_baselines_error() {
         let s = vec![
-            summary(LodMode::Bounded, Some(5.0), 2.0, 400_000.0, 400.0),
-            summary(LodMode::Bounded, Some(20.0), 8.0, 25_000.0, 100.0),
-            summary(LodMode::Bounded, Some(10.0), 4.0, 100_000.0, 200.0),
-            summary(LodMode::Clipmap, None, 5.0, 50_000.0, 150.0),
+            test_summary(LodMode::Bounded, Some(5.0), 2.0, 400_000.0, 400.0),
+            test_summary(LodMode::Bounded, Some(20.0), 8.0, 25_000.0, 100.0),
+            test_summary(LodMode::Bounded, Some(10.0), 4.0, 100_000.0, 200.0),
+            test_summary(LodMode::Clipmap, None, 5.0, 50_000.0, 150.0),
         ];
         // 5 px lies between 4 px (τ=10) and 8 px (τ=20): t = ln(5/4)/ln 2.
         let (tris, ms, a, b) = bounded_at_error(&s, 5.0).expect("bracketed");

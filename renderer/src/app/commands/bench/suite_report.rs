@@ -87,11 +87,25 @@ pub(crate) const BASELINES: [LodMode; 4] = [
     LodMode::Tessellation,
 ];
 
+/// DESIGN.md's late-tile target: at most 0.1 % of the tiles drawn late.
+pub(crate) const LATE_TARGET: f64 = 0.001;
+
+/// A configuration whose late tiles exceed [`LATE_TARGET`]: its frames drew coarse ancestors
+/// in place of what it selected (its pools or staging could not keep up), so its point says
+/// what a starved renderer draws, not what its setting costs. Left out of every mode's curve
+/// alike and named in `suite.md`.
+pub(crate) fn starved(s: &Summary) -> bool {
+    s.late_fraction() > LATE_TARGET
+}
+
 /// The curve of `mode` in one flight for `metric`: with several tile sizes (`--tile-sizes`),
-/// the lower envelope of each size's curve.
+/// the lower envelope of each size's curve; [`starved`] configurations left out.
 pub(crate) fn curve_of(summaries: &[Summary], mode: LodMode, metric: &Metric) -> Curve {
     let mut sizes: Vec<Option<u32>> = Vec::new();
-    for s in summaries.iter().filter(|s| s.config.mode == mode) {
+    for s in summaries
+        .iter()
+        .filter(|s| s.config.mode == mode && !starved(s))
+    {
         if !sizes.contains(&s.config.tile_size) {
             sizes.push(s.config.tile_size);
         }
@@ -101,7 +115,7 @@ pub(crate) fn curve_of(summaries: &[Summary], mode: LodMode, metric: &Metric) ->
         .map(|&size| {
             let pts: Vec<(f64, f64)> = summaries
                 .iter()
-                .filter(|s| s.config.mode == mode && s.config.tile_size == size)
+                .filter(|s| s.config.mode == mode && s.config.tile_size == size && !starved(s))
                 .map(|s| ((metric.error)(s), (metric.cost)(s)))
                 .collect();
             Curve::new(&pts)
@@ -146,12 +160,12 @@ fn cell(r: &Ratio) -> String {
 /// `curves.csv`: every configuration's point of every flight.
 pub(crate) fn curves_csv(results: &[FlightResult]) -> String {
     let mut s = String::from(
-        "dataset,flight,mode,config,max_error_px,p99_error_px,triangles_median,frame_ms_median,gpu_ms_median,frames_over_tau_plus_half\n",
+        "dataset,flight,mode,config,max_error_px,p99_error_px,triangles_median,frame_ms_median,gpu_ms_median,frames_over_tau_plus_half,late_fraction,in_curve\n",
     );
     for r in results {
         for m in &r.summaries {
             s.push_str(&format!(
-                "{},{},{},{},{},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{},{},{},{},{},{}\n",
                 r.dataset,
                 r.flight,
                 m.config.mode_name(),
@@ -163,6 +177,8 @@ pub(crate) fn curves_csv(results: &[FlightResult]) -> String {
                 m.gpu_ms.median,
                 m.image
                     .map_or(String::new(), |i| i.frames_over_target.to_string()),
+                m.late_fraction(),
+                !starved(m),
             ));
         }
     }
@@ -317,6 +333,7 @@ pub(crate) fn suite_md(info: &SuiteInfo, results: &[FlightResult]) -> String {
         md.push_str(&format!(" {n} of {known} |"));
     }
     md.push_str("\n\n");
+    md.push_str(&left_out(results));
     md.push_str(&targets(results));
     md.push_str("\n## Flights\n\n");
     for r in results {
@@ -331,6 +348,41 @@ pub(crate) fn suite_md(info: &SuiteInfo, results: &[FlightResult]) -> String {
         "\nFiles: `ratios.csv` (every cell above, with the error it was read at), `curves.csv` \
          (every configuration's point of every flight).\n",
     );
+    md
+}
+
+/// The configurations [`starved`] leaves out of the curves, flight by flight; empty when none.
+fn left_out(results: &[FlightResult]) -> String {
+    let rows: Vec<String> = results
+        .iter()
+        .flat_map(|r| {
+            r.summaries.iter().filter(|s| starved(s)).map(move |s| {
+                format!(
+                    "| {} | {} | {:.1} % | {} px | {:.0} |\n",
+                    r.key(),
+                    s.config.key(),
+                    100.0 * s.late_fraction(),
+                    px(s.error_px()),
+                    s.triangles.median
+                )
+            })
+        })
+        .collect();
+    if rows.is_empty() {
+        return String::new();
+    }
+    let mut md = format!(
+        "## Configurations left out of the curves\n\n\
+         {} configuration(s) drew more than {} % of their tiles late (coarse ancestors in place \
+         of what they selected, their pools or staging short): their points say what a starved \
+         renderer draws, not what their setting costs, so no mode's curve takes them. Their \
+         figures stay in `curves.csv` (`in_curve` false).\n\n\
+         | flight | configuration | late tiles | measured max error | triangles (median) |\n|---|---|---|---|---|\n",
+        rows.len(),
+        LATE_TARGET * 100.0
+    );
+    md.extend(rows);
+    md.push('\n');
     md
 }
 
@@ -436,5 +488,59 @@ mod tests {
         assert!(md.contains("timed by its fastest flight that did the same work"));
         let once = suite_md(&info(1), &[]);
         assert!(!once.contains("flown"), "{once}");
+    }
+
+    /// A flight where bounded's finest τ is starved (1 % of its tiles late): its cheap, coarse
+    /// point would otherwise reach an error the clipmap's curve also reaches.
+    fn starved_flight(late: u64) -> FlightResult {
+        use super::super::report::test_summary;
+        let mut fine = test_summary(LodMode::Bounded, Some(0.1), 80.0, 1_000.0, 10.0);
+        fine.tiles_drawn = 1000;
+        fine.tiles_late = late;
+        FlightResult {
+            dataset: "mixed".into(),
+            flight: "approach".into(),
+            dataset_summary: String::new(),
+            summaries: vec![
+                fine,
+                test_summary(LodMode::Bounded, Some(1.0), 1.0, 50_000.0, 10.0),
+                test_summary(LodMode::Bounded, Some(4.0), 3.0, 20_000.0, 10.0),
+                test_summary(LodMode::Clipmap, None, 60.0, 4_000.0, 10.0),
+                test_summary(LodMode::Clipmap, None, 100.0, 2_000.0, 10.0),
+            ],
+        }
+    }
+
+    #[test]
+    fn a_configuration_over_the_late_target_is_left_out_of_the_curves_and_named() {
+        let tris = &METRICS[0];
+        // At the target (0.1 %) it is a reading like any other: the curves meet at 80 px.
+        let kept = starved_flight(1);
+        let r = flight_ratio(&kept.summaries, LodMode::Clipmap, tris).unwrap();
+        assert!(r.value().is_some(), "{r:?}");
+        assert!(!suite_md(&info(1), &[kept]).contains("left out of the curves"));
+
+        // Over it, bounded's curve ends at 3 px: no error in common with the clipmap's 60–100 px,
+        // bounded lies wholly below and its dearest point costs more than the clipmap's
+        // cheapest, so the cell says so instead of reading the starved point.
+        let starved_one = starved_flight(10);
+        let r = flight_ratio(&starved_one.summaries, LodMode::Clipmap, tris).unwrap();
+        assert!(r.value().is_none(), "{r:?}");
+        let md = suite_md(&info(1), &[starved_one]);
+        assert!(
+            md.contains("## Configurations left out of the curves"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| mixed-approach | bounded_tau0.1 | 1.0 % | 80.00 px | 1000 |"),
+            "{md}"
+        );
+        let csv = curves_csv(&[starved_flight(10)]);
+        let row = csv.lines().find(|l| l.contains("bounded_tau0.1")).unwrap();
+        assert!(row.ends_with(",0.01,false"), "{row}");
+        assert!(
+            csv.lines().filter(|l| l.ends_with(",true")).count() == 4,
+            "{csv}"
+        );
     }
 }
