@@ -45,9 +45,9 @@ struct TileInstance {
     uint step;           // samples between adjacent vertices: 2^(node level)
     uint level;          // clipmap level L of the ring tile (texture layer when refinement = 0)
     uint refinement;     // r: heights from pool r (the ring tile at level L - r) when r > 0
-    uint slot;           // layer of the ring tile in pool r
+    uint slot;           // layer of the ring tile's slot in pool r
     float skirt_m;       // skirt depth below the tile edge, metres
-    uint slot_x;         // pool texel of this node's south-west vertex (r > 0)
+    uint slot_x;         // texel of this node's south-west vertex in that layer (its slot's cell + its place in the slot; r > 0)
     uint slot_y;
     uint slot_stride;    // pool texels between adjacent vertices: 2^(node level - (L - r))
     // CDLOD's geomorph (terrain/src/select/cdlod_morph.rs `Morph::to_gpu`); all zero in other modes.

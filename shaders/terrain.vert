@@ -36,9 +36,15 @@ float fetch(TileInstance t, ivec2 ij) {
         ivec2 v = (t.origin_sample >> int(t.level)) + ij;
         return texelFetch(clipmap, ivec3((v + T) % T, int(t.level)), 0).r;
     }
+    // A pool packs its slots several to a layer when it has more than the device's layers
+    // (render/pool_atlas.rs): slot_x, slot_y name the node's south-west texel in the layer, and
+    // its slot's cell is the multiple of the slot side at or below it (the node lies inside its
+    // slot). Reads are clamped into that cell, as `PoolAtlas::read_texel` does on the CPU.
     int side = (frame.grid_size.z << t.refinement) + 1;
-    ivec2 texel = ivec2(t.slot_x, t.slot_y) + ij * int(t.slot_stride);
-    ivec3 c = ivec3(clamp(texel, ivec2(0), ivec2(side - 1)), int(t.slot));
+    ivec2 sw = ivec2(t.slot_x, t.slot_y);
+    ivec2 cell = (sw / side) * side;
+    ivec2 texel = sw + ij * int(t.slot_stride);
+    ivec3 c = ivec3(clamp(texel, cell, cell + side - 1), int(t.slot));
     switch (t.refinement) {
         case 1u: return texelFetch(pools[0], c, 0).r;
         case 2u: return texelFetch(pools[1], c, 0).r;

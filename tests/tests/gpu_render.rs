@@ -121,6 +121,37 @@ fn bounded_at_half_pixel_looks_like_brute_force() {
     );
 }
 
+/// A pool packed several slots to a layer (`render/pool_atlas.rs`: more slots than the
+/// device's layers) draws exactly what one slot a layer draws: every refined node reads its
+/// own slot's samples, its normals' neighbours clamped into the slot's cell. Brute force
+/// refines every tile (pools r = 1..6), bounded at τ = 0.5 px some; 48 layers pack the four
+/// biggest pools (1024 slots: 5 × 5 to a layer).
+#[test]
+fn pools_packed_several_slots_to_a_layer_draw_the_same_image() {
+    let hf = load_dem(&demo_dem()).expect("demo DEM loads");
+    let cam = inn_camera();
+    for mode in [LodMode::Full, LodMode::Bounded] {
+        let one = desc_with(mode, 0.5);
+        let mut packed = one.clone();
+        packed.pool_layers = Some(48);
+        let a = &render_frames(&one, &hf, &[cam])[0];
+        let b = &render_frames(&packed, &hf, &[cam])[0];
+        assert!(
+            a.stats.tiles_by_refinement[1..].iter().sum::<u32>() > 0,
+            "{mode:?} refines tiles: {:?}",
+            a.stats.tiles_by_refinement
+        );
+        assert_eq!(a.stats.tiles_late, 0);
+        assert_eq!(
+            (a.stats.triangles, a.stats.tiles_by_refinement),
+            (b.stats.triangles, b.stats.tiles_by_refinement)
+        );
+        let differ = a.rgba.iter().zip(&b.rgba).filter(|(x, y)| x != y).count();
+        assert_eq!(differ, 0, "{mode:?}: {differ} bytes differ");
+        assert!(a.depth == b.depth, "{mode:?}: the depth differs");
+    }
+}
+
 /// Every pixel of a flat plane: the GPU's depth equals the f64 oracle's (ray through the pixel
 /// centre, intersected with the plane, projected with the reversed-Z infinite projection).
 #[test]

@@ -42,6 +42,10 @@ pub struct RendererDesc {
     /// Slots of the refined-tile pool for r = 1..=6 (0 = none: tiles needing that r are drawn
     /// at the best resolution below it and counted as late).
     pub pool_capacity: [u32; MAX_REFINEMENT as usize],
+    /// At most this many array layers in a pool's image (None: the device's
+    /// `maxImageArrayLayers`). A pool with more slots packs several to a layer
+    /// (`render/pool_atlas.rs`); fewer layers pack sooner — the tests draw that way on lavapipe.
+    pub pool_layers: Option<u32>,
     pub select: SelectParams,
     /// Colour tiles by level and refinement (the seed's figure 3).
     pub debug_tiles: bool,
@@ -103,6 +107,7 @@ impl Default for RendererDesc {
             // 1280×720) drew up to 65 such tiles a frame; 48 slots left 1.36 % of its
             // tile-frames late for want of a slot. 96 slots (65 KiB each) cost 3 MiB more.
             pool_capacity: [256, 128, 96, 32, 40, 0],
+            pool_layers: None,
             select: SelectParams::default(),
             debug_tiles: false,
             look: Look::default(),

@@ -445,7 +445,15 @@ impl TerrainRenderer {
         if normals == Some(NormalSource::Gpu) {
             self.gpu_normals = Some(NormalPass::new(d, [grid.spacing_x, grid.spacing_y])?);
         }
-        let mut t = GpuTerrain::new(d, source, bake, clipmap, &self.desc.pool_capacity, normals)?;
+        let mut t = GpuTerrain::new(
+            d,
+            source,
+            bake,
+            clipmap,
+            &self.desc.pool_capacity,
+            self.desc.pool_layers,
+            normals,
+        )?;
         let staged_normals = normals == Some(NormalSource::Cpu);
         // First fill of every level around the eye, streamed.
         let strips = t.plan.strips_around(eye);

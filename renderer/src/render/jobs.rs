@@ -243,13 +243,21 @@ pub fn split_level_uploads(
     Ok(submissions)
 }
 
-/// The upload of refined tile `key` into pool slot `slot` of a pool with `side` samples per slot
-/// side: (2^r q + 1)² samples at stride 2^(L−r) from the tile's south-west corner.
-pub fn refined_upload(tile_quads: u32, key: &TileKey, slot: u32, side: u32) -> ImageUpload {
+/// The upload of refined tile `key` into pool slot `slot` of a pool laid out as `atlas`:
+/// (2^r q + 1)² samples at stride 2^(L−r) from the tile's south-west corner, into the slot's
+/// cell.
+pub fn refined_upload(
+    tile_quads: u32,
+    key: &TileKey,
+    slot: u32,
+    atlas: &crate::render::pool_atlas::PoolAtlas,
+) -> ImageUpload {
     let tile = (tile_quads as i64) << key.level;
+    let place = atlas.place(slot);
+    let side = atlas.side;
     ImageUpload {
-        layer: slot,
-        texel: [0, 0],
+        layer: place.layer,
+        texel: [place.x, place.y],
         size: [side, side],
         origin_sample: [key.tx as i64 * tile, key.ty as i64 * tile],
         step: 1 << (key.level - key.refinement),

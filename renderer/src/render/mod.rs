@@ -44,6 +44,7 @@ pub mod normal_map;
 pub mod normal_pass;
 pub mod overlay_pass;
 pub mod plan;
+pub mod pool_atlas;
 pub mod resources;
 pub mod sky_pass;
 pub mod stats;

@@ -54,6 +54,7 @@ use crate::render::jobs::{
     StagingBudget, TEXEL_BYTES,
 };
 use crate::render::normal_map::normal_bytes;
+use crate::render::pool_atlas::{PoolAtlas, PoolLimits};
 use crate::render::stats::FrameStats;
 use crate::render::tile_instances::{build_instances, InstanceFrame};
 pub use crate::render::tile_instances::{indirect_draws, slot_placement, TileMeshes, DRAW_GROUPS};
@@ -82,14 +83,32 @@ pub const PREFETCH_PROTECT_FRAMES: u64 = 2;
 /// frame's own selection (the Inn valley, 1280×720: 344 µs median).
 pub const PREFETCH_RESELECT_FRAMES: u64 = 4;
 
-/// A refined-tile pool's bookkeeping: its LRU and the samples per slot side, 2^r(m−1)+1.
+/// A refined-tile pool's bookkeeping: its LRU, the samples per slot side, 2^r(m−1)+1, and
+/// where its slots lie in the pool's image.
 #[derive(Debug, Clone)]
 pub struct PoolSlots {
     pub side: u32,
     pub lru: RefinedTilePool,
+    pub atlas: PoolAtlas,
 }
 
 impl PoolSlots {
+    /// An empty pool of `slots` slots of `side` samples a side, laid out for common devices
+    /// (one slot a layer while they fit; `PlanState::fit_pools` lays it out for the device).
+    pub fn new(side: u32, slots: u32) -> Self {
+        let atlas = PoolAtlas::new(side, slots, PoolLimits::COMMON).unwrap_or(PoolAtlas {
+            side,
+            per_row: 1,
+            layers: slots.max(1),
+            slots,
+        });
+        Self {
+            side,
+            lru: RefinedTilePool::new(slots),
+            atlas,
+        }
+    }
+
     pub fn slot_bytes(&self) -> u64 {
         self.side as u64 * self.side as u64 * TEXEL_BYTES
     }
@@ -150,10 +169,7 @@ impl PlanState {
         let earth = GeoGrid::of(grid.geo.as_ref(), grid.spacing_x, grid.spacing_y);
         let feed = Feed::new(clipmap.clone(), spacing, Gatherer::new(source));
         let pools = (1..=pool_capacity.len() as u32)
-            .map(|r| PoolSlots {
-                side: (clipmap.tile_quads << r) + 1,
-                lru: RefinedTilePool::new(pool_capacity[r as usize - 1]),
-            })
+            .map(|r| PoolSlots::new((clipmap.tile_quads << r) + 1, pool_capacity[r as usize - 1]))
             .collect();
         Self {
             bake,
@@ -171,6 +187,21 @@ impl PlanState {
             earth,
             geo_cache: GeoNodeCache::default(),
         }
+    }
+
+    /// Lays every pool's slots out within `limits` (a device's image limits), before anything
+    /// is uploaded. Err names the pool that cannot fit.
+    pub fn fit_pools(&mut self, limits: PoolLimits) -> Result<(), String> {
+        for (r, p) in (1..).zip(&mut self.pools) {
+            debug_assert_eq!(
+                p.lru.counters().misses,
+                0,
+                "pools laid out before any upload"
+            );
+            p.atlas = PoolAtlas::new(p.side, p.lru.capacity(), limits)
+                .map_err(|e| format!("pool r={r}: {e}"))?;
+        }
+        Ok(())
     }
 
     /// Where the clipmap centres its levels for an eye at `eye` (world metres): the eye's grid
@@ -423,6 +454,7 @@ pub fn plan_frame(
             eye: inputs.camera.position,
             skirt_factor: inputs.skirt_factor,
             skirt_min_m: inputs.skirt_min_m,
+            pools: &state.pools,
         },
         &plan.draw_list,
         &mut state.geo_cache,
@@ -545,8 +577,7 @@ fn resolve_refined_tiles(
         };
         let pool = &mut state.pools[r as usize - 1];
         let slot_bytes = pool.slot_bytes();
-        let side = pool.side;
-        let job = refined_upload(q, &key, 0, side);
+        let job = refined_upload(q, &key, 0, &pool.atlas);
         let gatherer = &mut state.feed.gatherer;
         let (mut not_resident, mut no_budget) = (false, false);
         let cap = state.feed.data_cap_samples;
@@ -568,7 +599,7 @@ fn resolve_refined_tiles(
             }
             Request::Miss { slot, evicted } => {
                 plan.stats.pool_misses += 1;
-                let upload = refined_upload(q, &key, slot, side);
+                let upload = refined_upload(q, &key, slot, &pool.atlas);
                 budget.take(upload.bytes())?;
                 plan.stats.bytes_refined += upload.bytes();
                 plan.pool_uploads.push(PoolUpload {
@@ -737,7 +768,7 @@ fn prefetch(
             continue;
         }
         let slot_bytes = pool.slot_bytes();
-        let job = refined_upload(q, &key, 0, pool.side);
+        let job = refined_upload(q, &key, 0, &pool.atlas);
         let gatherer = &mut state.feed.gatherer;
         let mut not_resident = false;
         let cap = state.feed.data_cap_samples;
@@ -755,7 +786,7 @@ fn prefetch(
             PREFETCH_PROTECT_FRAMES,
         );
         if let Request::Miss { slot, evicted } = request {
-            let upload = refined_upload(q, &key, slot, pool.side);
+            let upload = refined_upload(q, &key, slot, &pool.atlas);
             budget.take(upload.bytes())?;
             plan.stats.bytes_refined += upload.bytes();
             plan.stats.prefetched += 1;

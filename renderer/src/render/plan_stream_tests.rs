@@ -22,6 +22,7 @@ use super::*;
 use crate::render::feed::{DRAWN_PRIORITY, PREFETCH_PRIORITY};
 use crate::render::gathered::SampleCursor;
 use crate::render::jobs::{refined_upload, StagingBudget};
+use crate::render::pool_atlas::{PoolAtlas, PoolLimits};
 
 const N: usize = 513;
 const Q: u32 = 16;
@@ -194,8 +195,8 @@ fn clipmap() -> ClipmapDesc {
 struct Mirror {
     side: usize,
     levels: Vec<Vec<f32>>,
-    /// Per r = 1..: (slot side, slots).
-    pools: Vec<(usize, Vec<Vec<f32>>)>,
+    /// Per r = 1..: the pool's layout and its image's layers (each `width()`² texels).
+    pools: Vec<(PoolAtlas, Vec<Vec<f32>>)>,
 }
 
 impl Mirror {
@@ -208,8 +209,11 @@ impl Mirror {
                 .pools
                 .iter()
                 .map(|p| {
-                    let s = p.side as usize;
-                    (s, vec![vec![f32::NAN; s * s]; p.lru.capacity() as usize])
+                    let w = p.atlas.width() as usize;
+                    (
+                        p.atlas,
+                        vec![vec![f32::NAN; w * w]; p.atlas.layers as usize],
+                    )
                 })
                 .collect(),
         }
@@ -234,8 +238,9 @@ impl Mirror {
             let src = cursor
                 .next(&p.upload)
                 .expect("samples for every pool upload");
-            let (s, slots) = &mut self.pools[p.key.refinement as usize - 1];
-            Self::write(&mut slots[p.upload.layer as usize], *s, &p.upload, src);
+            let (atlas, layers) = &mut self.pools[p.key.refinement as usize - 1];
+            let w = atlas.width() as usize;
+            Self::write(&mut layers[p.upload.layer as usize], w, &p.upload, src);
         }
         assert_eq!(cursor.left(), 0, "every gathered sample is staged");
     }
@@ -274,18 +279,25 @@ impl Mirror {
                         let want = truth(v[0] << item.level, v[1] << item.level);
                         (self.levels[l][t[1] * self.side + t[0]], want)
                     } else {
-                        let (s, slots) = &self.pools[item.refinement as usize - 1];
+                        let (atlas, layers) = &self.pools[item.refinement as usize - 1];
+                        let s = atlas.side as i64;
                         let (sx, sy, stride) = slot_placement(item, Q);
-                        let t = [sx as i64 + i * stride as i64, sy as i64 + j * stride as i64]
-                            .map(|c| c.clamp(0, *s as i64 - 1));
+                        // Where the slot's samples should be read (clamped into the slot) …
+                        let rel = [sx as i64 + i * stride as i64, sy as i64 + j * stride as i64];
+                        let t = rel.map(|c| c.clamp(0, s - 1));
                         let fine = 1i64 << (item.level - item.refinement);
                         let tile = q << item.level;
                         let want = truth(
                             item.tx as i64 * tile + t[0] * fine,
                             item.ty as i64 * tile + t[1] * fine,
                         );
+                        // … and where the shader reads them: the slot's layer, the texel it
+                        // finds from the node's south-west texel in that layer.
+                        let place = atlas.place(*slot);
+                        let read = atlas.read_texel([place.x + sx, place.y + sy], rel);
+                        let w = atlas.width() as usize;
                         (
-                            slots[*slot as usize][t[1] as usize * s + t[0] as usize],
+                            layers[place.layer as usize][read[1] as usize * w + read[0] as usize],
                             want,
                         )
                     };
@@ -313,22 +325,32 @@ fn camera(x: f64, y: f64, heading: f64) -> Camera {
 struct Fixture {
     ds: Arc<Dataset>,
     bake: Arc<ErrorBake>,
+    /// The pools' image limits (None: common devices', one slot a layer here).
+    pool_limits: Option<PoolLimits>,
 }
 
 impl Fixture {
     fn new() -> Self {
         let ds = dataset();
         let bake = Arc::new(bake(&ds, BakeParams::default(), &|_, _| {}));
-        Fixture { ds, bake }
+        Fixture {
+            ds,
+            bake,
+            pool_limits: None,
+        }
     }
 
     fn state(&self, source: Arc<dyn TerrainSource>) -> PlanState {
-        PlanState::new(
+        let mut st = PlanState::new(
             self.bake.clone(),
             source,
             clipmap(),
             &[64, 64, 32, 16, 8, 0],
-        )
+        );
+        if let Some(limits) = self.pool_limits {
+            st.fit_pools(limits).expect("the pools fit");
+        }
+        st
     }
 }
 
@@ -370,7 +392,31 @@ fn select() -> SelectParams {
 
 #[test]
 fn withheld_levels_are_drawn_coarser_late_and_never_stale_until_they_arrive() {
-    let f = Fixture::new();
+    withheld_levels_flight(Fixture::new());
+}
+
+/// The same flight with every pool packed several slots to a layer (at most 5 layers): each
+/// slot's upload lands in its own cell and every node reads its own slot's samples.
+#[test]
+fn with_pools_packed_several_slots_to_a_layer_every_node_reads_its_own_slot() {
+    let f = Fixture {
+        pool_limits: Some(PoolLimits {
+            max_layers: 5,
+            max_side: 4096,
+        }),
+        ..Fixture::new()
+    };
+    let st = f.state(Arc::new(InMemoryTerrain::new(f.ds.clone())));
+    let packed: Vec<u32> = st.pools.iter().map(|p| p.atlas.per_row).collect();
+    assert_eq!(
+        packed,
+        [4, 4, 3, 2, 2, 1],
+        "64, 64, 32, 16, 8 slots in 5 layers"
+    );
+    withheld_levels_flight(f);
+}
+
+fn withheld_levels_flight(f: Fixture) {
     let levels = clipmap().level_count();
     assert!(
         levels >= 3,
@@ -473,8 +519,8 @@ fn a_pool_upload_whose_samples_are_not_resident_is_late_and_asked_for_by_its_err
     let mut asked = 0;
     for l in &plan.late {
         assert!(l.drawn_refinement < l.key.refinement, "{l:?}");
-        let side = st.pools[l.key.refinement as usize - 1].side;
-        let rect = refined_upload(Q, &l.key, 0, side).sample_rect();
+        let atlas = st.pools[l.key.refinement as usize - 1].atlas;
+        let rect = refined_upload(Q, &l.key, 0, &atlas).sample_rect();
         if rect.level == 0 {
             let w = wants
                 .iter()

@@ -16,6 +16,7 @@ use crate::render::desc::NormalSource;
 use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, TileInstance};
 use crate::render::normal_pass::NormalTargets;
 use crate::render::plan::{PlanState, MAX_INSTANCES};
+use crate::render::pool_atlas::PoolLimits;
 use crate::render::tile_instances::DRAW_GROUPS;
 use crate::vk::frame_context::FrameContext;
 use crate::vk::image::{Image2d, ImageDesc};
@@ -129,6 +130,7 @@ impl GpuTerrain {
         bake: Arc<ErrorBake>,
         clipmap: ClipmapDesc,
         pool_capacity: &[u32; MAX_REFINEMENT as usize],
+        pool_layers: Option<u32>,
         normals: Option<NormalSource>,
     ) -> Result<Self, VkError> {
         let normal_maps = normals.is_some();
@@ -141,6 +143,13 @@ impl GpuTerrain {
         // Geographic data is drawn on the ellipsoid (`PlanState::new` places it); the rest on
         // the flat plane.
         let mut plan = PlanState::new(bake, source, clipmap, pool_capacity);
+        // Each pool's slots laid out within this device's limits: one a layer while they fit
+        // its layers, else packed several to a layer (`pool_atlas.rs`).
+        plan.fit_pools(PoolLimits {
+            max_layers: pool_layers.map_or(max_layers, |l| l.clamp(1, max_layers)),
+            max_side: max,
+        })
+        .map_err(VkError::Other)?;
         let image_desc = |w: u32, layers: u32| ImageDesc {
             width: w,
             height: w,
@@ -185,16 +194,15 @@ impl GpuTerrain {
             plan,
         };
         for (r, pool) in (1..).zip(&this.plan.pools) {
-            let capacity = pool.lru.capacity();
-            let (w, layers) = if capacity == 0 {
+            let (w, layers) = if pool.lru.capacity() == 0 {
                 (1, 1) // a placeholder so every binding is valid
             } else {
-                (pool.side, capacity)
+                (pool.atlas.width(), pool.atlas.layers)
             };
             if w > max || layers > max_layers {
                 this.destroy(d);
                 return Err(VkError::Other(format!(
-                    "pool r={r}: {layers} slots of {w}² exceed this device's limits"
+                    "pool r={r}: {layers} layers of {w}² exceed this device's limits"
                 )));
             }
             match Image2d::new(d, "refined-tile pool", image_desc(w, layers)) {

@@ -14,6 +14,7 @@ use aerie_terrain::select::{neighbour_eps, DrawItem};
 
 use crate::render::geo_instances::{GeoEye, GeoNodeCache};
 use crate::render::gpu::{DrawIndexedIndirect, TileInstance};
+use crate::render::plan::PoolSlots;
 use crate::render::stats::RESOLUTIONS;
 
 /// Instance groups, each one indirect command: per refinement the whole nodes, then per
@@ -84,6 +85,8 @@ pub struct InstanceFrame<'a> {
     pub eye: DVec3,
     pub skirt_factor: f32,
     pub skirt_min_m: f32,
+    /// The pools r = 1.. (index r − 1): where each slot lies in its image.
+    pub pools: &'a [PoolSlots],
 }
 
 /// Where a node lies in its pool slot: the slot holds the ring tile at level L − r, so a node
@@ -162,7 +165,17 @@ pub fn build_instances(
         t.step = 1 << item.node_level;
         t.level = item.level;
         t.refinement = item.refinement;
-        t.slot = slot;
+        // A refined node names its slot's layer and its south-west vertex's texel in that
+        // layer (the slot's cell + the node's place in the slot): `terrain.vert` finds the cell
+        // again from it (`PoolAtlas::read_texel`).
+        let (slot_x, slot_y) = if item.refinement > 0 {
+            let place = f.pools[item.refinement as usize - 1].atlas.place(slot);
+            t.slot = place.layer;
+            (slot_x + place.x, slot_y + place.y)
+        } else {
+            t.slot = slot;
+            (slot_x, slot_y)
+        };
         // ε + max(ε, neighbours' ε) at the default factor 2 (see neighbour_eps).
         t.skirt_m = 0.5 * f.skirt_factor * (item.eps_m + reach_m) + f.skirt_min_m;
         (t.slot_x, t.slot_y, t.slot_stride) = (slot_x, slot_y, slot_stride);
@@ -252,6 +265,7 @@ mod tests {
         .iter()
         .map(|&(r, k, q)| (refined(r, k, q), k))
         .collect();
+        let pools: Vec<PoolSlots> = (1..=6).map(|r| PoolSlots::new((16 << r) + 1, 16)).collect();
         let f = InstanceFrame {
             tile_quads: 16,
             spacing: [10.0, 10.0],
@@ -259,6 +273,7 @@ mod tests {
             eye: DVec3::ZERO,
             skirt_factor: 2.0,
             skirt_min_m: 0.0,
+            pools: &pools,
         };
         let (instances, sizes) = build_instances(&f, &list, &mut GeoNodeCache::default());
         let mut want = [0u32; DRAW_GROUPS];
@@ -269,6 +284,36 @@ mod tests {
         assert_eq!(sizes, want);
         let slots: Vec<u32> = instances.iter().map(|i| i.slot).collect();
         assert_eq!(slots, [2, 6, 3, 0, 5, 1, 7, 4, 8]);
+        // Packed 2 × 2 slots to a layer, a refined node names its slot's layer and its
+        // south-west vertex's texel there: the slot's cell + its place in the slot.
+        let limits = crate::render::pool_atlas::PoolLimits {
+            max_layers: 4,
+            max_side: 4096,
+        };
+        let packed: Vec<PoolSlots> = pools
+            .iter()
+            .map(|p| PoolSlots {
+                atlas: crate::render::pool_atlas::PoolAtlas::new(p.side, 16, limits).unwrap(),
+                ..p.clone()
+            })
+            .collect();
+        let g = InstanceFrame {
+            pools: &packed,
+            ..f
+        };
+        let (placed, _) = build_instances(&g, &list, &mut GeoNodeCache::default());
+        for (t, o) in placed.iter().zip(&instances) {
+            if t.refinement == 0 {
+                assert_eq!(t, o);
+                continue;
+            }
+            let atlas = &packed[t.refinement as usize - 1].atlas;
+            assert_eq!(atlas.per_row, 2);
+            let p = atlas.place(o.slot);
+            assert_eq!(t.slot, p.layer, "{t:?}");
+            assert_eq!([t.slot_x, t.slot_y], [p.x + o.slot_x, p.y + o.slot_y]);
+            assert_eq!(atlas.read_texel([t.slot_x, t.slot_y], [-1, -1]), [p.x, p.y]);
+        }
         // Quadrants and sixteenths alike are fully morphed onto the parent's grid.
         let quadrant: Vec<bool> = instances.iter().map(|i| i.morph[0] < 0.0).collect();
         assert_eq!(
