@@ -63,22 +63,18 @@ pub(super) fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> Rendere
     desc
 }
 
-/// Most slots a pool gets here: a pool is one array image, and 2048 layers is what common
-/// devices (lavapipe among them) allow; past it a smaller tile's pool holds fewer bytes than
-/// the default's, and what that costs shows as late tiles.
-pub(super) const MAX_POOL_SLOTS: u32 = 2048;
-
 /// Pool slots for tiles of `to` vertices a side holding the bytes `slots` hold for tiles of
-/// `from`: a slot of refinement r holds ((q << r) + 1)² samples, so the count scales by
-/// about (q_from / q_to)² (rounded up; an empty pool stays empty), at most
-/// [`MAX_POOL_SLOTS`] (or as many as given, if more).
+/// `from` (`slots[i]` the pool of r = i + 1): a slot of refinement r holds ((q << r) + 1)²
+/// samples, so the count scales by about (q_from / q_to)² (rounded up; an empty pool stays
+/// empty). A pool with more slots than the device's array layers packs several to a layer
+/// (`render/pool_atlas.rs`), so the count is not capped: every size gets the same bytes.
 pub(super) fn pools_for_tile_size<const N: usize>(slots: [u32; N], from: u32, to: u32) -> [u32; N] {
     let (qf, qt) = (u64::from(from.max(2) - 1), u64::from(to.max(2) - 1));
     let mut out = slots;
-    for (r, s) in out.iter_mut().enumerate() {
-        let side = |q: u64| ((q << r) + 1).pow(2);
+    for (i, s) in out.iter_mut().enumerate() {
+        let side = |q: u64| ((q << (i + 1)) + 1).pow(2);
         let scaled = (u64::from(*s) * side(qf)).div_ceil(side(qt));
-        *s = scaled.min(u64::from(MAX_POOL_SLOTS.max(*s))) as u32;
+        *s = u32::try_from(scaled).unwrap_or(u32::MAX);
     }
     out
 }
@@ -287,14 +283,15 @@ pub(super) fn replay(
 
 #[cfg(test)]
 mod tests {
-    use super::{pools_for_tile_size, MAX_POOL_SLOTS};
+    use super::pools_for_tile_size;
 
     #[test]
     fn pools_keep_their_bytes_across_tile_sizes() {
         let slots = [256u32, 128, 96, 32, 40, 0];
         assert_eq!(pools_for_tile_size(slots, 17, 17), slots);
         let small = pools_for_tile_size(slots, 17, 9);
-        for (r, (&a, &b)) in slots.iter().zip(&small).enumerate() {
+        for (i, (&a, &b)) in slots.iter().zip(&small).enumerate() {
+            let r = i + 1;
             let bytes = |n: u32, q: u64| u64::from(n) * ((q << r) + 1).pow(2);
             // At least the bytes of before, less than one more slot above them.
             assert!(bytes(b, 8) >= bytes(a, 16), "r = {r}: {b} slots");
@@ -304,12 +301,13 @@ mod tests {
             );
         }
         assert_eq!(small[5], 0, "an empty pool stays empty");
-        // About four quarter-size tiles to a slot of the default at r = 0 (289 / 81 samples).
-        assert_eq!(small[0], (256 * 289u32).div_ceil(81));
-        // Tiles of 5: r = 0 would want 256 · 289 / 25 slots, more than an array image holds.
+        // About four smaller slots to one of the default's at r = 1 (33² / 17² samples).
+        assert_eq!(small[0], (256 * 33 * 33u32).div_ceil(17 * 17));
+        // Tiles of 5: r = 1 wants 256 · 33² / 9² slots, more than 2048 array layers hold:
+        // not capped (the pool packs them several to a layer), the same bytes.
         let tiny = pools_for_tile_size(slots, 17, 5);
-        assert_eq!(tiny[0], MAX_POOL_SLOTS);
-        assert!(tiny.iter().all(|&n| n <= MAX_POOL_SLOTS), "{tiny:?}");
+        assert_eq!(tiny[0], (256 * 33 * 33u32).div_ceil(9 * 9));
+        assert!(tiny[0] > 2048, "{tiny:?}");
         // Larger tiles: fewer slots, never more than given.
         let large = pools_for_tile_size(slots, 17, 33);
         assert!(large.iter().zip(&slots).all(|(a, b)| a <= b), "{large:?}");
