@@ -355,3 +355,50 @@ fn misuse_is_an_error_not_a_crash() {
         .to_string();
     assert!(err.contains("0x10"), "{err}");
 }
+
+/// A selection whose instance records would crowd the staging region out (many small nodes:
+/// tiles of 9 at τ = 0.25 px, a region of 512 KiB) grows the region once instead of leaving
+/// every refined tile late: after the start-up frames nothing is late and the image is the
+/// one an ample region draws.
+#[test]
+fn instance_records_that_crowd_the_staging_region_grow_it() {
+    let hf = load_dem(&demo_dem()).expect("demo DEM loads");
+    let cam = inn_camera();
+    let mut results = Vec::new();
+    for budget in [64u64 << 20, 512 << 10] {
+        let mut desc = desc_with(LodMode::Bounded, 0.25);
+        desc.tile_size = 9;
+        desc.staging_budget = budget;
+        let (ds, b) = prepare(&desc, &hf);
+        let mut r = TerrainRenderer::new(&desc).unwrap();
+        r.load_terrain(ds, b, cam.position).unwrap();
+        let mut stats = Vec::new();
+        for _ in 0..6 {
+            stats.push(r.render(&cam).unwrap());
+        }
+        results.push((stats, r.staging_region(), r.colour_rgba()));
+        let counters = r.validation_counters();
+        r.destroy();
+        assert_validation_clean(&counters);
+    }
+    let (ample, small) = (&results[0], &results[1]);
+    let last = &small.0[5];
+    // The selection's records alone take more than half of 512 KiB: without growing, no pool
+    // upload fits and the frame draws coarse ancestors (90 tiles late every frame).
+    let records = ample.0[5].instances as u64
+        * std::mem::size_of::<aerie::render::gpu::TileInstance>() as u64;
+    assert!(records > 256 << 10, "{records} bytes of records");
+    assert_eq!(ample.1, (64 << 20, 0), "an ample region never grows");
+    assert!(small.1 .0 > 512 << 10 && small.1 .1 >= 1, "{:?}", small.1);
+    assert_eq!(
+        last.tiles_late,
+        0,
+        "{:?}",
+        small.0.iter().map(|s| s.tiles_late).collect::<Vec<_>>()
+    );
+    assert_eq!(last.triangles, ample.0[5].triangles);
+    assert!(
+        small.2 == ample.2,
+        "the grown region draws the ample region's image"
+    );
+}

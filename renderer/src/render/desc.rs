@@ -31,7 +31,10 @@ pub struct RendererDesc {
     pub device: DeviceDesc,
     pub width: u32,
     pub height: u32,
-    /// Hard upload budget per frame (bytes), the size of one staging-ring region.
+    /// Hard upload budget per frame (bytes), the size of one staging-ring region. The frame's
+    /// instance records are staged there too: when a selection's records would take more than
+    /// half the region, it grows to hold them beside this budget (`jobs::staging_to_hold`;
+    /// once per growth the device is waited idle).
     pub staging_budget: u64,
     /// m: vertices per tile side.
     pub tile_size: u32,

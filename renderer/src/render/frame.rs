@@ -26,18 +26,18 @@ use crate::render::frame_record::RecordParts;
 use crate::render::gathered::SampleCursor;
 use crate::render::gpu::EntityPush;
 use crate::render::imagery_stream::ImageryStream;
-use crate::render::jobs::{split_level_uploads, ImageUpload, PlanError, StagingBudget};
+use crate::render::jobs::{split_level_uploads, ImageUpload, StagingBudget};
 use crate::render::models::{Model, ModelLibrary};
 use crate::render::normal_map::NormalTexel;
-use crate::render::normal_pass::{read_texture_layer, NormalBatch, NormalPass};
+use crate::render::normal_pass::{read_normal_texels, NormalBatch, NormalPass};
 use crate::render::overlay_pass::Panel;
-use crate::render::plan::{plan_frame, select_frame, FrameInputs, TileMeshes};
+use crate::render::plan::{fixed_reserve, plan_frame, select_frame, FrameInputs, TileMeshes};
 use crate::render::resources::{reserve_instances, GpuTerrain};
 use crate::render::terrain_pass::{descriptor_pool_sizes, DESCRIPTOR_SETS};
 use crate::render::tess_pass::TessTerrain;
 use crate::render::uniforms::{frame_uniforms, FLAG_NORMAL_MAP};
 use crate::render::upload::{
-    initialise_images, stage_frame, stream_buffer, stream_image_uploads, GpuNormals, SAMPLED,
+    fit_staging, initialise_images, stage_frame, stream_buffer, stream_image_uploads, GpuNormals,
 };
 use crate::vk::frame_context::{FrameContext, FrameRing};
 use crate::vk::pipeline::TerrainPipeline;
@@ -99,13 +99,6 @@ macro_rules! or_unwind {
             }
         }
     };
-}
-
-fn plan_error(e: PlanError) -> VkError {
-    match e {
-        PlanError::Staging(m) => VkError::Staging(m),
-        PlanError::Other(m) => VkError::Other(m),
-    }
 }
 
 impl TerrainRenderer {
@@ -218,6 +211,11 @@ impl TerrainRenderer {
         &self.device.name
     }
 
+    /// Bytes one frame may stage now and how often the region grew (`jobs::staging_to_hold`).
+    pub fn staging_region(&self) -> (u64, u32) {
+        (self.ring.staging_budget(), self.ring.staging_growths())
+    }
+
     /// The last frame's tile selection (before the budget's decisions): for tests and tools.
     pub fn selection(&self) -> &Selection {
         &self.selection
@@ -248,7 +246,6 @@ impl TerrainRenderer {
         self.overlay = panel;
     }
 
-    /// Changes the LOD decision (mode, τ, curvature...) for the following frames.
     /// Sun and haze for the next frames (a host's Celestial Sphere / Atmosphere Control).
     pub fn set_lighting(&mut self, lighting: Lighting) {
         self.lighting = lighting;
@@ -287,6 +284,7 @@ impl TerrainRenderer {
         self.entities.as_ref().map_or(&[], EntityPass::models)
     }
 
+    /// Changes the LOD decision (mode, τ, curvature...) for the following frames.
     pub fn set_select_params(&mut self, params: SelectParams) {
         self.desc.select = params;
     }
@@ -461,8 +459,7 @@ impl TerrainRenderer {
         let gpu_normals = self.gpu_normals.as_mut();
         let loaded = initialise_images(d, &mut self.ring, t.images()).and_then(|()| {
             let (budget, align) = (self.ring.staging_budget(), self.ring.staging_alignment());
-            let submissions =
-                split_level_uploads(&strips, budget, align, staged_normals).map_err(plan_error)?;
+            let submissions = split_level_uploads(&strips, budget, align, staged_normals)?;
             let image = t.levels.raw;
             let gatherer = &t.plan.feed.gatherer;
             let mut samples = SampleCursor::new(gatherer.samples());
@@ -522,7 +519,7 @@ impl TerrainRenderer {
             return Err(VkError::Other("render called before load_terrain".into()));
         };
         let d = &self.device;
-        let inputs = FrameInputs {
+        let mut inputs = FrameInputs {
             frame: self.frame_counter,
             camera,
             viewport: (self.target.width, self.target.height),
@@ -557,8 +554,13 @@ impl TerrainRenderer {
             select_frame(&mut t.plan, &inputs, &mut self.selection)
         };
         let mut cpu_select_us = t0.elapsed().as_secs_f64() * 1e6;
+        // Instance records share the staging region: one they would crowd grows first.
+        let reserve = fixed_reserve(self.selection.items.len(), inputs.overlay_bytes);
+        if let Some(b) = fit_staging(&mut self.ring, d, self.desc.staging_budget, reserve)? {
+            inputs.staging = b;
+        }
         let t1 = Instant::now();
-        let plan = plan_frame(&mut t.plan, &inputs, &self.selection, strips).map_err(plan_error)?;
+        let plan = plan_frame(&mut t.plan, &inputs, &self.selection, strips)?;
         let cpu_thread_plan_us = thread_cpu_us() - cpu0;
 
         // Stage: spilled strips in their own submissions, then this frame's region, from the
@@ -725,16 +727,11 @@ impl TerrainRenderer {
     /// Layer `level` of the normal texture (side² texels, row-major, texel = sample mod side),
     /// read back after the frames rendered so far: for the tests of the normal maps.
     pub fn read_normal_layer(&mut self, level: u32) -> Result<Vec<NormalTexel>, VkError> {
-        let Some(t) = self.terrain.as_ref() else {
-            return Err(VkError::Other("no terrain loaded".into()));
-        };
-        let side = t.normals.desc.width;
-        let (image, d) = (t.normals.raw, &self.device);
-        let bytes = read_texture_layer(d, &mut self.ring, image, level, side, 2, &SAMPLED)?;
-        Ok(bytes
-            .chunks_exact(2)
-            .map(|c| [c[0] as i8, c[1] as i8])
-            .collect())
+        let t = self
+            .terrain
+            .as_ref()
+            .ok_or(VkError::Other("no terrain loaded".into()))?;
+        read_normal_texels(&self.device, &mut self.ring, &t.normals, level)
     }
 
     /// Each level's cache region (level-L vertices; None before it is placed) and the level

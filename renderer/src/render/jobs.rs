@@ -5,7 +5,6 @@
 use aerie_terrain::clipmap::{
     toroidal_pieces, update_cache, CacheRegion, ClipmapDesc, LevelPlacement,
 };
-use aerie_terrain::pool::TileKey;
 
 use crate::render::normal_map::normal_bytes;
 
@@ -243,25 +242,19 @@ pub fn split_level_uploads(
     Ok(submissions)
 }
 
-/// The upload of refined tile `key` into pool slot `slot` of a pool laid out as `atlas`:
-/// (2^r q + 1)² samples at stride 2^(L−r) from the tile's south-west corner, into the slot's
-/// cell.
-pub fn refined_upload(
-    tile_quads: u32,
-    key: &TileKey,
-    slot: u32,
-    atlas: &crate::render::pool_atlas::PoolAtlas,
-) -> ImageUpload {
-    let tile = (tile_quads as i64) << key.level;
-    let place = atlas.place(slot);
-    let side = atlas.side;
-    ImageUpload {
-        layer: place.layer,
-        texel: [place.x, place.y],
-        size: [side, side],
-        origin_sample: [key.tx as i64 * tile, key.ty as i64 * tile],
-        step: 1 << (key.level - key.refinement),
-    }
+/// The staging region a frame needs when its fixed pushes take `reserve` bytes of a region of
+/// `region` bytes, for an upload budget of `upload_budget` (`RendererDesc::staging_budget`):
+/// None while the records take at most half the region; else a region that holds them and
+/// the upload budget beside them, rounded up to a power of two (so a selection that keeps
+/// growing regrows the region a few times, not every frame). Without it a selection of many
+/// nodes — small tiles, a small τ, a big channel — leaves no room for any pool upload, and
+/// every refined tile stays late for as long as the view lasts.
+pub fn staging_to_hold(region: u64, upload_budget: u64, reserve: u64) -> Option<u64> {
+    (reserve > region / 2).then(|| {
+        (upload_budget + reserve)
+            .max(2 * reserve)
+            .next_power_of_two()
+    })
 }
 
 #[cfg(test)]

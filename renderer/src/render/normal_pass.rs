@@ -19,7 +19,7 @@ use aerie_terrain::clipmap::CacheRegion;
 
 use crate::render::gpu::NormalPush;
 use crate::render::jobs::ImageUpload;
-use crate::render::normal_map::{gpu_normal_jobs, level_spacing, NormalJob};
+use crate::render::normal_map::{gpu_normal_jobs, level_spacing, NormalJob, NormalTexel};
 use crate::render::upload::record_image_copies;
 use crate::vk::access::{image_barrier, memory_barrier, Access};
 use crate::vk::compute_pipeline::ComputePipeline;
@@ -270,6 +270,23 @@ impl NormalPass {
         self.buffer.destroy(device);
         self.pipeline.destroy(device);
     }
+}
+
+/// Layer `level` of the normal texture `normals` (side² texels, row-major, texel = sample mod
+/// side), read back in one submission waited for.
+pub fn read_normal_texels(
+    d: &Device,
+    ring: &mut FrameRing,
+    normals: &crate::vk::image::Image2d,
+    level: u32,
+) -> Result<Vec<NormalTexel>, VkError> {
+    let side = normals.desc.width;
+    let readers = &crate::render::upload::SAMPLED;
+    let bytes = read_texture_layer(d, ring, normals.raw, level, side, 2, readers)?;
+    Ok(bytes
+        .chunks_exact(2)
+        .map(|c| [c[0] as i8, c[1] as i8])
+        .collect())
 }
 
 /// Reads back layer `layer` of a `side`² texture of `texel_bytes` bytes a texel that rests in

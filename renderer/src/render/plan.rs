@@ -36,7 +36,7 @@ use glam::DVec3;
 use aerie_terrain::bake::ErrorBake;
 use aerie_terrain::camera::Camera;
 use aerie_terrain::clipmap::{place_levels, ClipmapDesc, LevelPlacement};
-use aerie_terrain::pool::{RefinedTilePool, Request, TileKey};
+use aerie_terrain::pool::{Request, TileKey};
 use aerie_terrain::select::cdlod_morph::Morph;
 use aerie_terrain::select::{select_tiles_multi_ready, DrawItem, SelectParams, Selection, View};
 use aerie_terrain::source::TerrainSource;
@@ -50,10 +50,10 @@ use aerie_terrain::geodesy::GeoGrid;
 use crate::render::geo_instances::GeoNodeCache;
 use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, TileInstance};
 use crate::render::jobs::{
-    eye_samples, refined_upload, split_level_uploads, within_data_cap, ImageUpload, PlanError,
-    StagingBudget, TEXEL_BYTES,
+    eye_samples, split_level_uploads, within_data_cap, ImageUpload, PlanError, StagingBudget,
 };
 use crate::render::normal_map::normal_bytes;
+pub use crate::render::pool_atlas::PoolSlots;
 use crate::render::pool_atlas::{PoolAtlas, PoolLimits};
 use crate::render::stats::FrameStats;
 use crate::render::tile_instances::{build_instances, InstanceFrame};
@@ -82,37 +82,6 @@ pub const PREFETCH_PROTECT_FRAMES: u64 = 2;
 /// from it what the budget leaves room for. Re-selecting every frame cost as much CPU as the
 /// frame's own selection (the Inn valley, 1280×720: 344 µs median).
 pub const PREFETCH_RESELECT_FRAMES: u64 = 4;
-
-/// A refined-tile pool's bookkeeping: its LRU, the samples per slot side, 2^r(m−1)+1, and
-/// where its slots lie in the pool's image.
-#[derive(Debug, Clone)]
-pub struct PoolSlots {
-    pub side: u32,
-    pub lru: RefinedTilePool,
-    pub atlas: PoolAtlas,
-}
-
-impl PoolSlots {
-    /// An empty pool of `slots` slots of `side` samples a side, laid out for common devices
-    /// (one slot a layer while they fit; `PlanState::fit_pools` lays it out for the device).
-    pub fn new(side: u32, slots: u32) -> Self {
-        let atlas = PoolAtlas::new(side, slots, PoolLimits::COMMON).unwrap_or(PoolAtlas {
-            side,
-            per_row: 1,
-            layers: slots.max(1),
-            slots,
-        });
-        Self {
-            side,
-            lru: RefinedTilePool::new(slots),
-            atlas,
-        }
-    }
-
-    pub fn slot_bytes(&self) -> u64 {
-        self.side as u64 * self.side as u64 * TEXEL_BYTES
-    }
-}
 
 /// The CPU state a plan reads and advances: clipmap cache regions and what the level textures
 /// hold, pool bookkeeping and the previous eye (for prefetch), with the dataset's bake, sample
@@ -577,7 +546,7 @@ fn resolve_refined_tiles(
         };
         let pool = &mut state.pools[r as usize - 1];
         let slot_bytes = pool.slot_bytes();
-        let job = refined_upload(q, &key, 0, &pool.atlas);
+        let job = pool.atlas.upload(q, &key, 0);
         let gatherer = &mut state.feed.gatherer;
         let (mut not_resident, mut no_budget) = (false, false);
         let cap = state.feed.data_cap_samples;
@@ -599,7 +568,7 @@ fn resolve_refined_tiles(
             }
             Request::Miss { slot, evicted } => {
                 plan.stats.pool_misses += 1;
-                let upload = refined_upload(q, &key, slot, &pool.atlas);
+                let upload = pool.atlas.upload(q, &key, slot);
                 budget.take(upload.bytes())?;
                 plan.stats.bytes_refined += upload.bytes();
                 plan.pool_uploads.push(PoolUpload {
@@ -768,7 +737,7 @@ fn prefetch(
             continue;
         }
         let slot_bytes = pool.slot_bytes();
-        let job = refined_upload(q, &key, 0, &pool.atlas);
+        let job = pool.atlas.upload(q, &key, 0);
         let gatherer = &mut state.feed.gatherer;
         let mut not_resident = false;
         let cap = state.feed.data_cap_samples;
@@ -786,7 +755,7 @@ fn prefetch(
             PREFETCH_PROTECT_FRAMES,
         );
         if let Request::Miss { slot, evicted } = request {
-            let upload = refined_upload(q, &key, slot, &pool.atlas);
+            let upload = pool.atlas.upload(q, &key, slot);
             budget.take(upload.bytes())?;
             plan.stats.bytes_refined += upload.bytes();
             plan.stats.prefetched += 1;

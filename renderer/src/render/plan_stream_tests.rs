@@ -21,7 +21,7 @@ use aerie_terrain::Heightfield;
 use super::*;
 use crate::render::feed::{DRAWN_PRIORITY, PREFETCH_PRIORITY};
 use crate::render::gathered::SampleCursor;
-use crate::render::jobs::{refined_upload, StagingBudget};
+use crate::render::jobs::StagingBudget;
 use crate::render::pool_atlas::{PoolAtlas, PoolLimits};
 
 const N: usize = 513;
@@ -520,7 +520,7 @@ fn a_pool_upload_whose_samples_are_not_resident_is_late_and_asked_for_by_its_err
     for l in &plan.late {
         assert!(l.drawn_refinement < l.key.refinement, "{l:?}");
         let atlas = st.pools[l.key.refinement as usize - 1].atlas;
-        let rect = refined_upload(Q, &l.key, 0, &atlas).sample_rect();
+        let rect = atlas.upload(Q, &l.key, 0).sample_rect();
         if rect.level == 0 {
             let w = wants
                 .iter()

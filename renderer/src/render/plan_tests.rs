@@ -764,3 +764,24 @@ fn geographic_data_is_planned_on_the_ellipsoid_by_every_planner() {
     let dlat = d.to_radians() as f32;
     assert!(plan.instances.iter().all(|i| i.geo_origin[3] == dlat));
 }
+
+/// The staging region grows only when the frame's fixed pushes would take more than half of
+/// it, to a power of two that holds them beside the upload budget.
+#[test]
+fn the_staging_region_grows_only_for_records_that_crowd_it() {
+    use crate::render::jobs::staging_to_hold;
+    const MIB: u64 = 1 << 20;
+    assert_eq!(staging_to_hold(8 * MIB, 8 * MIB, 4 * MIB), None);
+    assert_eq!(
+        staging_to_hold(8 * MIB, 8 * MIB, 4 * MIB + 1),
+        Some(16 * MIB)
+    );
+    assert_eq!(staging_to_hold(8 * MIB, 8 * MIB, 9 * MIB), Some(32 * MIB));
+    // A tiny upload budget: the records' double.
+    assert_eq!(staging_to_hold(MIB / 2, MIB / 2, 3 * MIB), Some(8 * MIB));
+    // Once grown, the same records fit.
+    assert_eq!(staging_to_hold(16 * MIB, 8 * MIB, 4 * MIB + 1), None);
+    // The reserve counts every selected node's record.
+    let per = std::mem::size_of::<TileInstance>() as u64;
+    assert!(fixed_reserve(10_000, None) >= 10_000 * per);
+}

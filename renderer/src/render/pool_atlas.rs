@@ -23,6 +23,10 @@ pub struct PoolAtlas {
     pub slots: u32,
 }
 
+use aerie_terrain::pool::{RefinedTilePool, TileKey};
+
+use crate::render::jobs::{ImageUpload, TEXEL_BYTES};
+
 /// Where one slot lies: its layer and the texel of its south-west sample in that layer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SlotPlace {
@@ -77,6 +81,20 @@ impl PoolAtlas {
         })
     }
 
+    /// The upload of refined tile `key` into slot `slot`: (2^r q + 1)² samples at stride
+    /// 2^(L−r) from the tile's south-west corner, into the slot's cell.
+    pub fn upload(&self, tile_quads: u32, key: &TileKey, slot: u32) -> ImageUpload {
+        let tile = (tile_quads as i64) << key.level;
+        let place = self.place(slot);
+        ImageUpload {
+            layer: place.layer,
+            texel: [place.x, place.y],
+            size: [self.side, self.side],
+            origin_sample: [key.tx as i64 * tile, key.ty as i64 * tile],
+            step: 1 << (key.level - key.refinement),
+        }
+    }
+
     /// The image's width and height, texels.
     pub fn width(&self) -> u32 {
         self.per_row * self.side
@@ -105,6 +123,37 @@ impl PoolAtlas {
             let base = i64::from(sw[a]) / side * side;
             (t[a] + base).clamp(base, base + side - 1) as u32
         })
+    }
+}
+
+/// A refined-tile pool's bookkeeping: its LRU, the samples per slot side, 2^r(m−1)+1, and
+/// where its slots lie in the pool's image.
+#[derive(Debug, Clone)]
+pub struct PoolSlots {
+    pub side: u32,
+    pub lru: RefinedTilePool,
+    pub atlas: PoolAtlas,
+}
+
+impl PoolSlots {
+    /// An empty pool of `slots` slots of `side` samples a side, laid out for common devices
+    /// (one slot a layer while they fit; `PlanState::fit_pools` lays it out for the device).
+    pub fn new(side: u32, slots: u32) -> Self {
+        let atlas = PoolAtlas::new(side, slots, PoolLimits::COMMON).unwrap_or(PoolAtlas {
+            side,
+            per_row: 1,
+            layers: slots.max(1),
+            slots,
+        });
+        Self {
+            side,
+            lru: RefinedTilePool::new(slots),
+            atlas,
+        }
+    }
+
+    pub fn slot_bytes(&self) -> u64 {
+        self.side as u64 * self.side as u64 * TEXEL_BYTES
     }
 }
 

@@ -14,7 +14,7 @@ use aerie_terrain::select::{neighbour_eps, DrawItem};
 
 use crate::render::geo_instances::{GeoEye, GeoNodeCache};
 use crate::render::gpu::{DrawIndexedIndirect, TileInstance};
-use crate::render::plan::PoolSlots;
+use crate::render::pool_atlas::PoolSlots;
 use crate::render::stats::RESOLUTIONS;
 
 /// Instance groups, each one indirect command: per refinement the whole nodes, then per

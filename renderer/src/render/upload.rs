@@ -10,6 +10,7 @@ use aerie_terrain::select::MAX_REFINEMENT;
 use crate::render::gathered::SampleCursor;
 use crate::render::gpu::FrameUniforms;
 use crate::render::jobs::ImageUpload;
+use crate::render::jobs::{staging_to_hold, PlanError, StagingBudget};
 use crate::render::normal_map::NormalTexel;
 use crate::render::overlay_pass::Panel;
 use crate::render::plan::FramePlan;
@@ -281,4 +282,31 @@ pub fn stage_frame(
         instances,
         overlay,
     })
+}
+
+/// Grows `ring`'s staging region when the frame's fixed pushes (`reserve` bytes: its instance
+/// records) would crowd it (`jobs::staging_to_hold`, for the configured `upload_budget`);
+/// the frame's new budget when it grew. Call with no frame context open.
+pub fn fit_staging(
+    ring: &mut FrameRing,
+    d: &Device,
+    upload_budget: u64,
+    reserve: u64,
+) -> Result<Option<StagingBudget>, VkError> {
+    let Some(grown) = staging_to_hold(ring.staging_budget(), upload_budget, reserve) else {
+        return Ok(None);
+    };
+    Ok(ring
+        .grow_staging(d, grown)?
+        .then(|| StagingBudget::new(ring.staging_budget(), ring.staging_alignment())))
+}
+
+/// A plan that cannot be carried out fails the frame with its reason.
+impl From<PlanError> for VkError {
+    fn from(e: PlanError) -> Self {
+        match e {
+            PlanError::Staging(m) => VkError::Staging(m),
+            PlanError::Other(m) => VkError::Other(m),
+        }
+    }
 }

@@ -38,6 +38,8 @@ pub struct FrameRing {
     frames: Vec<InFlight>,
     next: usize,
     staging: StagingRing,
+    /// Times the staging region grew (`grow_staging`).
+    staging_growths: u32,
     descriptors: FrameDescriptorPools,
     timer: GpuTimer,
 }
@@ -110,6 +112,7 @@ impl FrameRing {
             frames,
             next: 0,
             staging,
+            staging_growths: 0,
             descriptors,
             timer,
         })
@@ -118,6 +121,28 @@ impl FrameRing {
     /// Bytes one frame may stage (the size of one staging region).
     pub fn staging_budget(&self) -> u64 {
         self.staging.budget()
+    }
+
+    /// Replaces the staging ring with one of `budget` bytes a region when that is more than
+    /// now; true when it did. The new ring is made first (on failure the old one stays), then
+    /// the device is waited idle, so no submission still reads a region of the old one: a
+    /// one-off stall, when a frame's selection outgrows the region
+    /// (`render::jobs::staging_to_hold`).
+    pub fn grow_staging(&mut self, device: &Device, budget: u64) -> Result<bool, VkError> {
+        if budget <= self.staging.budget() {
+            return Ok(false);
+        }
+        let grown = StagingRing::new(device, budget)?;
+        device.wait_idle();
+        let mut old = std::mem::replace(&mut self.staging, grown);
+        old.destroy(device);
+        self.staging_growths += 1;
+        Ok(true)
+    }
+
+    /// How often [`Self::grow_staging`] grew the region.
+    pub fn staging_growths(&self) -> u32 {
+        self.staging_growths
     }
 
     /// Alignment of every staging allocation.

@@ -666,6 +666,11 @@ datasets = ["mixed"]
         assert_eq!(s.pairs().len(), 16);
         assert_eq!(s.run.sweeps.tile_sizes, vec![17, 9]);
         assert!(!s.run.modes.contains("tess"), "{}", s.run.modes);
+        // Tiles of 5 as a third size: the same 16 flights, every tiled mode at 17, 9 and 5.
+        let text = include_str!("../../../../../bench/suites/lavapipe-tiles5.toml");
+        let s = parse_suite(text, "lavapipe-tiles5.toml").unwrap();
+        assert_eq!(s.pairs().len(), 16);
+        assert_eq!(s.run.sweeps.tile_sizes, vec![17, 9, 5]);
         // The denser sweeps: four flights, every knob at 7 settings or more, both tile sizes.
         let text = include_str!("../../../../../bench/suites/lavapipe-dense.toml");
         let s = parse_suite(text, "lavapipe-dense.toml").unwrap();
