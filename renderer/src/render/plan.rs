@@ -38,7 +38,9 @@ use aerie_terrain::camera::Camera;
 use aerie_terrain::clipmap::{place_levels, ClipmapDesc, LevelPlacement};
 use aerie_terrain::pool::{Request, TileKey};
 use aerie_terrain::select::cdlod_morph::Morph;
-use aerie_terrain::select::{select_tiles_multi_ready, DrawItem, SelectParams, Selection, View};
+use aerie_terrain::select::{
+    select_tiles_multi_ready, DrawItem, LodMode, SelectParams, Selection, View,
+};
 use aerie_terrain::source::TerrainSource;
 
 use crate::render::ahead_select::{AheadJob, AheadSelector};
@@ -430,7 +432,13 @@ pub fn plan_frame(
     );
     // Quadrants drawn for their parents (bounded's and CDLOD's) draw the coarse mesh: the
     // parent's quarter mesh they show.
-    let (draws, triangles) = indirect_draws(&groups, inputs.tile_meshes);
+    // CDLOD draws no skirts (Strugar 2009: the morph closes its seams); every other mode's
+    // skirts hide the cracks between neighbours at different levels.
+    let meshes = match inputs.select.mode {
+        LodMode::Cdlod => inputs.tile_meshes.without_skirts(),
+        _ => inputs.tile_meshes,
+    };
+    let (draws, triangles) = indirect_draws(&groups, meshes);
     let total = instances.len();
     if total > MAX_INSTANCES {
         return Err(PlanError::Other(format!(

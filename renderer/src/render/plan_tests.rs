@@ -26,6 +26,7 @@ const MESHES: TileMeshes = TileMeshes {
     whole: INDICES,
     coarse: (1734, 528),
     sixteenth: (2262, 192),
+    grid: [1536, 384, 96],
 };
 const ALIGN: u64 = 64;
 

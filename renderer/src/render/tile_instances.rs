@@ -32,6 +32,9 @@ pub struct TileMeshes {
     pub whole: (u32, u32),
     pub coarse: (u32, u32),
     pub sixteenth: (u32, u32),
+    /// Each mesh's grid indices (whole, coarse, sixteenth): its first indices, before its
+    /// skirt's.
+    pub grid: [u32; 3],
 }
 
 impl TileMeshes {
@@ -45,19 +48,36 @@ impl TileMeshes {
         let whole = (0, v.len() as u32);
         v.extend(skirted_coarse_tile_indices(side));
         let coarse = (whole.1, v.len() as u32 - whole.1);
-        if side >= 5 && (side - 1).is_multiple_of(4) {
+        let sixteenths = side >= 5 && (side - 1).is_multiple_of(4);
+        if sixteenths {
             v.extend(skirted_sixteenth_tile_indices(side));
         }
         let end = coarse.0 + coarse.1;
         let sixteenth = (end, v.len() as u32 - end);
+        // A strided mesh lists its grid's 6 indices a cell, then its skirt's.
+        let cells = |stride: u32| ((side - 1) / stride).pow(2) * 6;
+        let grid = [cells(1), cells(2), if sixteenths { cells(4) } else { 0 }];
         (
             v,
             TileMeshes {
                 whole,
                 coarse,
                 sixteenth,
+                grid,
             },
         )
+    }
+
+    /// The same meshes without their skirts (each mesh's grid indices alone): CDLOD draws so,
+    /// as Strugar's paper does — its morph closes the seams between levels.
+    pub fn without_skirts(self) -> Self {
+        let [w, c, s] = self.grid;
+        Self {
+            whole: (self.whole.0, w),
+            coarse: (self.coarse.0, c),
+            sixteenth: (self.sixteenth.0, s),
+            ..self
+        }
     }
 
     /// Group `g`'s mesh ([`DRAW_GROUPS`]).
@@ -340,6 +360,7 @@ mod tests {
                 whole: (0, whole),
                 coarse: (whole, coarse),
                 sixteenth: (whole + coarse, sixteenth),
+                grid: [16 * 16 * 6, 8 * 8 * 6, 4 * 4 * 6],
             }
         );
         assert_eq!(buffer.len() as u32, whole + coarse + sixteenth);
@@ -363,8 +384,33 @@ mod tests {
                 + 2 * skirted_tile_triangles(8)
                 + 5 * skirted_tile_triangles(4)
         );
+        // Without skirts (CDLOD): each mesh's grid indices, which come first, 2q² triangles.
+        let (bare, _) = indirect_draws(&sizes, meshes.without_skirts());
+        for (b, d) in bare.iter().zip(&draws) {
+            assert_eq!(
+                (b.first_index, b.first_instance),
+                (d.first_index, d.first_instance)
+            );
+        }
+        let grid_of = |r: std::ops::Range<usize>| {
+            let (a, b) = (r.start, r.end);
+            let tri = &buffer[a..b];
+            // Every grid triangle's vertices lie on the tile's grid (index < 17²).
+            tri.iter().all(|&i| i < 17 * 17)
+        };
+        let m = meshes.without_skirts();
+        for (first, count) in [m.whole, m.coarse, m.sixteenth] {
+            assert!(grid_of(first as usize..(first + count) as usize));
+            // … and the next index after them is a skirt's.
+            assert!(buffer[(first + count) as usize..]
+                .iter()
+                .take(6)
+                .any(|&i| i >= 17 * 17));
+        }
+        assert_eq!(bare[0].index_count / 3, 2 * 16 * 16);
         // A tile whose quads a side are not a multiple of 4 has no sixteenth mesh.
         assert_eq!(TileMeshes::indices(7).1.sixteenth.1, 0);
+        assert_eq!(TileMeshes::indices(7).1.grid[2], 0);
         assert_eq!(
             skirted_tile_triangles(16) - quarter_mesh_saving(16),
             coarse as u64 / 3
