@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use super::curves::{geometric_mean, lower_envelope, ratio_at_equal_error, Curve, Ratio};
+use super::curves::{geometric_mean, lower_envelope, ratio_at_equal_error, Curve, Ratio, Reading};
 use super::report::Summary;
 use crate::app::failure::{runtime, Failure};
 use crate::tools::output::write_text;
@@ -333,6 +333,7 @@ pub(crate) fn suite_md(info: &SuiteInfo, results: &[FlightResult]) -> String {
         md.push_str(&format!(" {n} of {known} |"));
     }
     md.push_str("\n\n");
+    md.push_str(&at_operating_point(results, &bases));
     md.push_str(&left_out(results));
     md.push_str(&targets(results));
     md.push_str("\n## Flights\n\n");
@@ -348,6 +349,93 @@ pub(crate) fn suite_md(info: &SuiteInfo, results: &[FlightResult]) -> String {
         "\nFiles: `ratios.csv` (every cell above, with the error it was read at), `curves.csv` \
          (every configuration's point of every flight).\n",
     );
+    md
+}
+
+/// The τ whose measured error [`at_operating_point`] reads the curves at: what a user runs.
+pub(crate) const OPERATING_TAU_PX: f64 = 1.0;
+
+/// Bounded's triangles over `base`'s at the error bounded τ = [`OPERATING_TAU_PX`] measures
+/// (the least over its tile sizes), both curves read there as the ratio table reads them:
+/// (that error, the ratio — None where the baseline's curve does not reach it). None when the
+/// flight has no such configuration or no `base`.
+pub(crate) fn ratio_at_operating_point(
+    summaries: &[Summary],
+    base: LodMode,
+) -> Option<(f64, Option<f64>)> {
+    if !summaries.iter().any(|s| s.config.mode == base) {
+        return None;
+    }
+    let error = summaries
+        .iter()
+        .filter(|s| s.config.mode == LodMode::Bounded && s.config.tau_px == Some(OPERATING_TAU_PX))
+        .filter(|s| !starved(s))
+        .map(max_px)
+        .filter(|e| e.is_finite() && *e > 0.0)
+        .reduce(f64::min)?;
+    let metric = &METRICS[0];
+    let read = |mode| match curve_of(summaries, mode, metric).at(error) {
+        Reading::Value(v) => Some(v),
+        _ => None,
+    };
+    Some((
+        error,
+        read(LodMode::Bounded).zip(read(base)).map(|(a, b)| a / b),
+    ))
+}
+
+/// `suite.md`'s second table: the ratio at the error a user runs (bounded τ = 1), where the
+/// ratio table's cell — the largest over every error both curves reach — is often read at a
+/// baseline's coarsest setting.
+fn at_operating_point(results: &[FlightResult], bases: &[LodMode]) -> String {
+    let mut rows = String::new();
+    let mut columns: Vec<Vec<f64>> = vec![Vec::new(); bases.len()];
+    for r in results {
+        let cells: Vec<Option<(f64, Option<f64>)>> = bases
+            .iter()
+            .map(|&b| ratio_at_operating_point(&r.summaries, b))
+            .collect();
+        let Some(error) = cells.iter().flatten().map(|c| c.0).next() else {
+            continue;
+        };
+        rows.push_str(&format!("| {} | {} px |", r.key(), px(error)));
+        for (col, c) in columns.iter_mut().zip(&cells) {
+            match c {
+                Some((_, Some(v))) => {
+                    col.push(*v);
+                    rows.push_str(&format!(" {v:.2}× |"));
+                }
+                Some((_, None)) => rows.push_str(" out of range |"),
+                None => rows.push_str(" — |"),
+            }
+        }
+        rows.push('\n');
+    }
+    if rows.is_empty() {
+        return String::new();
+    }
+    let mut md = format!(
+        "## At the error bounded τ = {OPERATING_TAU_PX} px measures\n\n\
+         Triangles, bounded over each baseline, both curves read at the max error bounded \
+         τ = {OPERATING_TAU_PX} px measures on the flight (the least over its tile sizes) — the \
+         error a user runs —, as the table above reads them; *out of range*: the baseline's \
+         curve does not reach that error.\n\n| flight | error |"
+    );
+    for b in bases {
+        md.push_str(&format!(" vs {} |", mode_word(*b)));
+    }
+    md.push_str("\n|---|---|");
+    md.push_str(&"---|".repeat(bases.len()));
+    md.push('\n');
+    md.push_str(&rows);
+    md.push_str("| **geometric mean** | |");
+    for col in &columns {
+        match geometric_mean(col) {
+            Some(g) => md.push_str(&format!(" **{g:.2}×** ({}) |", col.len())),
+            None => md.push_str(" — |"),
+        }
+    }
+    md.push_str("\n\n");
     md
 }
 
@@ -541,6 +629,49 @@ mod tests {
         assert!(
             csv.lines().filter(|l| l.ends_with(",true")).count() == 4,
             "{csv}"
+        );
+    }
+
+    #[test]
+    fn the_operating_point_reads_both_curves_at_bounded_tau_one() {
+        use super::super::report::test_summary;
+        let s = vec![
+            test_summary(LodMode::Bounded, Some(1.0), 1.0, 50_000.0, 10.0),
+            test_summary(LodMode::Bounded, Some(4.0), 3.0, 20_000.0, 10.0),
+            test_summary(LodMode::Clipmap, None, 0.5, 200_000.0, 10.0),
+            test_summary(LodMode::Clipmap, None, 2.0, 40_000.0, 10.0),
+            test_summary(LodMode::Cdlod, None, 2.0, 30_000.0, 10.0),
+            test_summary(LodMode::Cdlod, None, 6.0, 9_000.0, 10.0),
+        ];
+        // The clipmap at 1 px: halfway between 0.5 and 2 px in log error, √(200k · 40k).
+        let (e, r) = ratio_at_operating_point(&s, LodMode::Clipmap).unwrap();
+        assert_eq!(e, 1.0);
+        let want = 50_000.0 / (200_000.0f64 * 40_000.0).sqrt();
+        assert!((r.unwrap() - want).abs() < 1e-12, "{r:?}");
+        // CDLOD's curve starts at 2 px: it does not reach 1 px.
+        assert_eq!(
+            ratio_at_operating_point(&s, LodMode::Cdlod),
+            Some((1.0, None))
+        );
+        assert_eq!(ratio_at_operating_point(&s, LodMode::Distance), None);
+        let flight = FlightResult {
+            dataset: "inn".into(),
+            flight: "cruise".into(),
+            dataset_summary: String::new(),
+            summaries: s,
+        };
+        let md = suite_md(&info(1), &[flight]);
+        assert!(
+            md.contains("## At the error bounded τ = 1 px measures"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| inn-cruise | 1.00 px | 0.56× | out of range |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| **geometric mean** | | **0.56×** (1) | — |"),
+            "{md}"
         );
     }
 }
