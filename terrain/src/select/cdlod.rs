@@ -149,17 +149,28 @@ impl Ctx<'_> {
             eps,
             rho_px: 0.0,
         };
+        // On the ellipsoid (geographic and UTM data) the node's box is where the renderer
+        // draws it (`GeoGrid::node_geometry`), not its grid rectangle: far from the grid's
+        // origin the two part by the meridians' convergence and the Earth's curvature, and a
+        // flat box culled nodes the view shows (holes along the frustum's sides on the
+        // Sierra Nevada and Northern England mosaics) and measured wrong distances.
+        let geo_box = self
+            .params
+            .earth
+            .map(|g| g.node_geometry(lo, hi, min_h, max_h).aabb);
         for v in &self.views {
             let eye = v.camera.position;
-            let aabb = tile_aabb(
-                lo,
-                hi,
-                min_h,
-                max_h,
-                eye,
-                self.params.curvature,
-                self.cell_diagonal(level),
-            );
+            let aabb = geo_box.unwrap_or_else(|| {
+                tile_aabb(
+                    lo,
+                    hi,
+                    min_h,
+                    max_h,
+                    eye,
+                    self.params.curvature,
+                    self.cell_diagonal(level),
+                )
+            });
             s.distance = s.distance.min(box_distance(eye, &aabb));
             let corners = aabb.corners().map(|c| v.to_view.transform_point3(c));
             let f = &v.camera.frustum;
