@@ -187,7 +187,23 @@ impl Ctx<'_> {
 
     #[cfg(test)]
     fn seen_for_test(bake: &ErrorBake, level: u32, tx: u32, ty: u32, eye: DVec3) -> f64 {
-        let params = SelectParams::default();
+        Self::seen_on(bake, None, level, tx, ty, eye)
+    }
+
+    /// The node's distance from `eye` with `earth` as the selection's Earth model.
+    #[cfg(test)]
+    fn seen_on(
+        bake: &ErrorBake,
+        earth: Option<crate::geodesy::GeoGrid>,
+        level: u32,
+        tx: u32,
+        ty: u32,
+        eye: DVec3,
+    ) -> f64 {
+        let params = SelectParams {
+            earth,
+            ..SelectParams::default()
+        };
         let cam = Camera::new(
             eye,
             crate::camera::Attitude::from_degrees(0.0, -90.0, 0.0),
@@ -597,5 +613,47 @@ mod tests {
             }
         }
         assert!(quadrants > 0, "no quadrant drawn for its parent");
+    }
+
+    /// On the ellipsoid a node's distance is to the box the renderer draws it in
+    /// (`GeoGrid::node_geometry`), not to its flat grid rectangle: far from the grid's origin
+    /// the two part (a 1/120° grid at 47° N, a level-3 node beside the origin's).
+    #[test]
+    fn on_the_ellipsoid_a_nodes_box_is_where_it_is_drawn() {
+        let (b, _) = scene();
+        let d = 1.0 / 120.0;
+        let (sx, sy) = crate::load::geographic_spacing_m(47.0, d, d);
+        let geo = crate::heightfield::GeoReference::Geographic {
+            south_lat_deg: 47.0,
+            west_lon_deg: 11.0,
+            dlat_deg: d,
+            dlon_deg: d,
+        };
+        let earth = crate::geodesy::GeoGrid::of(Some(&geo), sx, sy).unwrap();
+        let (level, tx, ty) = (3, 1, 1);
+        let side = (16u64 << level) as f64 * 10.0;
+        let lo = DVec2::new(tx as f64 * side, ty as f64 * side);
+        let valid = DVec2::new(256.0 * 10.0, 256.0 * 10.0);
+        let (lo, hi) = (lo.min(valid), (lo + DVec2::splat(side)).min(valid));
+        let (min_h, max_h) = b.bounds(level, tx, ty);
+        let drawn = earth.node_geometry(lo, hi, min_h, max_h).aabb;
+        // An eye 500 m beside the drawn box's east face, level with it.
+        let eye = DVec3::new(
+            drawn.max.x + 500.0,
+            0.5 * (drawn.min.y + drawn.max.y),
+            drawn.max.z,
+        );
+        let on_earth = Ctx::seen_on(&b, Some(earth), level, tx, ty, eye);
+        assert!(
+            (on_earth - box_distance(eye, &drawn)).abs() < 1e-9,
+            "{on_earth}"
+        );
+        let flat = Ctx::seen_for_test(&b, level, tx, ty, eye);
+        // The flat rectangle's box is elsewhere (0.39 m here, 2.6 km from the origin; tens of
+        // metres across a mosaic).
+        assert!(
+            (flat - on_earth).abs() > 0.1,
+            "flat {flat} vs drawn {on_earth}"
+        );
     }
 }
