@@ -73,6 +73,20 @@ fn normal_ecef(lat: f64, lon: f64) -> DVec3 {
 }
 
 impl GeoGrid {
+    /// A geographic grid of `d`° cells from (`south`°, `west`°), its spacing taken at
+    /// `lat_spacing`°: for the tests.
+    #[cfg(test)]
+    pub(crate) fn test_geographic(south: f64, west: f64, d: f64, lat_spacing: f64) -> Self {
+        let (sx, sy) = crate::load::geographic_spacing_m(lat_spacing, d, d);
+        let geo = GeoReference::Geographic {
+            south_lat_deg: south,
+            west_lon_deg: west,
+            dlat_deg: d,
+            dlon_deg: d,
+        };
+        Self::of(Some(&geo), sx, sy).expect("a geographic grid")
+    }
+
     /// The grid of a geographic or UTM geo-reference with the heightfield's index spacings;
     /// `None` for other projected CRSs or no reference (those stay on the flat plane; the
     /// reason: [`GeoGrid::of_projected`], which also checks the grid's extent).

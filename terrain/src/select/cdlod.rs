@@ -621,15 +621,7 @@ mod tests {
     #[test]
     fn on_the_ellipsoid_a_nodes_box_is_where_it_is_drawn() {
         let (b, _) = scene();
-        let d = 1.0 / 120.0;
-        let (sx, sy) = crate::load::geographic_spacing_m(47.0, d, d);
-        let geo = crate::heightfield::GeoReference::Geographic {
-            south_lat_deg: 47.0,
-            west_lon_deg: 11.0,
-            dlat_deg: d,
-            dlon_deg: d,
-        };
-        let earth = crate::geodesy::GeoGrid::of(Some(&geo), sx, sy).unwrap();
+        let earth = crate::geodesy::GeoGrid::test_geographic(47.0, 11.0, 1.0 / 120.0, 47.0);
         let (level, tx, ty) = (3, 1, 1);
         let side = (16u64 << level) as f64 * 10.0;
         let lo = DVec2::new(tx as f64 * side, ty as f64 * side);

@@ -392,15 +392,7 @@ mod tests {
 
     /// A 1/1200° grid at 47° N, 257 × 257 samples (cells of 32: 8 × 8), on the ellipsoid.
     fn geo_grid() -> GeoGrid {
-        let d = 1.0 / 1200.0;
-        let (sx, sy) = crate::load::geographic_spacing_m(47.05, d, d);
-        let geo = crate::heightfield::GeoReference::Geographic {
-            south_lat_deg: 47.0,
-            west_lon_deg: 11.0,
-            dlat_deg: d,
-            dlon_deg: d,
-        };
-        GeoGrid::of(Some(&geo), sx, sy).unwrap()
+        GeoGrid::test_geographic(47.0, 11.0, 1.0 / 1200.0, 47.05)
     }
 
     #[test]
