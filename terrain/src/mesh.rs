@@ -158,12 +158,31 @@ fn strided_skirted_indices(side: u32, stride: u32) -> Vec<u32> {
             }
         }
     }
+    for edge in 0..4 {
+        out.extend(skirt_edge_indices(side, stride, edge));
+    }
+    out
+}
+
+/// The skirt of one edge of a tile of `side` vertices drawn over every `stride`-th vertex:
+/// two triangles per segment joining the edge's vertices to the skirt vertices below them
+/// (index `side² + k` for perimeter vertex k), in the perimeter walk's order
+/// ([`perimeter_vertex`]: edge 0 south, 1 east, 2 north, 3 west). The four edges in order are
+/// the skirt of [`skirted_tile_indices`] and its strided variants, so one edge's skirt can be
+/// drawn alone (a node whose neighbour across the other edges is drawn at its resolution).
+pub fn skirt_edge_indices(side: u32, stride: u32, edge: u32) -> Vec<u32> {
+    let n = side - 1;
+    assert!(
+        edge < 4 && stride > 0 && n.is_multiple_of(stride),
+        "edge {edge} of stride {stride} on a tile side {side}"
+    );
     let grid = |k: u32| {
         let (i, j) = perimeter_vertex(side, k % (4 * n));
         j * side + i
     };
     let skirt = |k: u32| side * side + k % (4 * n);
-    for k in (0..4 * n).step_by(stride as usize) {
+    let mut out = Vec::with_capacity((n / stride * 6) as usize);
+    for k in (edge * n..(edge + 1) * n).step_by(stride as usize) {
         let (a, b) = (grid(k), grid(k + stride));
         let (sa, sb) = (skirt(k), skirt(k + stride));
         out.extend_from_slice(&[a, sa, sb, a, sb, b]);
@@ -231,6 +250,33 @@ mod skirt_tests {
                     skirted_tile_indices(small),
                     "stride {stride}, side {side}"
                 );
+            }
+        }
+    }
+
+    /// One edge's skirt joins only that edge's grid vertices (and the skirt vertices under
+    /// them) and covers each of its segments once, at every stride.
+    #[test]
+    fn an_edge_skirt_hangs_under_its_own_edge_only() {
+        for (side, stride) in [(5u32, 1u32), (9, 2), (17, 4), (17, 1)] {
+            let n = side - 1;
+            for edge in 0..4 {
+                let idx = skirt_edge_indices(side, stride, edge);
+                assert_eq!(idx.len() as u32, n / stride * 6);
+                for &v in &idx {
+                    let k = if v >= side * side {
+                        v - side * side
+                    } else {
+                        let (i, j) = (v % side, v / side);
+                        (0..4 * n)
+                            .find(|&k| perimeter_vertex(side, k) == (i, j))
+                            .expect("a perimeter vertex")
+                    };
+                    // Perimeter vertex k lies on this edge (its last vertex is the next
+                    // edge's first).
+                    let on = k / n == edge || k == ((edge + 1) * n) % (4 * n);
+                    assert!(on, "side {side} edge {edge}: vertex {v} (perimeter {k})");
+                }
             }
         }
     }

@@ -5,6 +5,7 @@ pub mod bins;
 pub mod cigi_host;
 pub mod drape_fixtures;
 pub mod flat_oracle;
+pub mod hills;
 pub mod imports;
 pub mod ridges;
 
@@ -105,6 +106,16 @@ pub fn render_dataset(
     r.destroy();
     assert_validation_clean(&counters);
     out
+}
+
+/// Renders `cam` 1 + `again` times (the pools and level textures fill over the first frames)
+/// and returns the last frame's statistics.
+pub fn render_settled(r: &mut TerrainRenderer, cam: &Camera, again: u32) -> FrameStats {
+    let mut stats = r.render(cam).expect("render");
+    for _ in 0..again {
+        stats = r.render(cam).expect("render");
+    }
+    stats
 }
 
 pub fn assert_validation_clean(c: &aerie::vk::ValidationCounters) {

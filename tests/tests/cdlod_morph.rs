@@ -21,25 +21,7 @@ const N: usize = 513;
 const SPACING: f64 = 10.0;
 
 fn hills() -> Heightfield {
-    let heights = (0..N)
-        .flat_map(|r| (0..N).map(move |c| (c as f64, r as f64)))
-        .map(|(c, r)| {
-            (250.0
-                + 180.0 * (c * 0.031).sin() * (r * 0.023).cos()
-                + 45.0 * (c * 0.17 + r * 0.11).sin()
-                + 12.0 * (c * 0.53 - r * 0.41).cos()) as f32
-        })
-        .collect();
-    Heightfield {
-        width: N,
-        height: N,
-        spacing_x: SPACING,
-        spacing_y: SPACING,
-        heights,
-        geo: None,
-        voids_filled: 0,
-        spacing_note: "synthetic".into(),
-    }
+    aerie_tests::hills::hills(N, SPACING, SPACING, 12.0, None)
 }
 
 /// A node's triangles, world metres.
@@ -139,10 +121,7 @@ fn the_morphed_surface_is_drawn_and_quadrants_count_as_quarter_meshes() {
     );
     let mut r = TerrainRenderer::new(&desc).expect("renderer");
     r.load_terrain(ds, bake, eye).expect("load");
-    let mut stats = r.render(&cam).expect("render");
-    for _ in 0..3 {
-        stats = r.render(&cam).expect("render");
-    }
+    let stats = render_settled(&mut r, &cam, 3);
     let depth = r.depth();
     let items = r.selection().items.clone();
     let counters = r.validation_counters();

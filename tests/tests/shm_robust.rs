@@ -172,13 +172,17 @@ fn shrinking_file_run() -> (serde_json::Value, u64) {
 }
 
 /// The scenario is timed (a 4 s listener, 40 cuts 50 ms apart). It runs alone (`SERIAL`: not
-/// beside the lavapipe frames of the other tests) and is tried twice: a listener thread that
-/// the machine did not schedule for a second reads too little to judge, and is reported.
+/// beside the lavapipe frames of the other tests) and is tried up to three times: a listener
+/// thread that the machine did not schedule for a second (other test binaries run beside
+/// this one) reads too little to judge, and is reported.
 #[test]
 fn aerie_listen_survives_a_file_shrinking_under_it() {
     let _alone = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let (mut s, mut k) = shrinking_file_run();
-    if u(&s, "shm_shrinks") < 10 {
+    for _ in 0..2 {
+        if u(&s, "shm_shrinks") >= 10 {
+            break;
+        }
         eprintln!("aerie listen read too little to judge (machine busy?), trying again: {s}");
         (s, k) = shrinking_file_run();
     }

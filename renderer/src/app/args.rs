@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::app::failure::{bad_input, Failure};
+use crate::render::tile_instances::SkirtRule;
 use crate::render::uniforms::Look;
 use crate::sim::flight::Waypoints;
 use aerie_terrain::select::LodMode;
@@ -69,6 +70,29 @@ pub struct GpuArgs {
     /// while a certificate says its nodes still meet τ (on), or walk every frame afresh (off).
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub carry_selection: Switch,
+    /// Skirts under the tiles' edges: needed (only where the tile across is drawn at another
+    /// resolution: the default), everywhere (every edge of every tile), none (shows the
+    /// cracks). CDLOD draws none whatever this says.
+    #[arg(long, value_enum, default_value_t = SkirtsArg::Needed)]
+    pub skirts: SkirtsArg,
+}
+
+/// `--skirts`: which tile edges get a skirt.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SkirtsArg {
+    Needed,
+    Everywhere,
+    None,
+}
+
+impl SkirtsArg {
+    pub fn rule(self) -> SkirtRule {
+        match self {
+            SkirtsArg::Needed => SkirtRule::WhereResolutionsDiffer,
+            SkirtsArg::Everywhere => SkirtRule::Everywhere,
+            SkirtsArg::None => SkirtRule::None,
+        }
+    }
 }
 
 /// `--normals`: where the normal maps' texels are computed.

@@ -8,6 +8,7 @@ use crate::app::args::{DrapeArgs, GpuArgs};
 use crate::app::failure::{bad_input, Failure};
 use crate::render::drape_textures::{DrapeInput, SharedDrapeInput};
 use crate::render::frame::{NormalSource, RendererDesc};
+use crate::render::tile_instances::SkirtRule;
 use crate::render::uniforms::Look;
 use crate::vk::DeviceDesc;
 use aerie_config::parse_size;
@@ -80,6 +81,8 @@ pub struct RendererChoice {
     pub horizon_cull: bool,
     /// Bounded, one view on the plane: carry refined ring tiles across frames.
     pub carry: bool,
+    /// Which tile edges get a skirt.
+    pub skirts: SkirtRule,
 }
 
 /// The offscreen renderer for `c`: validation always on in debug builds; `full` gets pools
@@ -102,6 +105,7 @@ pub fn renderer_desc(c: &RendererChoice) -> RendererDesc {
             defaults.pool_capacity
         },
         debug_tiles: c.debug_tiles,
+        skirts: c.skirts,
         look: c.look,
         normal_maps: c.normal_maps,
         normal_source: c.normal_source,
@@ -160,6 +164,7 @@ pub fn setup(g: &GpuArgs) -> Result<Setup, Failure> {
         normal_source: g.normals.source(),
         horizon_cull: g.horizon_cull.on(),
         carry: g.carry_selection.on(),
+        skirts: g.skirts.rule(),
     });
     desc.drape = drape_input(&g.drape)?;
     desc.drape_budget_bytes = drape_budget(&g.drape)?;
@@ -311,6 +316,7 @@ mod tests {
             normal_source: NormalSource::Cpu,
             horizon_cull: true,
             carry: false,
+            skirts: SkirtRule::Everywhere,
         }
     }
 
@@ -330,6 +336,8 @@ mod tests {
         assert!(!d.select.curvature);
         assert!(d.select.horizon_cull);
         assert!(!d.select.carry && SelectParams::default().carry);
+        assert_eq!(d.skirts, SkirtRule::Everywhere);
+        assert_eq!(defaults.skirts, SkirtRule::WhereResolutionsDiffer);
         assert_eq!(d.pool_capacity, defaults.pool_capacity);
         assert_eq!(
             d.select.max_refinement,

@@ -4,6 +4,7 @@ use aerie_terrain::clipmap::ClipmapDesc;
 use aerie_terrain::select::{SelectParams, MAX_REFINEMENT};
 use aerie_terrain::source::SampleRect;
 
+use crate::render::tile_instances::SkirtRule;
 use crate::render::uniforms::Look;
 use crate::vk::DeviceDesc;
 
@@ -64,6 +65,11 @@ pub struct RendererDesc {
     /// neighbour drawn at another level can open (`select::neighbour_eps`). Must be ≥ 1.
     pub skirt_factor: f32,
     pub skirt_min_m: f32,
+    /// Which edges get skirts: by default those not shared with a node drawn at the same
+    /// resolution — the same vertices on both sides — (`select::node_skirts`); `Everywhere`
+    /// as DESIGN.md's "Cracks" first drew them; `None` shows the cracks (tests). CDLOD draws
+    /// none whatever this says.
+    pub skirts: SkirtRule,
     /// Prefetch looks this many frames ahead along the eye's motion.
     pub prefetch_frames: f64,
     /// Imagery and a land-cover raster draped on the terrain (registered when it is loaded).
@@ -118,6 +124,7 @@ impl Default for RendererDesc {
             normal_source: NormalSource::Cpu,
             skirt_factor: 2.0,
             skirt_min_m: 1.0,
+            skirts: SkirtRule::default(),
             prefetch_frames: 20.0,
             drape: None,
             drape_budget_bytes: (crate::render::drape_textures::DEFAULT_DRAPE_MIB * 1048576.0)
@@ -150,6 +157,7 @@ impl RendererDesc {
             prefetch_frames: self.prefetch_frames,
             skirt_factor: self.skirt_factor,
             skirt_min_m: self.skirt_min_m,
+            skirts: self.skirts,
             overlay_bytes: None,
             tile_meshes,
             staging: crate::render::jobs::StagingBudget::new(self.staging_budget, alignment),

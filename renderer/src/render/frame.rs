@@ -529,6 +529,7 @@ impl TerrainRenderer {
             prefetch_frames: self.desc.prefetch_frames,
             skirt_factor: self.desc.skirt_factor,
             skirt_min_m: self.desc.skirt_min_m,
+            skirts: self.desc.skirts,
             overlay_bytes: self.overlay.as_ref().map(Panel::bytes),
             tile_meshes: self.tile_meshes,
             staging: StagingBudget::new(self.ring.staging_budget(), self.ring.staging_alignment()),

@@ -90,11 +90,13 @@ impl RecordParts<'_> {
             staged.uniforms,
             std::mem::size_of::<FrameUniforms>(),
         );
-        copy(
-            fb.indirect.raw,
-            staged.draws,
-            std::mem::size_of_val(&plan.draws),
-        );
+        if !plan.draws.is_empty() {
+            copy(
+                fb.indirect.raw,
+                staged.draws,
+                std::mem::size_of_val(plan.draws.as_slice()),
+            );
+        }
         if let Some(off) = staged.instances {
             let size = plan.instances.len() * std::mem::size_of::<TileInstance>();
             copy(fb.instances.raw, off, size);

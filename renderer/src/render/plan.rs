@@ -38,9 +38,7 @@ use aerie_terrain::camera::Camera;
 use aerie_terrain::clipmap::{place_levels, ClipmapDesc, LevelPlacement};
 use aerie_terrain::pool::{Request, TileKey};
 use aerie_terrain::select::cdlod_morph::Morph;
-use aerie_terrain::select::{
-    select_tiles_multi_ready, DrawItem, LodMode, SelectParams, Selection, View,
-};
+use aerie_terrain::select::{select_tiles_multi_ready, DrawItem, SelectParams, Selection, View};
 use aerie_terrain::source::TerrainSource;
 
 use crate::render::ahead_select::{AheadJob, AheadSelector};
@@ -58,8 +56,8 @@ use crate::render::normal_map::normal_bytes;
 pub use crate::render::pool_atlas::PoolSlots;
 use crate::render::pool_atlas::{PoolAtlas, PoolLimits};
 use crate::render::stats::FrameStats;
-use crate::render::tile_instances::{build_instances, InstanceFrame};
-pub use crate::render::tile_instances::{indirect_draws, slot_placement, TileMeshes, DRAW_GROUPS};
+use crate::render::tile_instances::{build_instances, InstanceFrame, MAX_TERRAIN_DRAWS};
+pub use crate::render::tile_instances::{indirect_draws, slot_placement, SkirtRule, TileMeshes};
 
 /// Largest number of m×m instances one frame may draw (48 bytes each per frame in flight): the
 /// instance buffers grow on demand up to this — `full` on a large dataset draws every visible
@@ -112,6 +110,8 @@ pub struct PlanState {
     pub earth: Option<GeoGrid>,
     /// The drawn nodes' eye-independent ellipsoid fields, kept across frames.
     pub geo_cache: GeoNodeCache,
+    /// The grid's valid samples east and north.
+    pub valid_samples: [u32; 2],
 }
 
 /// The selection shared by a set of channels, kept while the set and the level placement stay
@@ -138,6 +138,7 @@ impl PlanState {
         // plane: decided here, once, for every planner (renderer, `fly --no-draw`, benchmarks)
         // from the source's grid.
         let earth = GeoGrid::of(grid.geo.as_ref(), grid.spacing_x, grid.spacing_y);
+        let valid_samples = [grid.valid_width, grid.valid_height];
         let feed = Feed::new(clipmap.clone(), spacing, Gatherer::new(source));
         let pools = (1..=pool_capacity.len() as u32)
             .map(|r| PoolSlots::new((clipmap.tile_quads << r) + 1, pool_capacity[r as usize - 1]))
@@ -157,6 +158,7 @@ impl PlanState {
             shared_selections: 0,
             earth,
             geo_cache: GeoNodeCache::default(),
+            valid_samples,
         }
     }
 
@@ -229,6 +231,8 @@ pub struct FrameInputs<'a> {
     pub prefetch_frames: f64,
     pub skirt_factor: f32,
     pub skirt_min_m: f32,
+    /// Which edges get skirts (`RendererDesc::skirts`); CDLOD draws none either way.
+    pub skirts: SkirtRule,
     /// Bytes of the overlay panel staged with the frame (None: no overlay set).
     pub overlay_bytes: Option<u64>,
     /// Where the tile's whole and coarse meshes lie in the shared index buffer.
@@ -280,9 +284,9 @@ pub struct FramePlan {
     pub draw_list: Vec<(DrawItem, u32)>,
     /// Instance records, grouped by refinement (r = 0 first), whole nodes before quadrants.
     pub instances: Vec<TileInstance>,
-    /// One indexed indirect command per group ([`DRAW_GROUPS`]).
-    pub draws: [DrawIndexedIndirect; DRAW_GROUPS],
-    /// Commands the multi-draw issues: every group, or none when nothing is drawn.
+    /// The indirect commands: per group its grids, the skirts of each set of edges.
+    pub draws: Vec<DrawIndexedIndirect>,
+    /// Commands the multi-draw issues: `draws`' length.
     pub draw_count: u32,
     /// Whether every strip (spilled or not) is staged with its normal texels after its heights.
     pub normal_maps: bool,
@@ -296,7 +300,7 @@ pub struct FramePlan {
 pub fn fixed_reserve(selected_nodes: usize, overlay_bytes: Option<u64>) -> u64 {
     let overlay = overlay_bytes.map_or(0, |b| b + OVERLAY_SLACK_BYTES);
     FIXED_SLACK_BYTES
-        + (std::mem::size_of::<DrawIndexedIndirect>() * DRAW_GROUPS) as u64
+        + (std::mem::size_of::<DrawIndexedIndirect>() * MAX_TERRAIN_DRAWS) as u64
         + (selected_nodes * std::mem::size_of::<TileInstance>()) as u64
         + overlay
 }
@@ -425,6 +429,8 @@ pub fn plan_frame(
             eye: inputs.camera.position,
             skirt_factor: inputs.skirt_factor,
             skirt_min_m: inputs.skirt_min_m,
+            skirts: inputs.skirts.for_mode(inputs.select.mode),
+            valid_samples: state.valid_samples,
             pools: &state.pools,
         },
         &plan.draw_list,
@@ -432,27 +438,21 @@ pub fn plan_frame(
     );
     // Quadrants drawn for their parents (bounded's and CDLOD's) draw the coarse mesh: the
     // parent's quarter mesh they show.
-    // CDLOD draws no skirts (Strugar 2009: the morph closes its seams); every other mode's
-    // skirts hide the cracks between neighbours at different levels.
-    let meshes = match inputs.select.mode {
-        LodMode::Cdlod => inputs.tile_meshes.without_skirts(),
-        _ => inputs.tile_meshes,
-    };
-    let (draws, triangles) = indirect_draws(&groups, meshes);
+    let (draws, triangles) = indirect_draws(&groups, inputs.tile_meshes);
     let total = instances.len();
     if total > MAX_INSTANCES {
         return Err(PlanError::Other(format!(
             "selection of {total} tiles exceeds the largest instance buffer ({MAX_INSTANCES})"
         )));
     }
-    plan.draw_count = if total > 0 { DRAW_GROUPS as u32 } else { 0 };
+    plan.draw_count = draws.len() as u32;
     plan.stats.instances = total as u32;
     plan.stats.triangles = triangles;
     plan.stats.draw_calls = (plan.draw_count > 0) as u32;
 
     // The fixed pushes, in the order the renderer stages them.
     budget.take(std::mem::size_of::<FrameUniforms>() as u64)?;
-    budget.take(std::mem::size_of_val(&draws) as u64)?;
+    budget.take(std::mem::size_of_val(draws.as_slice()) as u64)?;
     if total > 0 {
         budget.take((total * std::mem::size_of::<TileInstance>()) as u64)?;
     }

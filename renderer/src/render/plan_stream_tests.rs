@@ -372,6 +372,7 @@ fn frame(
         prefetch_frames: prefetch,
         skirt_factor: 2.0,
         skirt_min_m: 1.0,
+        skirts: SkirtRule::WhereResolutionsDiffer,
         overlay_bytes: None,
         tile_meshes: TileMeshes::indices(17).1,
         staging: StagingBudget::new(0, 64),

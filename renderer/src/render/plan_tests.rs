@@ -16,17 +16,19 @@ use aerie_terrain::Heightfield;
 use super::*;
 use crate::render::jobs::{split_into_submissions, ImageUpload, StagingBudget};
 use crate::render::stats::RESOLUTIONS;
+use crate::render::tile_instances::{EDGE_SETS, INSTANCE_KEYS};
 
 const N: usize = 257;
 const Q: u32 = 16;
 /// Indices of one skirted 17×17 tile (any multiple of 3 does for the arithmetic), and of its
 /// coarse and sixteenth meshes after it.
-const INDICES: (u32, u32) = (0, 1734);
+const INDICES: (u32, u32) = (0, 1728);
 const MESHES: TileMeshes = TileMeshes {
     whole: INDICES,
-    coarse: (1734, 528),
-    sixteenth: (2262, 192),
+    coarse: (1824, 480),
+    sixteenth: (2352, 144),
     grid: [1536, 384, 96],
+    edge: [48, 24, 12],
 };
 const ALIGN: u64 = 64;
 
@@ -94,6 +96,7 @@ fn inputs<'a>(
         prefetch_frames: 0.0,
         skirt_factor: 2.0,
         skirt_min_m: 1.0,
+        skirts: SkirtRule::WhereResolutionsDiffer,
         overlay_bytes: None,
         tile_meshes: MESHES,
         staging: StagingBudget::new(capacity, ALIGN),
@@ -125,12 +128,13 @@ fn selection(items: Vec<DrawItem>) -> Selection {
     }
 }
 
-/// Bytes of the fixed pushes staged after the uploads for `instances` records, aligned.
-fn fixed_pushes(used: u64, instances: usize) -> u64 {
+/// Bytes of the fixed pushes staged after the uploads for `instances` records and `draws`
+/// commands, aligned.
+fn fixed_pushes(used: u64, instances: usize, draws: usize) -> u64 {
     let mut b = StagingBudget::new(u64::MAX / 2, ALIGN);
     b.take(used).unwrap();
     b.take(std::mem::size_of::<FrameUniforms>() as u64).unwrap();
-    b.take((std::mem::size_of::<DrawIndexedIndirect>() * DRAW_GROUPS) as u64)
+    b.take((std::mem::size_of::<DrawIndexedIndirect>() * draws) as u64)
         .unwrap();
     if instances > 0 {
         b.take((instances * std::mem::size_of::<TileInstance>()) as u64)
@@ -219,7 +223,7 @@ fn strips_come_first_and_pool_misses_get_what_is_left() {
     );
     assert_eq!(
         plan.staged_bytes,
-        b.used() + fixed_pushes(b.used(), instances)
+        b.used() + fixed_pushes(b.used(), instances, plan.draws.len())
     );
     assert_eq!(plan.stats.bytes_uploaded, plan.staged_bytes);
     assert!(plan.staged_bytes <= capacity);
@@ -412,35 +416,30 @@ fn instances_are_grouped_by_refinement_and_commands_follow_each_other() {
     items.extend(refined_tile(3, 1, 1, 2));
     items.push(DrawItem::whole(2, 1, 0, 0.5, 0.5));
     items.extend(refined_tile(2, 3, 3, 1));
-    let plan = plan_frame(
-        &mut st,
-        &inputs(0, &cam, &select, 1 << 20),
-        &selection(items),
-        vec![],
-    );
+    let everywhere = FrameInputs {
+        skirts: SkirtRule::Everywhere,
+        ..inputs(0, &cam, &select, 1 << 20)
+    };
+    let plan = plan_frame(&mut st, &everywhere, &selection(items.clone()), vec![]);
     let plan = plan.unwrap();
     let r: Vec<u32> = plan.instances.iter().map(|i| i.refinement).collect();
     let mut sorted = r.clone();
     sorted.sort();
     assert_eq!(r, sorted, "grouped by refinement");
     assert_eq!(r.len(), 1 + 16 + 1 + 4);
-    let mut counts = [0u32; DRAW_GROUPS];
-    counts[..3].copy_from_slice(&[2, 4, 16]);
-    let mut first = 0;
-    for (k, d) in plan.draws.iter().enumerate() {
-        assert_eq!(
-            (d.instance_count, d.first_instance),
-            (counts[k], first),
-            "command {k}"
-        );
-        let mesh = match k / RESOLUTIONS {
-            0 => INDICES,
-            1 => MESHES.coarse,
-            _ => MESHES.sixteenth,
-        };
-        assert_eq!((d.first_index, d.index_count), mesh);
-        first += counts[k];
+    // Skirts on every edge: per group its grid, then the four edges' skirts in one range
+    // after it, for the same instances.
+    let (grid, edge) = (MESHES.grid[0], MESHES.edge[0]);
+    let mut want = Vec::new();
+    for (first, n) in [(0, 2), (2, 4), (6, 16)] {
+        want.push((0, grid, first, n));
+        want.push((grid, 4 * edge, first, n));
     }
+    assert_eq!(
+        crate::render::tile_instances::draw_ranges(&plan.draws),
+        want
+    );
+    assert_eq!(INDICES.1, grid + 4 * edge);
     // Selection order inside a group: the two unrefined tiles, west first.
     assert_eq!(plan.instances[0].origin_sample, [0, 0]);
     assert_eq!(plan.instances[1].origin_sample, [(Q << 2) as i32, 0]);
@@ -449,10 +448,36 @@ fn instances_are_grouped_by_refinement_and_commands_follow_each_other() {
     assert_eq!(i.origin_rel, [(640.0 - 1280.0) as f32, -1280.0]);
     assert_eq!(plan.stats.instances, 22);
     assert_eq!(plan.stats.triangles, 22 * (INDICES.1 as u64 / 3));
+    assert_eq!((plan.draw_count, plan.stats.draw_calls), (6, 1));
+    // Skirts where resolutions differ: the same grids, fewer skirts (the two unrefined
+    // tiles side by side at one level share an edge), and the commands follow each other.
+    let needed = plan_frame(
+        &mut st,
+        &inputs(1, &cam, &select, 1 << 20),
+        &selection(items),
+        vec![],
+    )
+    .unwrap();
+    assert!(needed.stats.triangles < plan.stats.triangles);
     assert_eq!(
-        (plan.draw_count, plan.stats.draw_calls),
-        (DRAW_GROUPS as u32, 1)
+        needed.stats.triangles,
+        needed
+            .draws
+            .iter()
+            .map(|d| d.instance_count as u64 * d.index_count as u64 / 3)
+            .sum::<u64>()
     );
+    let grids: u32 = needed
+        .draws
+        .iter()
+        .filter(|d| d.first_index == 0 && d.index_count == grid)
+        .map(|d| d.instance_count)
+        .sum();
+    assert_eq!(grids, 22, "every node's grid drawn once");
+    assert!(needed
+        .draws
+        .iter()
+        .all(|d| d.first_instance + d.instance_count <= 22));
     // Nothing selected: no commands issued, no instances staged.
     let empty = plan_frame(
         &mut st,
@@ -462,13 +487,16 @@ fn instances_are_grouped_by_refinement_and_commands_follow_each_other() {
     );
     let empty = empty.unwrap();
     assert_eq!((empty.draw_count, empty.stats.draw_calls), (0, 0));
-    assert_eq!(empty.staged_bytes, fixed_pushes(0, 0));
+    assert_eq!(empty.staged_bytes, fixed_pushes(0, 0, 0));
     // A tile without indices draws nothing, whatever the instances.
-    let mut sizes = [0u32; DRAW_GROUPS];
-    (sizes[0], sizes[1], sizes[RESOLUTIONS]) = (3, 1, 2);
+    let mut sizes = [0u32; INSTANCE_KEYS];
+    (
+        sizes[0],
+        sizes[EDGE_SETS + 15],
+        sizes[RESOLUTIONS * EDGE_SETS],
+    ) = (3, 1, 2);
     let (draws, tris) = indirect_draws(&sizes, TileMeshes::default());
-    assert!(draws.iter().all(|d| d.instance_count == 0) && tris == 0);
-    assert_eq!(draws[1].first_instance, 3);
+    assert!(draws.is_empty() && tris == 0);
 }
 
 /// A real selection that refines: low over the rough terrain, looking along +x. `cap` None:

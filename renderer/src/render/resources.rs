@@ -17,7 +17,7 @@ use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, TileInstance};
 use crate::render::normal_pass::NormalTargets;
 use crate::render::plan::{PlanState, MAX_INSTANCES};
 use crate::render::pool_atlas::PoolLimits;
-use crate::render::tile_instances::DRAW_GROUPS;
+use crate::render::tile_instances::MAX_TERRAIN_DRAWS;
 use crate::vk::frame_context::FrameContext;
 use crate::vk::image::{Image2d, ImageDesc};
 use crate::vk::{Buffer, Device, VkError, FRAMES_IN_FLIGHT};
@@ -68,7 +68,7 @@ impl FrameBuffers {
         let indirect = match Buffer::new(
             d,
             "indirect draws",
-            (std::mem::size_of::<DrawIndexedIndirect>() * DRAW_GROUPS) as u64,
+            (std::mem::size_of::<DrawIndexedIndirect>() * MAX_TERRAIN_DRAWS) as u64,
             vk::BufferUsageFlags::INDIRECT_BUFFER | dst,
             MemoryLocation::GpuOnly,
         ) {

@@ -4,13 +4,15 @@
 //! grandparent's) and one indexed indirect command per group: whole nodes with the tile's
 //! mesh, quadrants with its coarse mesh (the parent's quarter mesh:
 //! `mesh::skirted_coarse_tile_indices`), sixteenths with every fourth vertex
-//! (`mesh::skirted_sixteenth_tile_indices`).
+//! (`mesh::skirted_sixteenth_tile_indices`). Within a group the records are sorted by the
+//! edges that need a skirt (`select::node_skirts`): the group's grid is one command, and
+//! each set of edges one more (two for opposite edges) drawing only those edges' skirts.
 
 use bytemuck::Zeroable;
 use glam::DVec3;
 
 use aerie_terrain::geodesy::GeoGrid;
-use aerie_terrain::select::{neighbour_eps, DrawItem};
+use aerie_terrain::select::{node_skirts, DrawItem, LodMode, ALL_EDGES};
 
 use crate::render::geo_instances::{GeoEye, GeoNodeCache};
 use crate::render::gpu::{DrawIndexedIndirect, TileInstance};
@@ -22,11 +24,56 @@ use crate::render::stats::RESOLUTIONS;
 /// sixteenths drawn at their grandparent's.
 pub const DRAW_GROUPS: usize = 3 * RESOLUTIONS;
 
+/// The sets of a node's edges that may need a skirt (`select::ALL_EDGES`' bits).
+pub const EDGE_SETS: usize = 16;
+
+/// The instance records' sort keys: a draw group's, then the node's skirted edges.
+pub const INSTANCE_KEYS: usize = DRAW_GROUPS * EDGE_SETS;
+
+/// The most commands a frame's terrain draw issues: per group its grid, and a command for
+/// each of the 15 non-empty edge sets, two for each of the 2 sets of opposite edges.
+pub const MAX_TERRAIN_DRAWS: usize = DRAW_GROUPS * (1 + 15 + 2);
+
+/// Which edges of the drawn nodes get a skirt.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SkirtRule {
+    /// None: CDLOD (Strugar 2009), whose morph closes the seams between its levels.
+    None,
+    /// Every edge of every node.
+    Everywhere,
+    /// The edges not shared with a node drawn at the same resolution
+    /// (`select::node_skirts`); every edge of a node that reaches past the grid's last
+    /// sample (its vertices there fold onto the last sample, each node by its own step) and
+    /// every node of a projected grid (its nodes' polynomials meet within their fit error,
+    /// not exactly).
+    #[default]
+    WhereResolutionsDiffer,
+}
+
+impl SkirtRule {
+    /// The rule a frame drawn in `mode` follows: CDLOD draws no skirts (Strugar 2009: the
+    /// morph closes its seams); every other mode's hide the cracks between neighbours drawn
+    /// at different resolutions.
+    pub fn for_mode(self, mode: LodMode) -> SkirtRule {
+        match mode {
+            LodMode::Cdlod => SkirtRule::None,
+            _ => self,
+        }
+    }
+}
+
+/// Skirt segments of one edge each mesh's skirt list repeats after its four edges, so that
+/// every run of edges around the tile — south, east, north, west, south, east — is one range
+/// of indices.
+const REPEATED_EDGES: u32 = 2;
+
 /// Where a tile's three meshes lie in the shared index buffer, (first index, index count)
 /// each: the whole tile, its coarse mesh for quadrants drawn at their parent's resolution, and
 /// its sixteenth mesh for sixteenths drawn at their grandparent's (empty when the tile's
 /// quads a side are not a multiple of 4). One vertex layout serves all three
-/// (`mesh::skirted_vertex_count`).
+/// (`mesh::skirted_vertex_count`). Each range is the mesh's grid, then its four edges'
+/// skirts (`mesh::skirt_edge_indices`, south, east, north, west), followed in the buffer by
+/// the south and east skirts again ([`REPEATED_EDGES`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct TileMeshes {
     pub whole: (u32, u32),
@@ -35,6 +82,8 @@ pub struct TileMeshes {
     /// Each mesh's grid indices (whole, coarse, sixteenth): its first indices, before its
     /// skirt's.
     pub grid: [u32; 3],
+    /// Each mesh's indices of one edge's skirt.
+    pub edge: [u32; 3],
 }
 
 impl TileMeshes {
@@ -42,21 +91,32 @@ impl TileMeshes {
     /// the sixteenth one — and where each lies in it.
     pub fn indices(side: u32) -> (Vec<u32>, TileMeshes) {
         use aerie_terrain::mesh::{
-            skirted_coarse_tile_indices, skirted_sixteenth_tile_indices, skirted_tile_indices,
+            skirt_edge_indices, skirted_coarse_tile_indices, skirted_sixteenth_tile_indices,
+            skirted_tile_indices,
         };
-        let mut v = skirted_tile_indices(side);
-        let whole = (0, v.len() as u32);
-        v.extend(skirted_coarse_tile_indices(side));
-        let coarse = (whole.1, v.len() as u32 - whole.1);
         let sixteenths = side >= 5 && (side - 1).is_multiple_of(4);
-        if sixteenths {
-            v.extend(skirted_sixteenth_tile_indices(side));
-        }
-        let end = coarse.0 + coarse.1;
-        let sixteenth = (end, v.len() as u32 - end);
-        // A strided mesh lists its grid's 6 indices a cell, then its skirt's.
-        let cells = |stride: u32| ((side - 1) / stride).pow(2) * 6;
+        let mut v = Vec::new();
+        let mut mesh = |stride: u32, skirted: Vec<u32>| {
+            let first = v.len() as u32;
+            let count = skirted.len() as u32;
+            v.extend(skirted);
+            for edge in 0..REPEATED_EDGES {
+                v.extend(skirt_edge_indices(side, stride, edge));
+            }
+            (first, count)
+        };
+        let whole = mesh(1, skirted_tile_indices(side));
+        let coarse = mesh(2, skirted_coarse_tile_indices(side));
+        let sixteenth = if sixteenths {
+            mesh(4, skirted_sixteenth_tile_indices(side))
+        } else {
+            (v.len() as u32, 0)
+        };
+        // A strided mesh lists its grid's 6 indices a cell, then each edge's 6 a segment.
+        let n = side - 1;
+        let cells = |stride: u32| (n / stride).pow(2) * 6;
         let grid = [cells(1), cells(2), if sixteenths { cells(4) } else { 0 }];
+        let edge = [n * 6, n / 2 * 6, if sixteenths { n / 4 * 6 } else { 0 }];
         (
             v,
             TileMeshes {
@@ -64,36 +124,82 @@ impl TileMeshes {
                 coarse,
                 sixteenth,
                 grid,
+                edge,
             },
         )
     }
 
-    /// The same meshes without their skirts (each mesh's grid indices alone): CDLOD draws so,
-    /// as Strugar's paper does — its morph closes the seams between levels.
-    pub fn without_skirts(self) -> Self {
-        let [w, c, s] = self.grid;
-        Self {
-            whole: (self.whole.0, w),
-            coarse: (self.coarse.0, c),
-            sixteenth: (self.sixteenth.0, s),
-            ..self
-        }
+    /// Group `g`'s mesh ([`DRAW_GROUPS`]): its first index, its grid's indices and one
+    /// edge's skirt's.
+    fn of_group(&self, g: usize) -> (u32, u32, u32) {
+        let k = (g / RESOLUTIONS).min(2);
+        let first = [self.whole.0, self.coarse.0, self.sixteenth.0][k];
+        (first, self.grid[k], self.edge[k])
     }
+}
 
-    /// Group `g`'s mesh ([`DRAW_GROUPS`]).
-    fn of_group(&self, g: usize) -> (u32, u32) {
-        match g / RESOLUTIONS {
-            0 => self.whole,
-            1 => self.coarse,
-            _ => self.sixteenth,
+/// The runs of consecutive edges (around the tile, south → east → north → west → south) that
+/// make up an edge set, (first edge, edges) each: one run, or two for opposite edges.
+fn edge_runs(set: u8) -> ([(u32, u32); 2], usize) {
+    if set & ALL_EDGES == ALL_EDGES {
+        return ([(0, 4), (0, 0)], 1);
+    }
+    let has = |e: u32| set & (1 << (e % 4)) != 0;
+    let mut runs = [(0, 0); 2];
+    let mut n = 0;
+    for e in 0..4 {
+        if has(e) && !has(e + 3) {
+            let mut len = 1;
+            while has(e + len) {
+                len += 1;
+            }
+            runs[n] = (e, len);
+            n += 1;
         }
     }
+    (runs, n)
 }
 
 /// A draw item's group: its refinement, offset by [`RESOLUTIONS`] for each level it is drawn
 /// coarser than its own (a quadrant, a sixteenth).
 fn group_of(item: &DrawItem) -> usize {
     item.refinement as usize + item.morph.levels_up() as usize * RESOLUTIONS
+}
+
+/// The edges of each drawn node that get a skirt under `f.skirts` (see [`SkirtRule`]);
+/// `reach` the nodes' neighbour ε, in the list's order.
+fn skirted_edges(f: &InstanceFrame, draw_list: &[(DrawItem, u32)], reach: &[f32]) -> Vec<u8> {
+    let everywhere = || vec![ALL_EDGES; draw_list.len()];
+    match f.skirts {
+        SkirtRule::None => vec![0; draw_list.len()],
+        SkirtRule::Everywhere => everywhere(),
+        SkirtRule::WhereResolutionsDiffer if f.earth.is_some_and(|g| g.projected.is_some()) => {
+            everywhere()
+        }
+        SkirtRule::WhereResolutionsDiffer => {
+            let q = f.tile_quads as u64;
+            let (nodes, resolution): (Vec<_>, Vec<_>) = draw_list
+                .iter()
+                .zip(reach)
+                .map(|((i, _), &e)| {
+                    (
+                        (i.node_level, i.node_tx, i.node_ty, e),
+                        i.node_level + i.morph.levels_up(),
+                    )
+                })
+                .unzip();
+            let mut edges = node_skirts(&nodes, &resolution).edges;
+            for ((item, _), e) in draw_list.iter().zip(&mut edges) {
+                let end = |t: u32| (t as u64 + 1) * (q << item.node_level);
+                if end(item.node_tx) >= f.valid_samples[0] as u64
+                    || end(item.node_ty) >= f.valid_samples[1] as u64
+                {
+                    *e = ALL_EDGES;
+                }
+            }
+            edges
+        }
+    }
 }
 
 /// What the instance records need from the frame: the clipmap's tile size, the grid spacing,
@@ -105,6 +211,10 @@ pub struct InstanceFrame<'a> {
     pub eye: DVec3,
     pub skirt_factor: f32,
     pub skirt_min_m: f32,
+    /// Which edges get a skirt.
+    pub skirts: SkirtRule,
+    /// The grid's samples east and north (a node reaching past the last keeps every skirt).
+    pub valid_samples: [u32; 2],
     /// The pools r = 1.. (index r − 1): where each slot lies in its image.
     pub pools: &'a [PoolSlots],
 }
@@ -130,40 +240,49 @@ pub fn slot_placement(item: &DrawItem, tile_quads: u32) -> (u32, u32, u32) {
 }
 
 /// Per-instance data grouped as [`DRAW_GROUPS`] says (unrefined whole nodes first, then r =
-/// 1.., then the quadrants likewise, then the sixteenths): node origin relative to the eye (f64 → f32), sample
+/// 1.., then the quadrants likewise, then the sixteenths), each group sorted by the edges its
+/// nodes skirt ([`INSTANCE_KEYS`]): node origin relative to the eye (f64 → f32), sample
 /// origin, vertex step, level, pool slot and the node's place in it, skirt depth. Returns the
-/// concatenated records and each group's size.
+/// concatenated records and each key's count.
 pub fn build_instances(
     f: &InstanceFrame,
     draw_list: &[(DrawItem, u32)],
     geo_cache: &mut GeoNodeCache,
-) -> (Vec<TileInstance>, [u32; DRAW_GROUPS]) {
+) -> (Vec<TileInstance>, [u32; INSTANCE_KEYS]) {
     let q = f.tile_quads;
     let eye = f.eye;
-    let nodes: Vec<(u32, u32, u32, f32)> = draw_list
-        .iter()
-        .map(|(i, _)| (i.node_level, i.node_tx, i.node_ty, i.eps_m))
-        .collect();
-    let reach = neighbour_eps(&nodes);
+    let (reach, edges) = if f.skirts == SkirtRule::None {
+        (vec![0.0; draw_list.len()], vec![0; draw_list.len()])
+    } else {
+        let nodes: Vec<(u32, u32, u32, f32)> = draw_list
+            .iter()
+            .map(|(i, _)| (i.node_level, i.node_tx, i.node_ty, i.eps_m))
+            .collect();
+        let levels: Vec<u32> = nodes.iter().map(|n| n.0).collect();
+        let reach = node_skirts(&nodes, &levels).reach;
+        let edges = skirted_edges(f, draw_list, &reach);
+        (reach, edges)
+    };
+    let key_of = |k: usize| group_of(&draw_list[k].0) * EDGE_SETS + edges[k] as usize;
     let geo = f.earth.map(|g| {
         geo_cache.begin(g);
         GeoEye::new(g, eye)
     });
     // The records are written once, in their final place: a counting sort of the draw list by
-    // refinement (stable, so each group keeps the list's order) into one vector of the exact
-    // size (records are ~450 bytes: growing and concatenating per-group vectors copied each
+    // key (stable, so each key keeps the list's order) into one vector of the exact size
+    // (records are ~450 bytes: growing and concatenating per-group vectors copied each
     // several times).
-    let mut sizes = [0u32; DRAW_GROUPS];
-    for (item, _) in draw_list {
-        sizes[group_of(item)] += 1;
+    let mut sizes = [0u32; INSTANCE_KEYS];
+    for k in 0..draw_list.len() {
+        sizes[key_of(k)] += 1;
     }
-    let mut next = [0usize; DRAW_GROUPS];
-    for g in 1..DRAW_GROUPS {
+    let mut next = [0usize; INSTANCE_KEYS];
+    for g in 1..INSTANCE_KEYS {
         next[g] = next[g - 1] + sizes[g - 1] as usize;
     }
     let mut order = vec![0u32; draw_list.len()];
-    for (k, (item, _)) in draw_list.iter().enumerate() {
-        let at = &mut next[group_of(item)];
+    for k in 0..draw_list.len() {
+        let at = &mut next[key_of(k)];
         order[*at] = k as u32;
         *at += 1;
     }
@@ -229,34 +348,81 @@ pub fn quarter_mesh_saving(q: u32) -> u64 {
     skirted_tile_triangles(q) - skirted_tile_triangles(q / 2)
 }
 
-/// One indexed indirect command per group ([`DRAW_GROUPS`]), each starting where the previous
-/// ended, and the triangles they draw: whole nodes with the tile's mesh, quadrants with its
-/// coarse one, sixteenths with the stride-4 one. A mesh without indices draws nothing.
+/// The indexed indirect commands of the instances counted per key ([`INSTANCE_KEYS`],
+/// as [`build_instances`] lays them out), and the triangles they draw. Per group: one
+/// command for every instance's grid — whole nodes the tile's mesh, quadrants its coarse one,
+/// sixteenths the stride-4 one —, then per set of skirted edges one command drawing those
+/// edges' skirts (two for opposite edges) for the instances of that set. Only commands that
+/// draw something are listed; a mesh without indices draws nothing.
 pub fn indirect_draws(
-    group_sizes: &[u32; DRAW_GROUPS],
+    key_sizes: &[u32; INSTANCE_KEYS],
     meshes: TileMeshes,
-) -> ([DrawIndexedIndirect; DRAW_GROUPS], u64) {
-    let mut draws = [DrawIndexedIndirect::default(); DRAW_GROUPS];
-    let mut first_instance = 0u32;
+) -> (Vec<DrawIndexedIndirect>, u64) {
+    let mut draws = Vec::new();
     let mut triangles = 0u64;
-    for (g, (draw, &n)) in draws.iter_mut().zip(group_sizes).enumerate() {
-        let (first_index, index_count) = meshes.of_group(g);
-        *draw = DrawIndexedIndirect {
-            index_count,
-            instance_count: if index_count == 0 { 0 } else { n },
-            first_index,
-            vertex_offset: 0,
-            first_instance,
-        };
-        first_instance += n;
-        triangles += n as u64 * (index_count as u64 / 3);
+    let mut push = |first_index: u32, index_count: u32, first_instance: u32, n: u32| {
+        if index_count > 0 && n > 0 {
+            draws.push(DrawIndexedIndirect {
+                index_count,
+                instance_count: n,
+                first_index,
+                vertex_offset: 0,
+                first_instance,
+            });
+            triangles += n as u64 * (index_count as u64 / 3);
+        }
+    };
+    let mut first_instance = 0u32;
+    for (g, sets) in key_sizes.chunks_exact(EDGE_SETS).enumerate() {
+        let (first, grid, edge) = meshes.of_group(g);
+        push(first, grid, first_instance, sets.iter().sum());
+        for (set, &n) in sets.iter().enumerate() {
+            let (runs, count) = edge_runs(set as u8);
+            for &(from, len) in &runs[..count] {
+                push(first + grid + from * edge, len * edge, first_instance, n);
+            }
+            first_instance += n;
+        }
     }
+    debug_assert!(draws.len() <= MAX_TERRAIN_DRAWS);
     (draws, triangles)
+}
+
+/// Each command's (first index, index count, first instance, instance count): what the
+/// tests compare.
+#[cfg(test)]
+pub(crate) fn draw_ranges(draws: &[DrawIndexedIndirect]) -> Vec<(u32, u32, u32, u32)> {
+    draws
+        .iter()
+        .map(|d| {
+            (
+                d.first_index,
+                d.index_count,
+                d.first_instance,
+                d.instance_count,
+            )
+        })
+        .collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A frame of tiles of 17 at 10 m, the eye at the origin, no minimum skirt.
+    fn frame(skirts: SkirtRule, valid_samples: [u32; 2], pools: &[PoolSlots]) -> InstanceFrame<'_> {
+        InstanceFrame {
+            tile_quads: 16,
+            spacing: [10.0, 10.0],
+            earth: None,
+            eye: DVec3::ZERO,
+            skirt_factor: 2.0,
+            skirt_min_m: 0.0,
+            skirts,
+            valid_samples,
+            pools,
+        }
+    }
 
     /// The records come grouped by refinement, unrefined first, whole nodes before the
     /// quadrants drawn at their parent's resolution and those before the sixteenths drawn at
@@ -286,22 +452,19 @@ mod tests {
         .map(|&(r, k, q)| (refined(r, k, q), k))
         .collect();
         let pools: Vec<PoolSlots> = (1..=6).map(|r| PoolSlots::new((16 << r) + 1, 16)).collect();
-        let f = InstanceFrame {
-            tile_quads: 16,
-            spacing: [10.0, 10.0],
-            earth: None,
-            eye: DVec3::ZERO,
-            skirt_factor: 2.0,
-            skirt_min_m: 0.0,
-            pools: &pools,
-        };
+        let f = frame(SkirtRule::Everywhere, [1 << 20, 1 << 20], &pools);
         let (instances, sizes) = build_instances(&f, &list, &mut GeoNodeCache::default());
         let mut want = [0u32; DRAW_GROUPS];
         want[..3].copy_from_slice(&[2, 1, 2]);
         want[RESOLUTIONS] = 2;
         want[RESOLUTIONS + 2] = 1;
         want[2 * RESOLUTIONS] = 1;
-        assert_eq!(sizes, want);
+        let per_group: Vec<u32> = sizes.chunks(EDGE_SETS).map(|c| c.iter().sum()).collect();
+        assert_eq!(per_group, want);
+        // Skirts everywhere: every node in its group's set of all four edges.
+        for (key, &n) in sizes.iter().enumerate() {
+            assert!(n == 0 || key % EDGE_SETS == ALL_EDGES as usize, "key {key}");
+        }
         let slots: Vec<u32> = instances.iter().map(|i| i.slot).collect();
         assert_eq!(slots, [2, 6, 3, 0, 5, 1, 7, 4, 8]);
         // Packed 2 × 2 slots to a layer, a refined node names its slot's layer and its
@@ -342,9 +505,9 @@ mod tests {
         );
     }
 
-    /// Whole nodes draw the tile's range, quadrants the coarse one, sixteenths the stride-4
-    /// one, each group's instances after the previous group's; the triangles are the ranges'
-    /// per instance.
+    /// Whole nodes draw the tile's grid, quadrants the coarse one, sixteenths the stride-4
+    /// one, each group's instances after the previous group's; all four skirts follow each
+    /// grid as one range; the triangles are the ranges' per instance.
     #[test]
     fn quadrant_groups_draw_the_coarse_range() {
         use aerie_terrain::mesh::{
@@ -354,66 +517,173 @@ mod tests {
         let whole = skirted_tile_indices(17).len() as u32;
         let coarse = skirted_coarse_tile_indices(17).len() as u32;
         let sixteenth = skirted_sixteenth_tile_indices(17).len() as u32;
+        let edge = [16 * 6, 8 * 6, 4 * 6];
+        let after = |k: usize| REPEATED_EDGES * edge[k];
         assert_eq!(
             meshes,
             TileMeshes {
                 whole: (0, whole),
-                coarse: (whole, coarse),
-                sixteenth: (whole + coarse, sixteenth),
+                coarse: (whole + after(0), coarse),
+                sixteenth: (whole + after(0) + coarse + after(1), sixteenth),
                 grid: [16 * 16 * 6, 8 * 8 * 6, 4 * 4 * 6],
+                edge,
             }
         );
-        assert_eq!(buffer.len() as u32, whole + coarse + sixteenth);
-        let mut sizes = [0u32; DRAW_GROUPS];
-        sizes[0] = 3;
-        sizes[1] = 1;
-        sizes[RESOLUTIONS] = 2;
-        sizes[2 * RESOLUTIONS] = 5;
+        assert_eq!(
+            buffer.len() as u32,
+            whole + coarse + sixteenth + after(0) + after(1) + after(2)
+        );
+        // Each range is the skirted mesh the mesh module makes.
+        for (range, mesh) in [
+            (meshes.whole, skirted_tile_indices(17)),
+            (meshes.coarse, skirted_coarse_tile_indices(17)),
+            (meshes.sixteenth, skirted_sixteenth_tile_indices(17)),
+        ] {
+            assert_eq!(
+                &buffer[range.0 as usize..(range.0 + range.1) as usize],
+                &mesh[..]
+            );
+        }
+        let all = ALL_EDGES as usize;
+        let mut sizes = [0u32; INSTANCE_KEYS];
+        sizes[all] = 3;
+        sizes[EDGE_SETS + all] = 1;
+        sizes[RESOLUTIONS * EDGE_SETS + all] = 2;
+        sizes[2 * RESOLUTIONS * EDGE_SETS + all] = 5;
         let (draws, tris) = indirect_draws(&sizes, meshes);
-        assert_eq!((draws[0].first_index, draws[0].index_count), (0, whole));
-        assert_eq!(draws[RESOLUTIONS].first_index, whole);
-        assert_eq!(draws[RESOLUTIONS].index_count, coarse);
-        assert_eq!(draws[RESOLUTIONS].first_instance, 4);
-        assert_eq!(draws[RESOLUTIONS].instance_count, 2);
-        let s = &draws[2 * RESOLUTIONS];
-        assert_eq!((s.first_index, s.index_count), (whole + coarse, sixteenth));
-        assert_eq!((s.first_instance, s.instance_count), (6, 5));
+        let got = draw_ranges(&draws);
+        let (g, c, s) = (meshes.grid, meshes.coarse.0, meshes.sixteenth.0);
+        assert_eq!(
+            got,
+            [
+                (0, g[0], 0, 3),
+                (g[0], 4 * edge[0], 0, 3),
+                (0, g[0], 3, 1),
+                (g[0], 4 * edge[0], 3, 1),
+                (c, g[1], 4, 2),
+                (c + g[1], 4 * edge[1], 4, 2),
+                (s, g[2], 6, 5),
+                (s + g[2], 4 * edge[2], 6, 5),
+            ]
+        );
         assert_eq!(
             tris,
             4 * skirted_tile_triangles(16)
                 + 2 * skirted_tile_triangles(8)
                 + 5 * skirted_tile_triangles(4)
         );
-        // Without skirts (CDLOD): each mesh's grid indices, which come first, 2q² triangles.
-        let (bare, _) = indirect_draws(&sizes, meshes.without_skirts());
-        for (b, d) in bare.iter().zip(&draws) {
-            assert_eq!(
-                (b.first_index, b.first_instance),
-                (d.first_index, d.first_instance)
-            );
-        }
-        let grid_of = |r: std::ops::Range<usize>| {
-            let (a, b) = (r.start, r.end);
-            let tri = &buffer[a..b];
-            // Every grid triangle's vertices lie on the tile's grid (index < 17²).
-            tri.iter().all(|&i| i < 17 * 17)
-        };
-        let m = meshes.without_skirts();
-        for (first, count) in [m.whole, m.coarse, m.sixteenth] {
-            assert!(grid_of(first as usize..(first + count) as usize));
-            // … and the next index after them is a skirt's.
-            assert!(buffer[(first + count) as usize..]
-                .iter()
-                .take(6)
-                .any(|&i| i >= 17 * 17));
-        }
-        assert_eq!(bare[0].index_count / 3, 2 * 16 * 16);
+        // Without skirts (CDLOD's set): each mesh's grid indices, 2q² triangles.
+        let mut bare = [0u32; INSTANCE_KEYS];
+        bare[0] = 3;
+        let (draws, tris) = indirect_draws(&bare, meshes);
+        assert_eq!(draws.len(), 1);
+        assert_eq!(tris, 3 * 2 * 16 * 16);
+        assert!(buffer[..g[0] as usize].iter().all(|&i| i < 17 * 17));
         // A tile whose quads a side are not a multiple of 4 has no sixteenth mesh.
         assert_eq!(TileMeshes::indices(7).1.sixteenth.1, 0);
         assert_eq!(TileMeshes::indices(7).1.grid[2], 0);
         assert_eq!(
             skirted_tile_triangles(16) - quarter_mesh_saving(16),
             coarse as u64 / 3
+        );
+    }
+
+    /// For every set of edges and every mesh, the skirt commands draw exactly those edges'
+    /// skirt segments (each once) and no grid triangle.
+    #[test]
+    fn each_edge_set_draws_exactly_its_edges_skirts() {
+        use aerie_terrain::mesh::skirt_edge_indices;
+        for side in [5u32, 9, 17] {
+            let (buffer, meshes) = TileMeshes::indices(side);
+            for (k, stride) in [(0usize, 1u32), (1, 2), (2, 4)] {
+                for set in 0..EDGE_SETS {
+                    let mut sizes = [0u32; INSTANCE_KEYS];
+                    sizes[k * RESOLUTIONS * EDGE_SETS + set] = 1;
+                    let (draws, _) = indirect_draws(&sizes, meshes);
+                    let first = [meshes.whole.0, meshes.coarse.0, meshes.sixteenth.0][k];
+                    let skirts: Vec<&[u32]> = draws
+                        .iter()
+                        .filter(|d| d.first_index != first)
+                        .map(|d| {
+                            let at = d.first_index as usize;
+                            &buffer[at..at + d.index_count as usize]
+                        })
+                        .collect();
+                    let six = |v: &[u32]| -> Vec<[u32; 6]> {
+                        v.chunks(6).map(|c| c.try_into().unwrap()).collect()
+                    };
+                    let mut drawn = six(&skirts.concat());
+                    let mut want = six(&(0..4)
+                        .filter(|e| set & (1 << e) != 0)
+                        .flat_map(|e| skirt_edge_indices(side, stride, e))
+                        .collect::<Vec<_>>());
+                    drawn.sort();
+                    want.sort();
+                    assert_eq!(drawn, want, "side {side}, stride {stride}, set {set:04b}");
+                    let opposite = set == 0b0101 || set == 0b1010;
+                    let runs = if set == 0 { 0 } else { 1 + opposite as usize };
+                    assert_eq!(draws.len(), 1 + runs, "set {set:04b}");
+                }
+            }
+        }
+    }
+
+    /// The skirt rule on a small frame: two tiles side by side at one level share an edge
+    /// without skirts; a finer node north of one keeps its skirts (against the coarser tile
+    /// and across the split); a quadrant drawn at its parent's resolution goes without one
+    /// against the tile of that resolution south of it; a tile reaching past the grid's last
+    /// sample keeps all four; CDLOD's rule draws none, and the default fewer triangles than
+    /// skirts everywhere.
+    #[test]
+    fn skirts_go_where_resolutions_differ() {
+        use aerie_terrain::select::cdlod_morph::Morph;
+        let tile = |l: u32, x: u32, y: u32, morph: Morph| {
+            (
+                DrawItem {
+                    morph,
+                    ..DrawItem::whole(l, x, y, 1.0, 0.5)
+                },
+                0,
+            )
+        };
+        let list = [
+            tile(2, 0, 0, Morph::NONE),
+            tile(2, 1, 0, Morph::NONE),
+            tile(1, 0, 2, Morph::NONE),
+            tile(1, 2, 2, Morph::QUADRANT),
+        ];
+        // The second tile spans samples 64..=128: past the last one.
+        let f = frame(SkirtRule::WhereResolutionsDiffer, [100, 1000], &[]);
+        let (s, e, n, w) = (1u8, 2u8, 4u8, 8u8);
+        assert_eq!(
+            skirted_edges(&f, &list, &[1.0; 4]),
+            [s | n | w, ALL_EDGES, ALL_EDGES, e | n | w]
+        );
+        let inside = InstanceFrame {
+            valid_samples: [1000, 1000],
+            ..f
+        };
+        assert_eq!(skirted_edges(&inside, &list, &[1.0; 4])[1], s | n | e);
+        for (rule, want) in [
+            (SkirtRule::None, [0; 4]),
+            (SkirtRule::Everywhere, [ALL_EDGES; 4]),
+        ] {
+            let g = InstanceFrame { skirts: rule, ..f };
+            assert_eq!(skirted_edges(&g, &list, &[1.0; 4]), want);
+        }
+        let (_, meshes) = TileMeshes::indices(17);
+        let tris = |rule| {
+            let g = InstanceFrame { skirts: rule, ..f };
+            let (_, sizes) = build_instances(&g, &list, &mut GeoNodeCache::default());
+            indirect_draws(&sizes, meshes).1
+        };
+        let grids = 3 * 512 + 128;
+        assert_eq!(tris(SkirtRule::None), grids);
+        assert_eq!(tris(SkirtRule::Everywhere), grids + 3 * 128 + 64);
+        // Bare: the first tile's east edge (32 triangles) and the quadrant's south (16).
+        assert_eq!(
+            tris(SkirtRule::WhereResolutionsDiffer),
+            grids + 3 * 128 + 64 - 48
         );
     }
 

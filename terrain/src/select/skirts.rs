@@ -1,4 +1,5 @@
-//! How far each drawn node's skirt must reach: the roughest of its edge neighbours.
+//! Each drawn node's skirt: how far it must reach (the roughest of its edge neighbours) and
+//! which of its edges need one at all (those not shared with a node drawn at its resolution).
 
 use crate::fast_hash::FastHash;
 
@@ -19,20 +20,47 @@ use crate::fast_hash::FastHash;
 /// [`GRID_CELLS_PER_NODE`] cells a node) take a hash table and the full walk; both give the
 /// same values (tests).
 pub fn neighbour_eps(nodes: &[(u32, u32, u32, f32)]) -> Vec<f32> {
+    let levels: Vec<u32> = nodes.iter().map(|n| n.0).collect();
+    node_skirts(nodes, &levels).reach
+}
+
+/// The edges of a node in the perimeter walk's order (`mesh::perimeter_vertex`): bit e set
+/// for edge e (0 south, 1 east, 2 north, 3 west).
+pub const ALL_EDGES: u8 = 0b1111;
+
+/// Each drawn node's skirt ([`node_skirts`]).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct NodeSkirts {
+    /// Per node, the largest ε among itself and its edge neighbours ([`neighbour_eps`]).
+    pub reach: Vec<f32>,
+    /// Per node, the edges that need a skirt ([`ALL_EDGES`]' bits).
+    pub edges: Vec<u8>,
+}
+
+/// [`neighbour_eps`], and per node the edges that need a skirt. `resolution[i]` is the level
+/// whose grid node i is drawn at (its own level, one more for a quadrant drawn at its parent's
+/// resolution, two for a sixteenth). Levels are subsamplings (DESIGN.md "The terrain
+/// technique"), so two nodes drawn at the same resolution put the same vertices — the same
+/// samples, the same heights — along an edge they share: no crack opens there and that
+/// edge needs no skirt. An edge needs one when the node across it is drawn at another
+/// resolution (a T-junction), when finer nodes lie across it (found from their side, which
+/// keeps theirs), and when nothing is drawn across it (culled, or the grid's edge).
+pub fn node_skirts(nodes: &[(u32, u32, u32, f32)], resolution: &[u32]) -> NodeSkirts {
+    assert_eq!(nodes.len(), resolution.len(), "a resolution per node");
     match LevelGrids::of(nodes) {
-        Some(grids) => walk_neighbours(nodes, |l, x, y| grids.get(l, x, y)),
-        None => neighbour_eps_hashed(nodes),
+        Some(grids) => walk_neighbours(nodes, resolution, |l, x, y| grids.get(l, x, y)),
+        None => node_skirts_hashed(nodes, resolution),
     }
 }
 
-/// [`neighbour_eps`] through a hash table of the drawn nodes, every walk to the top.
-fn neighbour_eps_hashed(nodes: &[(u32, u32, u32, f32)]) -> Vec<f32> {
+/// [`node_skirts`] through a hash table of the drawn nodes, every walk to the top.
+fn node_skirts_hashed(nodes: &[(u32, u32, u32, f32)], resolution: &[u32]) -> NodeSkirts {
     let mut index: std::collections::HashMap<(u32, u32, u32), usize, FastHash> =
         std::collections::HashMap::with_capacity_and_hasher(nodes.len(), FastHash::default());
     for (i, &(l, x, y, _)) in nodes.iter().enumerate() {
         index.insert((l, x, y), i);
     }
-    walk_neighbours(nodes, |l, x, y| match index.get(&(l, x, y)) {
+    walk_neighbours(nodes, resolution, |l, x, y| match index.get(&(l, x, y)) {
         Some(&j) => Cell::Drawn(j),
         None => Cell::Empty,
     })
@@ -53,12 +81,16 @@ enum Cell {
 /// The walk itself, over any lookup (a `Split` cell ends the walk).
 fn walk_neighbours(
     nodes: &[(u32, u32, u32, f32)],
+    resolution: &[u32],
     find: impl Fn(u32, u32, u32) -> Cell,
-) -> Vec<f32> {
+) -> NodeSkirts {
     let top = nodes.iter().map(|n| n.0).max().unwrap_or(0);
-    let mut out: Vec<f32> = nodes.iter().map(|n| n.3).collect();
+    let mut reach: Vec<f32> = nodes.iter().map(|n| n.3).collect();
+    let mut edges = vec![ALL_EDGES; nodes.len()];
+    // The perimeter walk's edges: south, east, north, west.
+    const ACROSS: [(i64, i64); 4] = [(0, -1), (1, 0), (0, 1), (-1, 0)];
     for (i, &(l, x, y, e)) in nodes.iter().enumerate() {
-        for (dx, dy) in [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)] {
+        for (edge, (dx, dy)) in ACROSS.into_iter().enumerate() {
             let (nx, ny) = (x as i64 + dx, y as i64 + dy);
             if nx < 0 || ny < 0 {
                 continue;
@@ -69,8 +101,13 @@ fn walk_neighbours(
                     Cell::Split => break,
                     Cell::Drawn(j) => {
                         if j != i {
-                            out[i] = out[i].max(nodes[j].3);
-                            out[j] = out[j].max(e);
+                            reach[i] = reach[i].max(nodes[j].3);
+                            reach[j] = reach[j].max(e);
+                            // Node j covers the whole strip across this edge (it is the
+                            // neighbour or its ancestor).
+                            if resolution[j] == resolution[i] {
+                                edges[i] &= !(1 << edge);
+                            }
                         }
                         break;
                     }
@@ -78,7 +115,7 @@ fn walk_neighbours(
             }
         }
     }
-    out
+    NodeSkirts { reach, edges }
 }
 
 /// Grid cells allowed per node before [`neighbour_eps`] takes the hash table instead (a
@@ -267,8 +304,13 @@ mod tests {
                 continue; // every part culled
             }
             let grids = LevelGrids::of(&nodes).expect("a cover fills its boxes");
-            let want = neighbour_eps_hashed(&nodes);
-            assert_eq!(neighbour_eps(&nodes), want, "case {case}: {nodes:?}");
+            let resolution: Vec<u32> = nodes.iter().map(|n| n.0 + (n.1 + n.2) % 2).collect();
+            let want = node_skirts_hashed(&nodes, &resolution);
+            assert_eq!(
+                node_skirts(&nodes, &resolution),
+                want,
+                "case {case}: {nodes:?}"
+            );
             if !grids.overlap {
                 stopped_early += grids
                     .levels
@@ -279,6 +321,75 @@ mod tests {
             }
         }
         assert!(stopped_early > 0, "no split cell in any case");
+    }
+
+    /// Against a brute force over every pair of nodes: an edge goes without a skirt exactly
+    /// when the one node across all of it is as coarse or coarser and drawn at the same
+    /// resolution — never against a node at another resolution, never where nothing is drawn
+    /// or finer nodes lie across it; and same-level neighbours at one resolution both go
+    /// without. Covers with holes, every resolution offset.
+    #[test]
+    fn an_edge_goes_without_a_skirt_only_against_its_own_resolution() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let (mut bare, mut kept) = (0, 0);
+        for case in 0..120u32 {
+            let top = 1 + case % 5;
+            let nodes = cover(&mut seed, top, 3 + case, 5, case % 2 == 1);
+            if nodes.is_empty() {
+                continue;
+            }
+            // Drawn at its own level, or (a quadrant, a sixteenth) one or two above.
+            let resolution: Vec<u32> = nodes
+                .iter()
+                .map(|n| n.0 + (xorshift(&mut seed) % 3) as u32 * (case % 3 != 0) as u32)
+                .collect();
+            let skirts = node_skirts(&nodes, &resolution);
+            // Footprints in level-0 cells: [x0, x1) × [y0, y1).
+            let fp =
+                |&(l, x, y, _): &(u32, u32, u32, f32)| [x << l, (x + 1) << l, y << l, (y + 1) << l];
+            for (i, n) in nodes.iter().enumerate() {
+                let [x0, x1, y0, y1] = fp(n);
+                for edge in 0..4 {
+                    // Nodes touching this edge along a positive length, across it.
+                    let across: Vec<usize> = (0..nodes.len())
+                        .filter(|&j| {
+                            let [a0, a1, b0, b1] = fp(&nodes[j]);
+                            let along_x = a0 < x1 && x0 < a1;
+                            let along_y = b0 < y1 && y0 < b1;
+                            match edge {
+                                0 => b1 == y0 && along_x,
+                                1 => a0 == x1 && along_y,
+                                2 => b0 == y1 && along_x,
+                                _ => a1 == x0 && along_y,
+                            }
+                        })
+                        .collect();
+                    let want_bare = across.len() == 1
+                        && nodes[across[0]].0 >= n.0
+                        && resolution[across[0]] == resolution[i];
+                    let has_skirt = skirts.edges[i] & (1 << edge) != 0;
+                    assert_eq!(
+                        has_skirt,
+                        !want_bare,
+                        "case {case}: node {n:?} (resolution {}) edge {edge}, across {:?}",
+                        resolution[i],
+                        across
+                            .iter()
+                            .map(|&j| (nodes[j], resolution[j]))
+                            .collect::<Vec<_>>()
+                    );
+                    if has_skirt {
+                        kept += 1;
+                    } else {
+                        bare += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            bare > 100 && kept > 100,
+            "{bare} bare edges, {kept} skirted"
+        );
     }
 
     /// Nodes spread far apart (a box of more cells than the nodes can justify) take the hash

@@ -8,7 +8,9 @@ use super::config::{
     check_tile_sizes, configurations, parse_modes, parse_positive_list, parse_taus, sizes_drawn,
     BenchConfig, Sweeps,
 };
-use crate::app::args::{read_waypoints, LookArg, NormalsArg, PassArgs, StoreArgs, Switch};
+use crate::app::args::{
+    read_waypoints, LookArg, NormalsArg, PassArgs, SkirtsArg, StoreArgs, Switch,
+};
 use crate::app::failure::{bad_input, Failure};
 use crate::app::renderer_setup::{parse_view, patch_tiles, patch_tiles_of, View};
 use crate::sim::flight::Waypoints;
@@ -121,6 +123,11 @@ pub struct BenchArgs {
     /// while a certificate says its nodes still meet τ (on), or walk every frame afresh (off).
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub carry_selection: Switch,
+    /// Skirts under the tiles' edges: needed (only where the tile across is drawn at another
+    /// resolution: the default), everywhere (every edge of every tile), none (shows the
+    /// cracks). CDLOD draws none whatever this says.
+    #[arg(long, value_enum, default_value_t = SkirtsArg::Needed)]
+    pub skirts: SkirtsArg,
     /// Nodes per frame the CPU oracle checks by brute force (0: no oracle).
     #[arg(long, default_value_t = 12)]
     pub oracle_nodes: u32,

@@ -51,6 +51,7 @@ pub(super) fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> Rendere
         normal_source: a.normals.source(),
         horizon_cull: a.horizon_cull.on(),
         carry: a.carry_selection.on(),
+        skirts: a.skirts.rule(),
     });
     desc.pool_capacity = pools_for_tile_size(desc.pool_capacity, desc.tile_size, m);
     desc.tile_size = m;

@@ -1,0 +1,35 @@
+//! Rough synthetic hills of the GPU oracle tests (`cdlod_morph.rs`, `skirt_edges.rs`): three
+//! scales of waves between about 0 and 500 m, so that a frame's nodes are drawn at many
+//! resolutions side by side.
+
+use aerie::terrain::heightfield::GeoReference;
+use aerie::terrain::Heightfield;
+
+/// `n` × `n` samples `spacing_x` × `spacing_y` metres apart; the finest waves `fine_m` high.
+pub fn hills(
+    n: usize,
+    spacing_x: f64,
+    spacing_y: f64,
+    fine_m: f64,
+    geo: Option<GeoReference>,
+) -> Heightfield {
+    let heights = (0..n)
+        .flat_map(|r| (0..n).map(move |c| (c as f64, r as f64)))
+        .map(|(c, r)| {
+            (250.0
+                + 180.0 * (c * 0.031).sin() * (r * 0.023).cos()
+                + 45.0 * (c * 0.17 + r * 0.11).sin()
+                + fine_m * (c * 0.53 - r * 0.41).cos()) as f32
+        })
+        .collect();
+    Heightfield {
+        width: n,
+        height: n,
+        spacing_x,
+        spacing_y,
+        heights,
+        geo,
+        voids_filled: 0,
+        spacing_note: "synthetic".into(),
+    }
+}
