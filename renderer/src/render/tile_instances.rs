@@ -12,7 +12,7 @@ use bytemuck::Zeroable;
 use glam::DVec3;
 
 use aerie_terrain::geodesy::GeoGrid;
-use aerie_terrain::select::{node_skirts, DrawItem, LodMode, ALL_EDGES};
+use aerie_terrain::select::{node_skirts, DrawItem, LodMode, NodeSkirts, ALL_EDGES};
 
 use crate::render::geo_instances::{GeoEye, GeoNodeCache};
 use crate::render::gpu::{DrawIndexedIndirect, TileInstance};
@@ -166,40 +166,36 @@ fn group_of(item: &DrawItem) -> usize {
     item.refinement as usize + item.morph.levels_up() as usize * RESOLUTIONS
 }
 
-/// The edges of each drawn node that get a skirt under `f.skirts` (see [`SkirtRule`]);
-/// `reach` the nodes' neighbour ε, in the list's order.
-fn skirted_edges(f: &InstanceFrame, draw_list: &[(DrawItem, u32)], reach: &[f32]) -> Vec<u8> {
-    let everywhere = || vec![ALL_EDGES; draw_list.len()];
-    match f.skirts {
-        SkirtRule::None => vec![0; draw_list.len()],
-        SkirtRule::Everywhere => everywhere(),
-        SkirtRule::WhereResolutionsDiffer if f.earth.is_some_and(|g| g.projected.is_some()) => {
-            everywhere()
-        }
-        SkirtRule::WhereResolutionsDiffer => {
-            let q = f.tile_quads as u64;
-            let (nodes, resolution): (Vec<_>, Vec<_>) = draw_list
-                .iter()
-                .zip(reach)
-                .map(|((i, _), &e)| {
-                    (
-                        (i.node_level, i.node_tx, i.node_ty, e),
-                        i.node_level + i.morph.levels_up(),
-                    )
-                })
-                .unzip();
-            let mut edges = node_skirts(&nodes, &resolution).edges;
-            for ((item, _), e) in draw_list.iter().zip(&mut edges) {
-                let end = |t: u32| (t as u64 + 1) * (q << item.node_level);
-                if end(item.node_tx) >= f.valid_samples[0] as u64
-                    || end(item.node_ty) >= f.valid_samples[1] as u64
-                {
-                    *e = ALL_EDGES;
-                }
-            }
-            edges
+/// Each drawn node's skirt: how far it reaches (`select::neighbour_eps`) and the edges that
+/// get one under `f.skirts` (see [`SkirtRule`]), in the list's order; one walk over the nodes
+/// gives both.
+fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)]) -> (Vec<f32>, Vec<u8>) {
+    if f.skirts == SkirtRule::None {
+        return (vec![0.0; draw_list.len()], vec![0; draw_list.len()]);
+    }
+    let (nodes, resolution): (Vec<_>, Vec<_>) = draw_list
+        .iter()
+        .map(|(i, _)| {
+            (
+                (i.node_level, i.node_tx, i.node_ty, i.eps_m),
+                i.node_level + i.morph.levels_up(),
+            )
+        })
+        .unzip();
+    let NodeSkirts { reach, mut edges } = node_skirts(&nodes, &resolution);
+    let q = f.tile_quads as u64;
+    let projected = f.earth.is_some_and(|g| g.projected.is_some());
+    for ((item, _), e) in draw_list.iter().zip(&mut edges) {
+        let end = |t: u32| (t as u64 + 1) * (q << item.node_level);
+        if f.skirts == SkirtRule::Everywhere
+            || projected
+            || end(item.node_tx) >= f.valid_samples[0] as u64
+            || end(item.node_ty) >= f.valid_samples[1] as u64
+        {
+            *e = ALL_EDGES;
         }
     }
+    (reach, edges)
 }
 
 /// What the instance records need from the frame: the clipmap's tile size, the grid spacing,
@@ -251,18 +247,7 @@ pub fn build_instances(
 ) -> (Vec<TileInstance>, [u32; INSTANCE_KEYS]) {
     let q = f.tile_quads;
     let eye = f.eye;
-    let (reach, edges) = if f.skirts == SkirtRule::None {
-        (vec![0.0; draw_list.len()], vec![0; draw_list.len()])
-    } else {
-        let nodes: Vec<(u32, u32, u32, f32)> = draw_list
-            .iter()
-            .map(|(i, _)| (i.node_level, i.node_tx, i.node_ty, i.eps_m))
-            .collect();
-        let levels: Vec<u32> = nodes.iter().map(|n| n.0).collect();
-        let reach = node_skirts(&nodes, &levels).reach;
-        let edges = skirted_edges(f, draw_list, &reach);
-        (reach, edges)
-    };
+    let (reach, edges) = skirts_of(f, draw_list);
     let key_of = |k: usize| group_of(&draw_list[k].0) * EDGE_SETS + edges[k] as usize;
     let geo = f.earth.map(|g| {
         geo_cache.begin(g);
@@ -656,20 +641,20 @@ mod tests {
         let f = frame(SkirtRule::WhereResolutionsDiffer, [100, 1000], &[]);
         let (s, e, n, w) = (1u8, 2u8, 4u8, 8u8);
         assert_eq!(
-            skirted_edges(&f, &list, &[1.0; 4]),
+            skirts_of(&f, &list).1,
             [s | n | w, ALL_EDGES, ALL_EDGES, e | n | w]
         );
         let inside = InstanceFrame {
             valid_samples: [1000, 1000],
             ..f
         };
-        assert_eq!(skirted_edges(&inside, &list, &[1.0; 4])[1], s | n | e);
+        assert_eq!(skirts_of(&inside, &list).1[1], s | n | e);
         for (rule, want) in [
             (SkirtRule::None, [0; 4]),
             (SkirtRule::Everywhere, [ALL_EDGES; 4]),
         ] {
             let g = InstanceFrame { skirts: rule, ..f };
-            assert_eq!(skirted_edges(&g, &list, &[1.0; 4]), want);
+            assert_eq!(skirts_of(&g, &list).1, want);
         }
         let (_, meshes) = TileMeshes::indices(17);
         let tris = |rule| {
