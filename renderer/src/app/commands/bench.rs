@@ -80,6 +80,7 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             out: &a.out,
             overwrite: a.overwrite,
             resume: a.resume,
+            command_line: a.result_settings(),
         };
         return suite::run(&paths, &mut |job| suite_flight(&a, job));
     }

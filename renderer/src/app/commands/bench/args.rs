@@ -163,6 +163,29 @@ pub struct BenchArgs {
     pub feature_costs: bool,
 }
 
+impl BenchArgs {
+    /// The options besides the suite file's that change what a flight draws or measures
+    /// (the patch, curvature, culling, carried selection, skirts, look, normal maps, the
+    /// image error and its holes), in words: a suite flight's record holds them, and
+    /// `--resume` takes it only under the same ones.
+    pub fn result_settings(&self) -> String {
+        format!(
+            "patch {} curvature {} horizon-cull {:?} carry-selection {:?} skirts {:?} \
+             look {:?} normal-maps {:?} normals {:?} image-error {} holes {}",
+            self.patch,
+            !self.no_curvature,
+            self.horizon_cull,
+            self.carry_selection,
+            self.skirts,
+            self.look,
+            self.normal_maps,
+            self.normals,
+            !self.no_image_error,
+            !self.no_holes,
+        )
+    }
+}
+
 /// Validated arguments.
 pub(crate) struct Plan {
     pub view: View,
@@ -232,4 +255,44 @@ pub(crate) fn plan(a: &BenchArgs) -> Result<Plan, Failure> {
         patch_tiles,
         waypoints,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Bench {
+        #[command(flatten)]
+        a: BenchArgs,
+    }
+
+    fn settings(extra: &[&str]) -> String {
+        let base = ["aerie", "--suite", "s.toml", "--out", "o"];
+        let args = base.iter().chain(extra).copied();
+        Bench::try_parse_from(args).unwrap().a.result_settings()
+    }
+
+    /// Each option that changes what a suite's flights draw or measure changes the words
+    /// their records keep; where the results go and whether the run resumes do not.
+    #[test]
+    fn result_settings_name_every_option_that_changes_a_flight() {
+        let default = settings(&[]);
+        for option in [
+            &["--skirts", "everywhere"][..],
+            &["--horizon-cull", "on"],
+            &["--carry-selection", "off"],
+            &["--no-curvature"],
+            &["--patch", "257"],
+            &["--look", "plain"],
+            &["--normal-maps", "off"],
+            &["--normals", "gpu"],
+            &["--no-holes"],
+            &["--no-image-error"],
+        ] {
+            assert_ne!(settings(option), default, "{option:?}");
+        }
+        assert_eq!(settings(&["--resume", "--overwrite"]), default);
+    }
 }

@@ -50,6 +50,10 @@ pub(crate) struct SuitePaths<'a> {
     pub overwrite: bool,
     /// `--resume`: flights whose record matches are taken from it (`suite_resume.rs`).
     pub resume: bool,
+    /// The command line's options that change a flight's results
+    /// (`BenchArgs::result_settings`): part of each flight's fingerprint, so `--resume` never
+    /// takes a flight run with other ones.
+    pub command_line: String,
 }
 
 /// Largest suite file read.
@@ -127,7 +131,7 @@ fn run_pairs(
             let key = format!("{}-{}", d.name, f.spec.name);
             eprintln!("suite: {key} ({}/{})", results.len() + 1, pairs.len());
             let dir = out.join(&key);
-            let print = fingerprint(r, d, f);
+            let print = fingerprint(r, d, f, &paths.command_line);
             if paths.resume {
                 match read_record(&dir, &print) {
                     Resume::Record(rec) => {

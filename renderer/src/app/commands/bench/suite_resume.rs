@@ -54,15 +54,18 @@ impl FlightRecord {
     }
 }
 
-/// Everything a flight's results depend on that the suite file says: its run settings, its
-/// dataset and the flight itself, as this build of aerie describes them (a build whose
-/// settings carry another field describes them otherwise, and its records are not reused).
+/// Everything a flight's results depend on: what the suite file says — its run settings, its
+/// dataset and the flight itself — and what the command line says (`command_line`: the
+/// bench's options that change what is drawn or measured, `BenchArgs::result_settings`), as
+/// this build of aerie describes them (a build whose settings carry another field describes
+/// them otherwise, and its records are not reused).
 pub(crate) fn fingerprint(
     run: &RunSettings,
     dataset: &DatasetSpec,
     flight: &SuiteFlight,
+    command_line: &str,
 ) -> String {
-    format!("{run:?} / {dataset:?} / {:?}", flight.spec)
+    format!("{run:?} / {dataset:?} / {:?} / {command_line}", flight.spec)
 }
 
 /// Whether a flight is taken from its record or flown again, and why.

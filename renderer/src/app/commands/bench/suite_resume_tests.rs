@@ -81,9 +81,16 @@ fn summaries() -> Vec<Summary> {
     vec![bounded, clipmap]
 }
 
+/// The bench's options as a default command line gives them.
+const COMMAND_LINE: &str = "patch 129 curvature true skirts Needed";
+
 fn print_of(text: &str) -> String {
+    print_with(text, COMMAND_LINE)
+}
+
+fn print_with(text: &str, command_line: &str) -> String {
     let s = parse_suite(text, "test.toml").unwrap();
-    fingerprint(&s.run, &s.datasets[0], &s.flights[0])
+    fingerprint(&s.run, &s.datasets[0], &s.flights[0], command_line)
 }
 
 #[test]
@@ -116,6 +123,12 @@ fn a_record_reads_back_equal_and_only_for_its_own_settings() {
             Resume::Record(_) => panic!("resumed across {from} → {to}"),
         }
     }
+    // So does an option of the command line that changes them.
+    let other = print_with(SUITE, "patch 129 curvature true skirts Everywhere");
+    assert_ne!(other, print);
+    assert!(
+        matches!(read_record(dir.path(), &other), Resume::Run(w) if w.contains("other run settings"))
+    );
     remove_record(dir.path()).unwrap();
     assert!(matches!(read_record(dir.path(), &print), Resume::Run(w) if w.contains("no record")));
     // Removing what is not there is no error.
