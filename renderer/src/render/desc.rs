@@ -62,7 +62,7 @@ pub struct RendererDesc {
     pub normal_source: NormalSource,
     /// Skirt depth = factor × ½(ε + the largest of ε and its edge neighbours' ε) + minimum
     /// (metres): at the default 2, ε + max(ε, neighbours' ε), which closes the cracks a
-    /// neighbour drawn at another level can open (`select::neighbour_eps`). Must be ≥ 1.
+    /// neighbour drawn at another level can open (`select::node_skirts`). Must be ≥ 1.
     pub skirt_factor: f32,
     pub skirt_min_m: f32,
     /// Which edges get skirts: by default those not shared with a node drawn at the same

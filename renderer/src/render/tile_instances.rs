@@ -166,7 +166,7 @@ fn group_of(item: &DrawItem) -> usize {
     item.refinement as usize + item.morph.levels_up() as usize * RESOLUTIONS
 }
 
-/// Each drawn node's skirt: how far it reaches (`select::neighbour_eps`) and the edges that
+/// Each drawn node's skirt: how far it reaches and the edges that
 /// get one under `f.skirts` (see [`SkirtRule`]), in the list's order; one walk over the nodes
 /// gives both.
 fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)]) -> (Vec<f32>, Vec<u8>) {
@@ -300,7 +300,7 @@ pub fn build_instances(
             t.slot = slot;
             (slot_x, slot_y)
         };
-        // ε + max(ε, neighbours' ε) at the default factor 2 (see neighbour_eps).
+        // ε + max(ε, neighbours' ε) at the default factor 2 (see select::node_skirts).
         t.skirt_m = 0.5 * f.skirt_factor * (item.eps_m + reach_m) + f.skirt_min_m;
         (t.slot_x, t.slot_y, t.slot_stride) = (slot_x, slot_y, slot_stride);
         t.morph = item.morph.to_gpu();

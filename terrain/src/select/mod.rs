@@ -32,7 +32,9 @@ pub use selection::{AllReady, TileReadiness};
 pub use selection::{
     DrawItem, LevelStats, LodMode, SelectParams, Selection, View, EARTH_RADIUS_M, MAX_REFINEMENT,
 };
-pub use skirts::{neighbour_eps, node_skirts, NodeSkirts, ALL_EDGES};
+#[cfg(test)]
+use skirts::neighbour_eps;
+pub use skirts::{node_skirts, NodeSkirts, ALL_EDGES};
 pub use tess_density::{sample_density, TessDensity, DEFAULT_TOL_M, TESS_LEVEL_CAP, TESS_PATCH};
 pub use tessellation::{
     distance_factor, edge_factor, rounded_level, select_patches, triangles_emitted, Spacing,

@@ -3,23 +3,9 @@
 
 use crate::fast_hash::FastHash;
 
-/// For each drawn node (level, tx, ty, ε), the largest ε among itself and the nodes sharing
-/// an edge with it — what its skirt must reach. Along an edge between nodes A and B both
-/// surfaces are within their ε of the true one, so the edges differ by up to ε_A + ε_B, and
-/// the higher edge's skirt must cover that: a skirt of ε + max(ε, neighbours' ε) closes every
-/// crack, including T-junctions against a much rougher coarse neighbour, which 2ε alone does
-/// not. Each fine–coarse pair is found from the finer node by walking up from the position
-/// across its edge to the first drawn node (a same-level neighbour or a coarser ancestor) and
-/// updates both.
-///
-/// The nodes are looked up in a dense grid per level over the box its nodes and their
-/// ancestors span (a frame's nodes of one level lie in that level's clipmap patch), where the
-/// ancestors of drawn nodes are marked split: a walk that meets a split node stops there — no
-/// node above it is drawn, unless drawn nodes overlap, which no selection makes and which
-/// then takes the full walk. Nodes too scattered for the grids (more than
-/// [`GRID_CELLS_PER_NODE`] cells a node) take a hash table and the full walk; both give the
-/// same values (tests).
-pub fn neighbour_eps(nodes: &[(u32, u32, u32, f32)]) -> Vec<f32> {
+/// [`node_skirts`]' reach alone, every node drawn at its own level (the tests' entry).
+#[cfg(test)]
+pub(crate) fn neighbour_eps(nodes: &[(u32, u32, u32, f32)]) -> Vec<f32> {
     let levels: Vec<u32> = nodes.iter().map(|n| n.0).collect();
     node_skirts(nodes, &levels).reach
 }
@@ -31,13 +17,32 @@ pub const ALL_EDGES: u8 = 0b1111;
 /// Each drawn node's skirt ([`node_skirts`]).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct NodeSkirts {
-    /// Per node, the largest ε among itself and its edge neighbours ([`neighbour_eps`]).
+    /// Per node, the largest ε among itself and the nodes sharing an edge with it: what its
+    /// skirt must reach ([`node_skirts`]).
     pub reach: Vec<f32>,
     /// Per node, the edges that need a skirt ([`ALL_EDGES`]' bits).
     pub edges: Vec<u8>,
 }
 
-/// [`neighbour_eps`], and per node the edges that need a skirt. `resolution[i]` is the level
+/// For each drawn node (level, tx, ty, ε), the largest ε among itself and the nodes sharing
+/// an edge with it — what its skirt must reach —, and the edges that need a skirt at all.
+///
+/// Reach: along an edge between nodes A and B both surfaces are within their ε of the true
+/// one, so the edges differ by up to ε_A + ε_B, and the higher edge's skirt must cover that: a
+/// skirt of ε + max(ε, neighbours' ε) closes every crack, including T-junctions against a much
+/// rougher coarse neighbour, which 2ε alone does not. Each fine–coarse pair is found from the
+/// finer node by walking up from the position across its edge to the first drawn node (a
+/// same-level neighbour or a coarser ancestor) and updates both.
+///
+/// The nodes are looked up in a dense grid per level over the box its nodes and their
+/// ancestors span (a frame's nodes of one level lie in that level's clipmap patch), where the
+/// ancestors of drawn nodes are marked split: a walk that meets a split node stops there — no
+/// node above it is drawn, unless drawn nodes overlap, which no selection makes and which
+/// then takes the full walk. Nodes too scattered for the grids (more than
+/// `GRID_CELLS_PER_NODE` cells a node) take a hash table and the full walk; both give the
+/// same values (tests).
+///
+/// Edges: `resolution[i]` is the level
 /// whose grid node i is drawn at (its own level, one more for a quadrant drawn at its parent's
 /// resolution, two for a sixteenth). Levels are subsamplings (DESIGN.md "The terrain
 /// technique"), so two nodes drawn at the same resolution put the same vertices — the same
@@ -118,7 +123,7 @@ fn walk_neighbours(
     NodeSkirts { reach, edges }
 }
 
-/// Grid cells allowed per node before [`neighbour_eps`] takes the hash table instead (a
+/// Grid cells allowed per node before [`node_skirts`] takes the hash table instead (a
 /// frame's nodes fill their levels' boxes far more densely).
 const GRID_CELLS_PER_NODE: u64 = 64;
 
