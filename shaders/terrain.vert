@@ -32,8 +32,11 @@ layout(location = 6) out vec2 v_grid;
 float fetch(TileInstance t, ivec2 ij) {
     if (t.refinement == 0u) {
         int T = frame.clipmap.x;
-        // Level-L vertex coordinates; +T keeps the toroidal modulo non-negative at ij = -1.
-        ivec2 v = (t.origin_sample >> int(t.level)) + ij;
+        // Level-L vertex coordinates (arithmetic shift: ij = -1 gives -1); +T keeps the
+        // toroidal modulo non-negative. A node is drawn from its own level (step 2^L) or, a
+        // quadrant of its ring tile drawn at the tile's resolution (step 2^(L-1)), from the
+        // tile's: its even vertices are the tile's samples, its odd ones morphed onto them.
+        ivec2 v = (t.origin_sample + ij * int(t.step)) >> int(t.level);
         return texelFetch(clipmap, ivec3((v + T) % T, int(t.level)), 0).r;
     }
     // A pool packs its slots several to a layer when it has more than the device's layers
@@ -110,8 +113,11 @@ void main() {
     // Heights per sample along the grid's axes, from central differences at the drawn
     // resolution (neighbours outside the node come from the same texture; a pool slot clamps at
     // its edge): the shading normal.
-    ivec2 lo = ij - 1;
-    ivec2 hi = ij + 1;
+    // One texel of the texture read either side: two vertices for a quadrant read from its
+    // ring tile's level (terrain/src/select/seen_quadrants.rs).
+    int texel = t.refinement == 0u ? max(1, (1 << int(t.level)) / int(t.step)) : 1;
+    ivec2 lo = ij - texel;
+    ivec2 hi = ij + texel;
     vec2 dh = vec2(fetch(t, ivec2(hi.x, ij.y)) - fetch(t, ivec2(lo.x, ij.y)),
         fetch(t, ivec2(ij.x, hi.y)) - fetch(t, ivec2(ij.x, lo.y))) / (vec2(hi - lo) * float(step));
     bool geo = t.geo_origin.w != 0.0;
@@ -137,7 +143,8 @@ void main() {
     }
     v_grid = vec2(t.origin_sample) + f * float(step);
     v_height = h;
-    v_tile = uint(findMSB(t.step)) | (t.refinement << 8);
+    // The level whose samples (and normal map) the node is drawn from.
+    v_tile = (t.refinement == 0u ? t.level : uint(findMSB(t.step))) | (t.refinement << 8);
     if (geo) {
         // On the ellipsoid (geographic or projected): the node's frame plus the vertex's offset.
         GeoVertex gv = geo_vertex(g, (f - vec2(n / 2)) * float(step), h - skirt_m, dh);

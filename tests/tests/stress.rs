@@ -123,8 +123,13 @@ fn check_selection(
 ) {
     let hf = &s.ds.hf;
     for it in &sel.items {
+        // Within its ring tile's refinement, or (`SelectParams::seen_quadrants`) a quadrant of
+        // an unrefined ring tile drawn at the tile's resolution.
+        let seen_quadrant =
+            it.refinement == 0 && it.node_level + 1 == it.level && it.morph.levels_up() == 1;
         assert!(
-            it.node_level <= it.level && it.level - it.node_level <= it.refinement,
+            it.node_level <= it.level
+                && (it.level - it.node_level <= it.refinement || seen_quadrant),
             "{what}: {it:?}"
         );
         let up = it.level - it.node_level;

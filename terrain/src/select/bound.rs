@@ -123,6 +123,26 @@ pub(super) fn outside_of(corners: &[DVec3; 8], f: &Frustum, near: f64) -> bool {
         || all(&|p| -p.y < f.tan_down * p.z)
 }
 
+/// Whether every corner (view space) is inside every plane of the frustum: no part of the box
+/// can be outside it. The reference evaluation's (tests); the fast path's is `CornerPass::inside`.
+#[cfg(test)]
+pub(super) fn inside_of(corners: &[DVec3; 8], f: &Frustum, near: f64) -> bool {
+    corners
+        .iter()
+        .all(|p| corner_inside(p.x, p.y, p.z, f, near))
+}
+
+/// One view-space point inside every plane of the frustum (the complement of each of
+/// [`outside_of`]'s tests).
+#[inline]
+fn corner_inside(x: f64, y: f64, z: f64, f: &Frustum, near: f64) -> bool {
+    z >= near
+        && x <= f.tan_right * z
+        && x >= f.tan_left * z
+        && -y <= f.tan_up * z
+        && -y >= f.tan_down * z
+}
+
 /// The screen factor of a *vertical* error over the part of a box inside the frustum — the `c`
 /// of DESIGN.md's `ρ = ε·f·c / (z_min − ε)`, tightened for the direction terrain errors have.
 ///
@@ -257,6 +277,8 @@ pub fn projected_error_px(eps: f64, z_min: f64, focal_px: f64, obliquity: f64) -
 pub(super) struct CornerPass {
     /// Every corner outside one frustum plane: the box is culled.
     pub outside: bool,
+    /// Every corner inside every frustum plane: no part of the box can be culled.
+    pub inside: bool,
     /// Smallest view depth of a corner, not clamped.
     pub z_min: f64,
     /// A corner at or behind the eye plane: the gains take the whole frustum's ranges.
@@ -280,6 +302,7 @@ impl CornerPass {
         let mut z_min = f64::INFINITY;
         let [mut n, mut r, mut l, mut u, mut d] = [true; 5];
         let mut behind = false;
+        let mut inside = true;
         for i in 0..8 {
             let (x, y, z) = (c.x[i], c.y[i], c.z[i]);
             z_min = z_min.min(z);
@@ -288,10 +311,12 @@ impl CornerPass {
             l &= x < f.tan_left * z;
             u &= -y > f.tan_up * z;
             d &= -y < f.tan_down * z;
+            inside &= corner_inside(x, y, z, f, near);
             behind |= z <= 1e-9;
         }
         Self {
             outside: n || r || l || u || d,
+            inside,
             z_min,
             behind,
             a: [f64::INFINITY, f64::NEG_INFINITY],

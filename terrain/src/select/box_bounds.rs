@@ -69,6 +69,8 @@ impl Frame<'_> {
                     rho_norm,
                     gain: eval.gain,
                     gain_slack: eval.gain_slack,
+                    // Within the node's box: fully inside the frustums when the node is.
+                    straddles: eval.straddles,
                 }
             };
             let quadrant = bounded(self.bake.coarse_eps(level - 1, cx, cy), node.sag);

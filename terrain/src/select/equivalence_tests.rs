@@ -362,3 +362,92 @@ fn ring_tiles_are_carried_only_where_the_certificate_holds() {
     };
     assert_eq!(carried(&geo, &ellipsoid, 1), (0, 0), "the ellipsoid");
 }
+
+/// A node that meets τ but crosses a frustum plane or holds padding is drawn as its seen
+/// quadrants (`seen_quadrants.rs`) only where that is all that changes: every other item is the
+/// same; each node left out is drawn whole without, and its quadrants that are not drawn hold
+/// no terrain or (on the plane, checked here from the bake's bounds) lie wholly outside the
+/// frustum; each drawn quadrant is the node's child at the node's resolution, from the node's
+/// texture (no refinement), meets τ, and together they are fewer triangles than the node.
+#[test]
+fn a_node_is_drawn_in_its_seen_quadrants_only_where_the_rest_cannot_show() {
+    use super::bound::{outside_of, tile_aabb};
+    use super::cdlod_morph::Morph;
+    use super::walk::{has_terrain, Grid};
+    let scenes = [scene(false), scene(true)];
+    let mut rng = Rng(0x15_07);
+    let (mut on, mut off) = (Selection::default(), Selection::default());
+    let (mut replaced, mut parts, mut culled, mut padding) = (0, 0, 0, 0);
+    for k in 0..120 {
+        let s = &scenes[k % 2];
+        let tau = [1.0, 3.0, 10.0][k % 3];
+        let params = |seen_quadrants| SelectParams {
+            tau_px: tau,
+            earth: s.earth,
+            seen_quadrants,
+            ..SelectParams::default()
+        };
+        let cam = random_camera(&mut rng, s);
+        select(s, &[cam], &params(true), &mut on);
+        select(s, &[cam], &params(false), &mut off);
+        let what = format!("camera {k}, geographic {}", k % 2);
+        let is_part = |i: &DrawItem| i.refinement == 0 && i.node_level + 1 == i.level;
+        for i in on.items.iter().filter(|i| !is_part(i)) {
+            assert!(off.items.contains(i), "{what}: {i:?} only with parts");
+        }
+        assert!(off.items.iter().all(|i| !is_part(i)), "{what}");
+        let costs = super::parts::MeshCosts::of(s.bake.params.tile_size - 1);
+        let grid = Grid::of(&s.bake);
+        for node in off.items.iter().filter(|i| !on.items.contains(i)) {
+            assert_eq!(
+                (node.refinement, node.node_level),
+                (0, node.level),
+                "{what}"
+            );
+            let kids: Vec<&DrawItem> = on
+                .items
+                .iter()
+                .filter(|i| is_part(i) && (i.level, i.tx, i.ty) == (node.level, node.tx, node.ty))
+                .collect();
+            assert!(
+                kids.len() as u32 * costs.quadrant < costs.whole,
+                "{what}: {} quadrants for {node:?}",
+                kids.len()
+            );
+            for kid in &kids {
+                assert_eq!(kid.morph, Morph::QUADRANT, "{what}");
+                assert!(kid.rho_px as f64 <= tau * (1.0 + 1e-9), "{what}: {kid:?}");
+                assert!(kid.eps_m <= node.eps_m, "{what}: {kid:?} over {node:?}");
+            }
+            replaced += 1;
+            parts += kids.len();
+            let level = node.level;
+            for q in 0..4u32 {
+                let (cx, cy) = (2 * node.tx + (q & 1), 2 * node.ty + (q >> 1));
+                if kids.iter().any(|i| (i.node_tx, i.node_ty) == (cx, cy)) {
+                    continue;
+                }
+                if !has_terrain(&s.bake, level - 1, cx, cy) {
+                    padding += 1;
+                    continue;
+                }
+                culled += 1;
+                if s.earth.is_some() {
+                    continue;
+                }
+                let (lo, hi) = grid.rect(level - 1, cx, cy);
+                let (min_h, max_h) = s.bake.bounds(level - 1, cx, cy);
+                let diagonal = grid.cell_diagonal(level);
+                let aabb = tile_aabb(lo, hi, min_h, max_h, cam.position, true, diagonal);
+                let to_view = cam.world_to_view();
+                let corners = aabb.corners().map(|c| to_view.transform_point3(c));
+                assert!(
+                    outside_of(&corners, &cam.frustum, cam.near),
+                    "{what}: quadrant ({cx}, {cy}) of {node:?} left out but in the frustum"
+                );
+            }
+        }
+    }
+    eprintln!("{replaced} nodes drawn as {parts} seen quadrants; {culled} quadrants culled, {padding} padding");
+    assert!(replaced > 20 && culled > 20, "{replaced} {culled}");
+}

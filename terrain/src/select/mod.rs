@@ -13,6 +13,7 @@ mod horizon;
 mod node_cache;
 mod parts;
 mod quadtree;
+mod seen_quadrants;
 mod selection;
 mod skirts;
 mod tess_density;

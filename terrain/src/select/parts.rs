@@ -16,6 +16,9 @@ pub(super) struct NodeEval {
     /// the node from its box alone (`Frame::quadrants_within`).
     pub(super) gain: f64,
     pub(super) gain_slack: f64,
+    /// Some view that sees the node has a corner of its box outside one of its frustum's
+    /// planes: a part of the node may be unseen (`Frame::seen_quadrants`).
+    pub(super) straddles: bool,
 }
 
 /// A child of a split node seen as a quadrant of it (`Frame::quadrants`).

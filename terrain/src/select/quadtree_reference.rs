@@ -5,7 +5,7 @@
 use std::cell::Cell;
 
 use super::super::bound::{
-    frustum_spread_gain, min_depth_of, obliquity_of, outside_of, projected_error_px,
+    frustum_spread_gain, inside_of, min_depth_of, obliquity_of, outside_of, projected_error_px,
     spread_gain_of, vertical_gain_of,
 };
 use super::{Frame, NodeEval, NodeFixed};
@@ -65,7 +65,7 @@ impl Frame<'_> {
         cull: bool,
     ) -> Option<NodeEval> {
         let geo = node.geo;
-        let mut seen = false;
+        let (mut seen, mut straddles) = (false, false);
         let (mut rho_px, mut rho_norm) = (0.0f64, 0.0f64);
         let (mut gain, mut gain_slack) = (0.0f64, 0.0f64);
         for v in &self.views {
@@ -79,6 +79,7 @@ impl Frame<'_> {
                 continue;
             }
             seen = true;
+            straddles |= cull && !inside_of(&corners, f, v.camera.near);
             let z_min = min_depth_of(&corners, v.camera.near);
             let c = match (&geo, cull) {
                 (Some(n), true) => spread_gain_of(&corners, f, v.rotation * n.up, slack),
@@ -106,6 +107,7 @@ impl Frame<'_> {
             rho_norm,
             gain,
             gain_slack,
+            straddles,
         })
     }
 }

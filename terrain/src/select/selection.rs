@@ -73,6 +73,12 @@ pub struct SelectParams {
     /// resolution, the bake's [`ErrorBake::fine_eps`](crate::bake::ErrorBake::fine_eps) — and
     /// drawn in the fewest triangles that meet τ (`walk::choose_parts`).
     pub sixteenths: bool,
+    /// With `parent_quadrants`, in the coarsest-first quadtree: a node that meets τ but that
+    /// no view sees whole (its box crosses a frustum plane) or that holds padding is drawn as
+    /// only its quadrants some view sees and that hold terrain, each at the node's resolution
+    /// from the node's own level texture, when that draws fewer triangles
+    /// (`Frame::seen_quadrants`) — what CDLOD's quadtree does with a node it culls in part.
+    pub seen_quadrants: bool,
     /// `Bounded` with one view on the flat plane: a ring tile refined in an earlier frame is
     /// drawn again while its certificate says every node still meets τ (`carry.rs`), instead
     /// of walked afresh.
@@ -94,6 +100,7 @@ impl Default for SelectParams {
             horizon_cull: false,
             parent_quadrants: true,
             sixteenths: true,
+            seen_quadrants: true,
             carry: true,
         }
     }
@@ -115,7 +122,9 @@ pub struct DrawItem {
     pub ty: u32,
     /// r: the pool slot holds the ring tile at level L−r (0 = unrefined, from the clipmap).
     pub refinement: u32,
-    /// The node drawn: a level-`node_level` tile, L−r ≤ node_level ≤ L.
+    /// The node drawn: a level-`node_level` tile, L−r ≤ node_level ≤ L; or, unrefined, a
+    /// quadrant of the ring tile (node_level = L − 1) drawn at the tile's resolution from its
+    /// level texture ([`SelectParams::seen_quadrants`]).
     pub node_level: u32,
     pub node_tx: u32,
     pub node_ty: u32,

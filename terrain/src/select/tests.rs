@@ -350,6 +350,7 @@ fn choose_parts_draws_the_fewest_triangles_that_meet_tau() {
         rho_norm: rho_px,
         gain: 0.0,
         gain_slack: 0.0,
+        straddles: false,
     };
     // ρ as a sixteenth (None: not measured), as a quadrant; own never read.
     let seen = |sub: Option<f64>, q: f64| Quadrant::Seen {

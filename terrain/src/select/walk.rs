@@ -371,7 +371,7 @@ impl Frame<'_> {
     ) -> Option<[NodeEval; 3]> {
         debug_assert!((1..=3).contains(&errors.len()));
         let geo = node.geo;
-        let (mut seen, mut hidden) = (false, false);
+        let (mut seen, mut hidden, mut straddles) = (false, false, false);
         let mut rho = [(0.0f64, 0.0f64); 3];
         let (mut gain_max, mut slack_max) = (0f64, 0f64);
         for (vi, v) in self.views.iter().enumerate() {
@@ -391,6 +391,7 @@ impl Frame<'_> {
                 continue;
             }
             seen = true;
+            straddles |= cull && !pass.inside;
             let z_min = pass.z_min.max(v.camera.near);
             // On the plane the gain does not depend on the slack: formed once for all errors.
             let flat_gain = match (&geo, cull) {
@@ -428,6 +429,7 @@ impl Frame<'_> {
                 rho_norm: rho[k].1,
                 gain: gain_max,
                 gain_slack: slack_max,
+                straddles,
             }
         };
         seen.then(|| [eval(0), eval(1), eval(2)])
