@@ -41,8 +41,9 @@ pub enum SkirtRule {
     None,
     /// Every edge of every node.
     Everywhere,
-    /// The edges not shared with a node drawn at the same resolution
-    /// (`select::node_skirts`); every edge of a node that reaches past the grid's last
+    /// The edges not shared with a node drawn at the same resolution, and not facing a
+    /// place where nothing is drawn — culled — inside the grid (`select::node_skirts`);
+    /// every edge of a node that reaches past the grid's last
     /// sample (its vertices there fold onto the last sample, each node by its own step) and
     /// every node of a projected grid (its nodes' polynomials meet within their fit error,
     /// not exactly).
@@ -187,12 +188,17 @@ fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)]) -> (Vec<f32>, Vec
     let projected = f.earth.is_some_and(|g| g.projected.is_some());
     for ((item, _), e) in draw_list.iter().zip(&mut edges) {
         let end = |t: u32| (t as u64 + 1) * (q << item.node_level);
-        if f.skirts == SkirtRule::Everywhere
-            || projected
-            || end(item.node_tx) >= f.valid_samples[0] as u64
-            || end(item.node_ty) >= f.valid_samples[1] as u64
-        {
+        let [east, north] = [item.node_tx, item.node_ty].map(end);
+        let [last_x, last_y] = f.valid_samples.map(|v| (v as u64).saturating_sub(1));
+        if f.skirts == SkirtRule::Everywhere || projected || east > last_x || north > last_y {
             *e = ALL_EDGES;
+        }
+        // The grid's last sample: its edge keeps the skirt its first one keeps.
+        if east == last_x {
+            *e |= 1 << 1;
+        }
+        if north == last_y {
+            *e |= 1 << 2;
         }
     }
     (reach, edges)
@@ -614,11 +620,13 @@ mod tests {
     }
 
     /// The skirt rule on a small frame: two tiles side by side at one level share an edge
-    /// without skirts; a finer node north of one keeps its skirts (against the coarser tile
-    /// and across the split); a quadrant drawn at its parent's resolution goes without one
-    /// against the tile of that resolution south of it; a tile reaching past the grid's last
-    /// sample keeps all four; CDLOD's rule draws none, and the default fewer triangles than
-    /// skirts everywhere.
+    /// without skirts; a finer node north of one keeps its skirts against the coarser tile
+    /// and the grid's first samples, and goes without them against the holes east and north
+    /// of it (nothing drawn there: culled); a quadrant drawn at its parent's resolution goes
+    /// without one against the tile of that resolution south of it and the holes around it; a
+    /// tile reaching past the grid's last sample keeps all four, one ending on it the skirt
+    /// there; CDLOD's rule draws none, and the default fewer triangles than skirts
+    /// everywhere.
     #[test]
     fn skirts_go_where_resolutions_differ() {
         use aerie_terrain::select::cdlod_morph::Morph;
@@ -640,15 +648,17 @@ mod tests {
         // The second tile spans samples 64..=128: past the last one.
         let f = frame(SkirtRule::WhereResolutionsDiffer, [100, 1000], &[]);
         let (s, e, n, w) = (1u8, 2u8, 4u8, 8u8);
-        assert_eq!(
-            skirts_of(&f, &list).1,
-            [s | n | w, ALL_EDGES, ALL_EDGES, e | n | w]
-        );
+        assert_eq!(skirts_of(&f, &list).1, [s | n | w, ALL_EDGES, s | w, 0]);
         let inside = InstanceFrame {
             valid_samples: [1000, 1000],
             ..f
         };
-        assert_eq!(skirts_of(&inside, &list).1[1], s | n | e);
+        assert_eq!(skirts_of(&inside, &list).1[1], s | n);
+        let on_the_last = InstanceFrame {
+            valid_samples: [129, 1000],
+            ..f
+        };
+        assert_eq!(skirts_of(&on_the_last, &list).1[1], s | n | e);
         for (rule, want) in [
             (SkirtRule::None, [0; 4]),
             (SkirtRule::Everywhere, [ALL_EDGES; 4]),
@@ -665,10 +675,11 @@ mod tests {
         let grids = 3 * 512 + 128;
         assert_eq!(tris(SkirtRule::None), grids);
         assert_eq!(tris(SkirtRule::Everywhere), grids + 3 * 128 + 64);
-        // Bare: the first tile's east edge (32 triangles) and the quadrant's south (16).
+        // Bare: the first tile's east edge (32 triangles), the finer tile's east and north
+        // (64) and the quadrant's four (64).
         assert_eq!(
             tris(SkirtRule::WhereResolutionsDiffer),
-            grids + 3 * 128 + 64 - 48
+            grids + 3 * 128 + 64 - 160
         );
     }
 

@@ -48,12 +48,24 @@ pub struct NodeSkirts {
 /// technique"), so two nodes drawn at the same resolution put the same vertices — the same
 /// samples, the same heights — along an edge they share: no crack opens there and that
 /// edge needs no skirt. An edge needs one when the node across it is drawn at another
-/// resolution (a T-junction), when finer nodes lie across it (found from their side, which
-/// keeps theirs), and when nothing is drawn across it (culled, or the grid's edge).
+/// resolution (a T-junction) and when finer nodes lie across it (found from their side, which
+/// keeps theirs). Where nothing is drawn across it (the node of its size there neither drawn,
+/// nor split, nor inside a drawn node) the edge needs none either: that node was culled — its
+/// box, which holds the strip between the two edges, is outside every view or hidden — or
+/// holds no terrain (the renderer keeps the skirts of edges on the grid's last sample, as this
+/// keeps those on its first).
+///
+/// `nodes` must not overlap (no selection draws a place twice); where they do, an edge with
+/// nothing across keeps its skirt.
 pub fn node_skirts(nodes: &[(u32, u32, u32, f32)], resolution: &[u32]) -> NodeSkirts {
     assert_eq!(nodes.len(), resolution.len(), "a resolution per node");
     match LevelGrids::of(nodes) {
-        Some(grids) => walk_neighbours(nodes, resolution, |l, x, y| grids.get(l, x, y)),
+        Some(grids) => walk_neighbours(
+            nodes,
+            resolution,
+            |l, x, y| grids.get(l, x, y),
+            |l, x, y| grids.below(l, x, y),
+        ),
         None => node_skirts_hashed(nodes, resolution),
     }
 }
@@ -65,10 +77,33 @@ fn node_skirts_hashed(nodes: &[(u32, u32, u32, f32)], resolution: &[u32]) -> Nod
     for (i, &(l, x, y, _)) in nodes.iter().enumerate() {
         index.insert((l, x, y), i);
     }
-    walk_neighbours(nodes, resolution, |l, x, y| match index.get(&(l, x, y)) {
-        Some(&j) => Cell::Drawn(j),
-        None => Cell::Empty,
-    })
+    // The drawn nodes' ancestors, where drawn nodes lie below, marked as the grids mark them
+    // (up to the first marked already; all unsure once a drawn node lies inside another).
+    let top = nodes.iter().map(|n| n.0).max().unwrap_or(0);
+    let mut split: std::collections::HashSet<(u32, u32, u32), FastHash> =
+        std::collections::HashSet::with_capacity_and_hasher(nodes.len(), FastHash::default());
+    let mut overlap = false;
+    'nodes: for &(l, x, y, _) in nodes {
+        for k in 1..=top - l {
+            let up = (l + k, x >> k, y >> k);
+            if index.contains_key(&up) {
+                overlap = true;
+                break 'nodes;
+            }
+            if !split.insert(up) {
+                continue 'nodes;
+            }
+        }
+    }
+    walk_neighbours(
+        nodes,
+        resolution,
+        |l, x, y| match index.get(&(l, x, y)) {
+            Some(&j) => Cell::Drawn(j),
+            None => Cell::Empty,
+        },
+        |l, x, y| overlap || split.contains(&(l, x, y)),
+    )
 }
 
 /// What a lookup finds at (level, x, y).
@@ -83,11 +118,13 @@ enum Cell {
     Split,
 }
 
-/// The walk itself, over any lookup (a `Split` cell ends the walk).
+/// The walk itself, over any lookup (a `Split` cell ends the walk); `below` says whether
+/// drawn nodes may lie inside a cell (true where unsure).
 fn walk_neighbours(
     nodes: &[(u32, u32, u32, f32)],
     resolution: &[u32],
     find: impl Fn(u32, u32, u32) -> Cell,
+    below: impl Fn(u32, u32, u32) -> bool,
 ) -> NodeSkirts {
     let top = nodes.iter().map(|n| n.0).max().unwrap_or(0);
     let mut reach: Vec<f32> = nodes.iter().map(|n| n.3).collect();
@@ -100,11 +137,13 @@ fn walk_neighbours(
             if nx < 0 || ny < 0 {
                 continue;
             }
+            let mut covered = false;
             for k in 0..=(top - l) {
                 match find(l + k, (nx >> k) as u32, (ny >> k) as u32) {
                     Cell::Empty => continue,
                     Cell::Split => break,
                     Cell::Drawn(j) => {
+                        covered = true;
                         if j != i {
                             reach[i] = reach[i].max(nodes[j].3);
                             reach[j] = reach[j].max(e);
@@ -117,6 +156,12 @@ fn walk_neighbours(
                         break;
                     }
                 }
+            }
+            // Nothing drawn across: the neighbour culled (its box outside every view, or
+            // hidden) — the strip between the two edges lies in that box, which no ray of a
+            // view reaches — or no terrain there.
+            if !covered && !below(l, nx as u32, ny as u32) {
+                edges[i] &= !(1 << edge);
             }
         }
     }
@@ -231,6 +276,18 @@ impl LevelGrids {
         Some(Self { levels, overlap })
     }
 
+    /// Whether drawn nodes may lie inside cell (level, x, y): it is marked split, or the
+    /// marks stopped at an overlap.
+    fn below(&self, level: u32, x: u32, y: u32) -> bool {
+        if self.overlap {
+            return true;
+        }
+        let Some(g) = self.levels.get(level as usize) else {
+            return false;
+        };
+        g.at(x, y).is_some_and(|at| g.cells[at] == SPLIT)
+    }
+
     fn get(&self, level: u32, x: u32, y: u32) -> Cell {
         let Some(g) = self.levels.get(level as usize) else {
             return Cell::Empty;
@@ -330,8 +387,9 @@ mod tests {
 
     /// Against a brute force over every pair of nodes: an edge goes without a skirt exactly
     /// when the one node across all of it is as coarse or coarser and drawn at the same
-    /// resolution — never against a node at another resolution, never where nothing is drawn
-    /// or finer nodes lie across it; and same-level neighbours at one resolution both go
+    /// resolution, or when nothing is drawn across it nor inside the cell of its size there
+    /// (a hole: culled) — never against a node at another resolution, never where finer nodes
+    /// lie across it or inside that cell; and same-level neighbours at one resolution both go
     /// without. Covers with holes, every resolution offset.
     #[test]
     fn an_edge_goes_without_a_skirt_only_against_its_own_resolution() {
@@ -369,9 +427,22 @@ mod tests {
                             }
                         })
                         .collect();
-                    let want_bare = across.len() == 1
+                    // The cell of the node's size across the edge, in level-0 cells.
+                    let side = 1u32 << n.0;
+                    let [c0, c1, d0, d1] = match edge {
+                        0 => [x0, x1, y0 - side, y0],
+                        1 => [x1, x1 + side, y0, y1],
+                        2 => [x0, x1, y1, y1 + side],
+                        _ => [x0 - side, x0, y0, y1],
+                    };
+                    let inside = nodes.iter().any(|m| {
+                        let [a0, a1, b0, b1] = fp(m);
+                        c0 <= a0 && a1 <= c1 && d0 <= b0 && b1 <= d1
+                    });
+                    let want_bare = (across.len() == 1
                         && nodes[across[0]].0 >= n.0
-                        && resolution[across[0]] == resolution[i];
+                        && resolution[across[0]] == resolution[i])
+                        || (across.is_empty() && !inside);
                     let has_skirt = skirts.edges[i] & (1 << edge) != 0;
                     assert_eq!(
                         has_skirt,
