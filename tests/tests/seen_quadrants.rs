@@ -1,5 +1,6 @@
-//! A node that meets τ but crosses a frustum plane is drawn as only its seen quadrants, each
-//! read from the node's own level texture (`select::seen_quadrants`, `terrain.vert`'s fetch),
+//! A node that meets τ but crosses a frustum plane is drawn as only its seen quadrants (a
+//! quadrant that crosses one too as its seen sixteenths), each read from the node's own level
+//! texture (`select::seen_quadrants`, `terrain.vert`'s fetch),
 //! on lavapipe with validation on. The frame must be the frame the node whole draws — the
 //! same surface, depth and colour, where the frame shows — in fewer triangles; the quadrants
 //! far from the eye lie outside the finer level's texture, so a quadrant read from its own
@@ -23,7 +24,8 @@ struct Drawn {
     depth: Vec<f32>,
     colour: Vec<u8>,
     triangles: u64,
-    seen_quadrants: usize,
+    /// Quadrants and sixteenths drawn from their node's texture.
+    seen_quadrants: [usize; 2],
 }
 
 fn frame(hf: &Heightfield, cam: &Camera, seen_quadrants: bool, normal_maps: bool) -> Drawn {
@@ -39,12 +41,14 @@ fn frame(hf: &Heightfield, cam: &Camera, seen_quadrants: bool, normal_maps: bool
     let mut r = TerrainRenderer::new(&desc).expect("renderer");
     r.load_terrain(ds, bake, cam.position).expect("load");
     let stats = render_settled(&mut r, cam, 3);
-    let seen = r
-        .selection()
-        .items
-        .iter()
-        .filter(|i| i.refinement == 0 && i.node_level + 1 == i.level)
-        .count();
+    let parts = |up: u32| {
+        r.selection()
+            .items
+            .iter()
+            .filter(|i| i.refinement == 0 && i.node_level + up == i.level)
+            .count()
+    };
+    let seen = [parts(1), parts(2)];
     let drawn = Drawn {
         depth: r.depth(),
         colour: r.colour_rgba(),
@@ -84,14 +88,15 @@ fn check(name: &str, hf: &Heightfield, eye: DVec3, heading: f64, pitch: f64) {
             .filter(|(a, b)| a.iter().zip(*b).any(|(x, y)| x.abs_diff(*y) > 2))
             .count();
         eprintln!(
-            "{name}, normal maps {normal_maps}: {terrain} terrain pixels; triangles {} whole, {} in seen quadrants ({} drawn); pixels apart: depth {depth_off}, colour {colour_off}",
-            whole.triangles, parts.triangles, parts.seen_quadrants
+            "{name}, normal maps {normal_maps}: {terrain} terrain pixels; triangles {} whole, {} in seen parts ({} quadrants, {} sixteenths); pixels apart: depth {depth_off}, colour {colour_off}",
+            whole.triangles, parts.triangles, parts.seen_quadrants[0], parts.seen_quadrants[1]
         );
         assert!(terrain > (W * H / 3) as usize, "{terrain}");
-        assert_eq!(whole.seen_quadrants, 0);
+        assert_eq!(whole.seen_quadrants, [0, 0]);
         assert!(
-            parts.seen_quadrants >= 4,
-            "{name}: the scene drew no node in its seen quadrants"
+            parts.seen_quadrants[0] >= 4 && parts.seen_quadrants[1] >= 2,
+            "{name}: the scene drew too few nodes in their seen parts: {:?}",
+            parts.seen_quadrants
         );
         assert!(parts.triangles < whole.triangles);
         assert_eq!(depth_off, 0, "{name}: the quadrants drew another surface");

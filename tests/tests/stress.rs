@@ -123,10 +123,10 @@ fn check_selection(
 ) {
     let hf = &s.ds.hf;
     for it in &sel.items {
-        // Within its ring tile's refinement, or (`SelectParams::seen_quadrants`) a quadrant of
-        // an unrefined ring tile drawn at the tile's resolution.
-        let seen_quadrant =
-            it.refinement == 0 && it.node_level + 1 == it.level && it.morph.levels_up() == 1;
+        // Within its ring tile's refinement, or (`SelectParams::seen_quadrants`) a quadrant or
+        // sixteenth of an unrefined ring tile drawn at the tile's resolution.
+        let up = it.morph.levels_up();
+        let seen_quadrant = it.refinement == 0 && up >= 1 && it.node_level + up == it.level;
         assert!(
             it.node_level <= it.level
                 && (it.level - it.node_level <= it.refinement || seen_quadrant),

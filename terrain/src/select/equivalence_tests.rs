@@ -364,20 +364,21 @@ fn ring_tiles_are_carried_only_where_the_certificate_holds() {
 }
 
 /// A node that meets τ but crosses a frustum plane or holds padding is drawn as its seen
-/// quadrants (`seen_quadrants.rs`) only where that is all that changes: every other item is the
-/// same; each node left out is drawn whole without, and its quadrants that are not drawn hold
-/// no terrain or (on the plane, checked here from the bake's bounds) lie wholly outside the
-/// frustum; each drawn quadrant is the node's child at the node's resolution, from the node's
-/// texture (no refinement), meets τ, and together they are fewer triangles than the node.
+/// parts (`seen_quadrants.rs`) only where that is all that changes: every other item is the
+/// same; each node left out is drawn whole without, and what its parts leave out of it holds
+/// no terrain or (on the plane, checked here from the bake's bounds) lies wholly outside the
+/// frustum; each part is a quadrant or a sixteenth of the node at the node's resolution, from
+/// the node's texture (no refinement), meets τ with ε within the node's, no two overlap, and
+/// together they are fewer triangles than the node.
 #[test]
-fn a_node_is_drawn_in_its_seen_quadrants_only_where_the_rest_cannot_show() {
+fn a_node_is_drawn_in_its_seen_parts_only_where_the_rest_cannot_show() {
     use super::bound::{outside_of, tile_aabb};
     use super::cdlod_morph::Morph;
     use super::walk::{has_terrain, Grid};
     let scenes = [scene(false), scene(true)];
     let mut rng = Rng(0x15_07);
     let (mut on, mut off) = (Selection::default(), Selection::default());
-    let (mut replaced, mut parts, mut culled, mut padding) = (0, 0, 0, 0);
+    let (mut replaced, mut quadrants, mut sixteenths, mut culled) = (0, 0, 0, 0);
     for k in 0..120 {
         let s = &scenes[k % 2];
         let tau = [1.0, 3.0, 10.0][k % 3];
@@ -391,63 +392,85 @@ fn a_node_is_drawn_in_its_seen_quadrants_only_where_the_rest_cannot_show() {
         select(s, &[cam], &params(true), &mut on);
         select(s, &[cam], &params(false), &mut off);
         let what = format!("camera {k}, geographic {}", k % 2);
-        let is_part = |i: &DrawItem| i.refinement == 0 && i.node_level + 1 == i.level;
+        let is_part = |i: &DrawItem| i.refinement == 0 && i.node_level < i.level;
         for i in on.items.iter().filter(|i| !is_part(i)) {
             assert!(off.items.contains(i), "{what}: {i:?} only with parts");
         }
         assert!(off.items.iter().all(|i| !is_part(i)), "{what}");
         let costs = super::parts::MeshCosts::of(s.bake.params.tile_size - 1);
         let grid = Grid::of(&s.bake);
+        let to_view = cam.world_to_view();
+        let outside = |l: u32, x: u32, y: u32, drawn: u32| {
+            let (lo, hi) = grid.rect(l, x, y);
+            let (min_h, max_h) = s.bake.bounds(l, x, y);
+            let diagonal = grid.cell_diagonal(drawn);
+            let aabb = tile_aabb(lo, hi, min_h, max_h, cam.position, true, diagonal);
+            let corners = aabb.corners().map(|c| to_view.transform_point3(c));
+            outside_of(&corners, &cam.frustum, cam.near)
+        };
         for node in off.items.iter().filter(|i| !on.items.contains(i)) {
-            assert_eq!(
-                (node.refinement, node.node_level),
-                (0, node.level),
-                "{what}"
-            );
+            let level = node.level;
+            assert_eq!((node.refinement, node.node_level), (0, level), "{what}");
             let kids: Vec<&DrawItem> = on
                 .items
                 .iter()
-                .filter(|i| is_part(i) && (i.level, i.tx, i.ty) == (node.level, node.tx, node.ty))
+                .filter(|i| is_part(i) && (i.level, i.tx, i.ty) == (level, node.tx, node.ty))
                 .collect();
-            assert!(
-                kids.len() as u32 * costs.quadrant < costs.whole,
-                "{what}: {} quadrants for {node:?}",
-                kids.len()
-            );
+            let mut triangles = 0;
             for kid in &kids {
-                assert_eq!(kid.morph, Morph::QUADRANT, "{what}");
+                let up = level - kid.node_level;
+                let (mesh, morph) = match up {
+                    1 => (costs.quadrant, Morph::QUADRANT),
+                    2 => (costs.sixteenth, Morph::SIXTEENTH),
+                    _ => panic!("{what}: {kid:?}"),
+                };
+                assert_eq!(kid.morph, morph, "{what}");
+                assert_eq!((kid.node_tx >> up, kid.node_ty >> up), (node.tx, node.ty));
                 assert!(kid.rho_px as f64 <= tau * (1.0 + 1e-9), "{what}: {kid:?}");
                 assert!(kid.eps_m <= node.eps_m, "{what}: {kid:?} over {node:?}");
+                triangles += mesh;
+                quadrants += (up == 1) as usize;
+                sixteenths += (up == 2) as usize;
             }
+            assert!(triangles < costs.whole, "{what}: {kids:?} for {node:?}");
             replaced += 1;
-            parts += kids.len();
-            let level = node.level;
-            for q in 0..4u32 {
-                let (cx, cy) = (2 * node.tx + (q & 1), 2 * node.ty + (q >> 1));
-                if kids.iter().any(|i| (i.node_tx, i.node_ty) == (cx, cy)) {
-                    continue;
-                }
-                if !has_terrain(&s.bake, level - 1, cx, cy) {
-                    padding += 1;
+            // Each sixteenth of the node (quadrant of a level-1 node): drawn (itself or in
+            // its quadrant), or no terrain, or outside the frustum by its box or its
+            // quadrant's; never drawn twice.
+            let base = level.saturating_sub(2);
+            let side = 1u32 << (level - base);
+            for j in 0..side * side {
+                let (gx, gy) = (side * node.tx + j % side, side * node.ty + j / side);
+                let covering = kids
+                    .iter()
+                    .filter(|i| {
+                        let up = i.node_level - base;
+                        (i.node_tx, i.node_ty) == (gx >> up, gy >> up)
+                    })
+                    .count();
+                assert!(covering <= 1, "{what}: overlapping parts");
+                let up = level - 1 - base;
+                let (qx, qy) = (gx >> up, gy >> up);
+                if covering == 1 || !has_terrain(&s.bake, base, gx, gy) {
                     continue;
                 }
                 culled += 1;
                 if s.earth.is_some() {
                     continue;
                 }
-                let (lo, hi) = grid.rect(level - 1, cx, cy);
-                let (min_h, max_h) = s.bake.bounds(level - 1, cx, cy);
-                let diagonal = grid.cell_diagonal(level);
-                let aabb = tile_aabb(lo, hi, min_h, max_h, cam.position, true, diagonal);
-                let to_view = cam.world_to_view();
-                let corners = aabb.corners().map(|c| to_view.transform_point3(c));
+                let gone = outside(level - 1, qx, qy, level) || outside(base, gx, gy, level);
                 assert!(
-                    outside_of(&corners, &cam.frustum, cam.near),
-                    "{what}: quadrant ({cx}, {cy}) of {node:?} left out but in the frustum"
+                    gone,
+                    "{what}: part ({base}, {gx}, {gy}) of {node:?} left out but in the frustum; parts {kids:?}"
                 );
             }
         }
     }
-    eprintln!("{replaced} nodes drawn as {parts} seen quadrants; {culled} quadrants culled, {padding} padding");
-    assert!(replaced > 20 && culled > 20, "{replaced} {culled}");
+    eprintln!(
+        "{replaced} nodes drawn as {quadrants} quadrants and {sixteenths} sixteenths; {culled} sixteenths left out"
+    );
+    assert!(
+        replaced > 20 && culled > 20 && sixteenths > 20,
+        "{replaced} {culled} {sixteenths}"
+    );
 }

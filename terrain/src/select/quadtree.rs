@@ -11,7 +11,6 @@ use super::bound::{frustum_gain_floor, frustum_vertical_gain};
 use super::carry::{Carry, CarryKey, FrustumPlanes, Optics, ViewNow};
 use super::cdlod_morph::Morph;
 use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant, Upgrade};
-use super::seen_quadrants::seen_quadrant_items;
 use super::selection::{
     AllReady, DrawItem, LevelStats, LodMode, SelectParams, Selection, TileReadiness, View,
     MAX_REFINEMENT,
@@ -313,6 +312,7 @@ fn select_coarsest_first(
         })
         .collect();
     let mut formed: Vec<[Quadrant; 4]> = Vec::new();
+    let mut parts = Vec::new();
     while let Some((i, tx, ty, known, retry)) = stack.pop() {
         let kids = match retry {
             Retry::Formed(k) => frame.formed(Some(&formed[k as usize])).copied(),
@@ -356,17 +356,16 @@ fn select_coarsest_first(
         let grand = (known.is_some() && retry && children_ready && frame.sixteenths_below(level))
             .then(|| frame.fixed(level + 1, tx / 2, ty / 2));
         if rho_norm <= 1.0 && grand.is_none() {
-            match frame.seen_quadrants(&eval, level, tx, ty) {
-                Some(quads) => {
-                    for item in seen_quadrant_items(&quads, level, tx, ty) {
-                        push_drawn(out, i, item);
-                    }
+            if frame.seen_parts(&eval, level, tx, ty, &mut parts) {
+                for &item in &parts {
+                    push_drawn(out, i, item);
                 }
-                None => push_drawn(
+            } else {
+                push_drawn(
                     out,
                     i,
                     DrawItem::whole(level, tx, ty, eps as f32, rho as f32),
-                ),
+                );
             }
             continue;
         }

@@ -75,9 +75,10 @@ pub struct SelectParams {
     pub sixteenths: bool,
     /// With `parent_quadrants`, in the coarsest-first quadtree: a node that meets τ but that
     /// no view sees whole (its box crosses a frustum plane) or that holds padding is drawn as
-    /// only its quadrants some view sees and that hold terrain, each at the node's resolution
-    /// from the node's own level texture, when that draws fewer triangles
-    /// (`Frame::seen_quadrants`) — what CDLOD's quadtree does with a node it culls in part.
+    /// only its quadrants some view sees and that hold terrain (one that crosses a plane too
+    /// as its seen sixteenths), each at the node's resolution from the node's own level
+    /// texture, when that draws fewer triangles (`Frame::seen_parts`) — what CDLOD's quadtree
+    /// does with a node it culls in part.
     pub seen_quadrants: bool,
     /// `Bounded` with one view on the flat plane: a ring tile refined in an earlier frame is
     /// drawn again while its certificate says every node still meets τ (`carry.rs`), instead
@@ -123,8 +124,9 @@ pub struct DrawItem {
     /// r: the pool slot holds the ring tile at level L−r (0 = unrefined, from the clipmap).
     pub refinement: u32,
     /// The node drawn: a level-`node_level` tile, L−r ≤ node_level ≤ L; or, unrefined, a
-    /// quadrant of the ring tile (node_level = L − 1) drawn at the tile's resolution from its
-    /// level texture ([`SelectParams::seen_quadrants`]).
+    /// quadrant or sixteenth of the ring tile (node_level = L − 1 or L − 2, `morph` saying
+    /// which) drawn at the tile's resolution from its level texture
+    /// ([`SelectParams::seen_quadrants`]).
     pub node_level: u32,
     pub node_tx: u32,
     pub node_ty: u32,
