@@ -1,9 +1,10 @@
-//! Rough synthetic hills of the GPU oracle tests (`cdlod_morph.rs`, `skirt_edges.rs`): three
-//! scales of waves between about 0 and 500 m, so that a frame's nodes are drawn at many
-//! resolutions side by side.
+//! Rough synthetic hills of the GPU oracle tests (`cdlod_morph.rs`, `skirt_edges.rs`,
+//! `seen_quadrants.rs`): three scales of waves between about 0 and 500 m, so that a frame's
+//! nodes are drawn at many resolutions side by side.
 
 use aerie::terrain::heightfield::GeoReference;
 use aerie::terrain::Heightfield;
+use glam::DVec3;
 
 /// `n` × `n` samples `spacing_x` × `spacing_y` metres apart; the finest waves `fine_m` high.
 pub fn hills(
@@ -32,4 +33,13 @@ pub fn hills(
         voids_filled: 0,
         spacing_note: "synthetic".into(),
     }
+}
+
+/// The eye `agl` metres above `hf`'s sample nearest (x, y) metres east and north.
+pub fn eye_above(hf: &Heightfield, x: f64, y: f64, agl: f64) -> DVec3 {
+    let (c, r) = (
+        (x / hf.spacing_x).round() as usize,
+        (y / hf.spacing_y).round() as usize,
+    );
+    DVec3::new(x, y, hf.heights[r * hf.width + c] as f64 + agl)
 }

@@ -12,6 +12,7 @@ use aerie::render::frame::TerrainRenderer;
 use aerie::terrain::heightfield::GeoReference;
 use aerie::terrain::heightfield::Heightfield;
 use aerie::terrain::select::{LodMode, SelectParams};
+use aerie_tests::hills::eye_above;
 use aerie_tests::*;
 use glam::DVec3;
 
@@ -102,15 +103,6 @@ fn check(name: &str, hf: &Heightfield, eye: DVec3, heading: f64, pitch: f64) {
         assert_eq!(depth_off, 0, "{name}: the quadrants drew another surface");
         assert_eq!(colour_off, 0, "{name}: the quadrants shade otherwise");
     }
-}
-
-/// The eye `agl` metres above the hills' sample nearest (x, y) metres east and north.
-fn eye_above(hf: &Heightfield, x: f64, y: f64, agl: f64) -> DVec3 {
-    let (c, r) = (
-        (x / hf.spacing_x).round() as usize,
-        (y / hf.spacing_y).round() as usize,
-    );
-    DVec3::new(x, y, hf.heights[r * hf.width + c] as f64 + agl)
 }
 
 #[test]

@@ -14,6 +14,7 @@ use aerie::render::tile_instances::SkirtRule;
 use aerie::terrain::heightfield::GeoReference;
 use aerie::terrain::heightfield::Heightfield;
 use aerie::terrain::select::{LodMode, SelectParams};
+use aerie_tests::hills::eye_above;
 use aerie_tests::*;
 use glam::DVec3;
 
@@ -109,15 +110,6 @@ fn check(name: &str, hf: &Heightfield, eye: DVec3, heading: f64, pitch: f64) {
         "{name}: skirts left out where a crack opens"
     );
     assert!(none.1 < needed.1 && needed.1 < everywhere.1);
-}
-
-/// The eye `agl` metres above the hills' sample nearest (x, y) metres east and north.
-fn eye_above(hf: &Heightfield, x: f64, y: f64, agl: f64) -> DVec3 {
-    let (c, r) = (
-        (x / hf.spacing_x).round() as usize,
-        (y / hf.spacing_y).round() as usize,
-    );
-    DVec3::new(x, y, hf.heights[r * hf.width + c] as f64 + agl)
 }
 
 #[test]
