@@ -43,3 +43,17 @@ pub fn eye_above(hf: &Heightfield, x: f64, y: f64, agl: f64) -> DVec3 {
     );
     DVec3::new(x, y, hf.heights[r * hf.width + c] as f64 + agl)
 }
+
+/// [`hills`] on a geographic grid: `n` × `n` samples of 1/3600° from 46.5° N, 11° E (513:
+/// about 11 km by 16 km), drawn on the WGS84 ellipsoid.
+pub fn geographic_hills(n: usize, fine_m: f64) -> Heightfield {
+    let d = 1.0 / 3600.0;
+    let geo = GeoReference::Geographic {
+        south_lat_deg: 46.5,
+        west_lon_deg: 11.0,
+        dlat_deg: d,
+        dlon_deg: d,
+    };
+    let (sx, sy) = aerie::terrain::load::geographic_spacing_m(46.6, d, d);
+    hills(n, sx, sy, fine_m, Some(geo))
+}

@@ -9,7 +9,6 @@
 
 use aerie::camera::{Attitude, Camera, Frustum};
 use aerie::render::frame::TerrainRenderer;
-use aerie::terrain::heightfield::GeoReference;
 use aerie::terrain::heightfield::Heightfield;
 use aerie::terrain::select::{LodMode, SelectParams};
 use aerie_tests::hills::eye_above;
@@ -119,15 +118,7 @@ fn seen_quadrants_draw_the_whole_nodes_frame_on_the_plane() {
 
 #[test]
 fn seen_quadrants_draw_the_whole_nodes_frame_on_the_ellipsoid() {
-    // 513 samples of 1/3600° from 46.5° N, 11° E: about 11 km by 16 km.
-    let geo = GeoReference::Geographic {
-        south_lat_deg: 46.5,
-        west_lon_deg: 11.0,
-        dlat_deg: 1.0 / 3600.0,
-        dlon_deg: 1.0 / 3600.0,
-    };
-    let (sx, sy) = aerie::terrain::load::geographic_spacing_m(46.6, 1.0 / 3600.0, 1.0 / 3600.0);
-    let hf = aerie_tests::hills::hills(N, sx, sy, 30.0, Some(geo));
+    let hf = aerie_tests::hills::geographic_hills(N, 30.0);
     check(
         "ellipsoid",
         &hf,

@@ -120,15 +120,7 @@ fn skirts_where_resolutions_differ_close_every_crack_on_the_plane() {
 
 #[test]
 fn skirts_where_resolutions_differ_close_every_crack_on_the_ellipsoid() {
-    // 513 samples of 1/3600° from 46.5° N, 11° E: about 11 km by 16 km.
-    let geo = GeoReference::Geographic {
-        south_lat_deg: 46.5,
-        west_lon_deg: 11.0,
-        dlat_deg: 1.0 / 3600.0,
-        dlon_deg: 1.0 / 3600.0,
-    };
-    let (sx, sy) = aerie::terrain::load::geographic_spacing_m(46.6, 1.0 / 3600.0, 1.0 / 3600.0);
-    let hf = hills(sx, sy, Some(geo));
+    let hf = aerie_tests::hills::geographic_hills(N, 30.0);
     check(
         "ellipsoid",
         &hf,
