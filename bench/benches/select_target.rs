@@ -3,7 +3,9 @@
 //! ellipsoid (a 1″ geographic grid), with ring tiles carried across frames where they may be
 //! (`SelectParams::carry`, the default: one view on the plane) and walked afresh every frame
 //! (`_walked_afresh`). Besides criterion's figures, the flight is flown three more times in
-//! order (thread CPU time, each frame's least) for the per-frame median and p99. Then how much of each frame's cut the cut of 1, 8
+//! order (thread CPU time, each frame's least) for the per-frame median and p99; and with the
+//! seen parts (`SelectParams::seen_quadrants`) on and off, interleaved frame by frame, for what
+//! they cost. Then how much of each frame's cut the cut of 1, 8
 //! and 30 frames before already drew (the same nodes in the same parts): what a selection
 //! carried across frames could keep.
 
@@ -67,6 +69,41 @@ fn selection_target(c: &mut Criterion) {
                 100.0 * carried as f64 / drawn.max(1) as f64
             );
         }
+        // The seen parts (`SelectParams::seen_quadrants`) on and off, interleaved frame by
+        // frame in one process (the order swapped each pass), each frame's least of three: on
+        // a loaded machine runs minutes apart differ more than the two do.
+        let variants = [true, false].map(|seen_quadrants| SelectParams {
+            earth: scene.earth,
+            seen_quadrants,
+            ..SelectParams::default()
+        });
+        let mut least = [
+            vec![f64::INFINITY; cams.len()],
+            vec![f64::INFINITY; cams.len()],
+        ];
+        for pass in 0..3 {
+            let mut sels = [Selection::default(), Selection::default()];
+            for (f, cam) in cams.iter().enumerate() {
+                for k in [pass % 2, 1 - pass % 2] {
+                    let t = thread_cpu_us();
+                    black_box(run(&scene, cam, &variants[k], &mut sels[k]));
+                    least[k][f] = least[k][f].min(thread_cpu_us() - t);
+                }
+            }
+        }
+        let median = |v: &[f64]| {
+            let mut v = v.to_vec();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        let ratios: Vec<f64> = least[0].iter().zip(&least[1]).map(|(a, b)| a / b).collect();
+        eprintln!(
+            "select_target {}: seen parts on {:.1} µs, off {:.1} µs per frame (medians, interleaved); per-frame ratio median {:.3}",
+            scene.name,
+            median(&least[0]),
+            median(&least[1]),
+            median(&ratios)
+        );
         // The cuts of fresh walks: what a carried selection can keep.
         let params = SelectParams {
             earth: scene.earth,
