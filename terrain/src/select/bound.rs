@@ -123,24 +123,18 @@ pub(super) fn outside_of(corners: &[DVec3; 8], f: &Frustum, near: f64) -> bool {
         || all(&|p| -p.y < f.tan_down * p.z)
 }
 
-/// Whether every corner (view space) is inside every plane of the frustum: no part of the box
-/// can be outside it. The reference evaluation's (tests); the fast path's is `CornerPass::inside`.
+/// Whether no corner (view space) is outside any plane of the frustum — outside by
+/// [`outside_of`]'s tests —: no part of the box can be culled. The reference evaluation's
+/// (tests); the fast path's is `CornerPass::inside`, from the same comparisons as its cull.
 #[cfg(test)]
 pub(super) fn inside_of(corners: &[DVec3; 8], f: &Frustum, near: f64) -> bool {
-    corners
-        .iter()
-        .all(|p| corner_inside(p.x, p.y, p.z, f, near))
-}
-
-/// One view-space point inside every plane of the frustum (the complement of each of
-/// [`outside_of`]'s tests).
-#[inline]
-fn corner_inside(x: f64, y: f64, z: f64, f: &Frustum, near: f64) -> bool {
-    z >= near
-        && x <= f.tan_right * z
-        && x >= f.tan_left * z
-        && -y <= f.tan_up * z
-        && -y >= f.tan_down * z
+    !corners.iter().any(|p| {
+        p.z < near
+            || p.x > f.tan_right * p.z
+            || p.x < f.tan_left * p.z
+            || -p.y > f.tan_up * p.z
+            || -p.y < f.tan_down * p.z
+    })
 }
 
 /// The screen factor of a *vertical* error over the part of a box inside the frustum — the `c`
@@ -300,23 +294,32 @@ impl CornerPass {
     /// eye, without the (a, b) ranges ([`Self::with_ranges`] forms them).
     pub(super) fn cull_and_depth(c: &ViewCorners, f: &Frustum, near: f64) -> Self {
         let mut z_min = f64::INFINITY;
+        // Per plane: every corner outside it (the cull) and some corner outside it (a box
+        // with none is inside), from one comparison per corner and plane.
         let [mut n, mut r, mut l, mut u, mut d] = [true; 5];
+        let mut some_out = false;
         let mut behind = false;
-        let mut inside = true;
         for i in 0..8 {
             let (x, y, z) = (c.x[i], c.y[i], c.z[i]);
             z_min = z_min.min(z);
-            n &= z < near;
-            r &= x > f.tan_right * z;
-            l &= x < f.tan_left * z;
-            u &= -y > f.tan_up * z;
-            d &= -y < f.tan_down * z;
-            inside &= corner_inside(x, y, z, f, near);
+            let out = [
+                z < near,
+                x > f.tan_right * z,
+                x < f.tan_left * z,
+                -y > f.tan_up * z,
+                -y < f.tan_down * z,
+            ];
+            n &= out[0];
+            r &= out[1];
+            l &= out[2];
+            u &= out[3];
+            d &= out[4];
+            some_out |= out[0] | out[1] | out[2] | out[3] | out[4];
             behind |= z <= 1e-9;
         }
         Self {
             outside: n || r || l || u || d,
-            inside,
+            inside: !some_out,
             z_min,
             behind,
             a: [f64::INFINITY, f64::NEG_INFINITY],

@@ -61,17 +61,17 @@ impl Frame<'_> {
             // ε at a drawn level with that level's sag (as `as_quadrant` / `as_sixteenth`).
             let bounded = |raw: f32, sag: f64| {
                 let (eps, slack) = drawn_at(raw, sag, node.geo.map(|_| node.spread));
-                let gain = eval.gain + slack * eval.gain_slack;
+                let gain = eval.gain + slack * eval.gain_slack();
                 let rho_norm = projected_error_px(eps, z, gain, 1.0);
-                NodeEval {
+                NodeEval::new(
                     eps,
-                    rho_px: rho_norm * self.tau_max,
+                    rho_norm * self.tau_max,
                     rho_norm,
-                    gain: eval.gain,
-                    gain_slack: eval.gain_slack,
+                    eval.gain,
+                    eval.gain_slack(),
                     // Within the node's box: fully inside the frustums when the node is.
-                    straddles: eval.straddles,
-                }
+                    eval.straddles(),
+                )
             };
             let quadrant = bounded(self.bake.coarse_eps(level - 1, cx, cy), node.sag);
             let sub = bounded(self.bake.fine_eps(level - 1, cx, cy), parent.sag);

@@ -101,13 +101,8 @@ impl Frame<'_> {
             rho_px = rho_px.max(rho);
             rho_norm = rho_norm.max(rho * v.inv_tau);
         }
-        seen.then_some(NodeEval {
-            eps,
-            rho_px,
-            rho_norm,
-            gain,
-            gain_slack,
-            straddles,
-        })
+        seen.then_some(NodeEval::new(
+            eps, rho_px, rho_norm, gain, gain_slack, straddles,
+        ))
     }
 }

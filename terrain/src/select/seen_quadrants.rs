@@ -56,7 +56,7 @@ impl Frame<'_> {
             let (cx, cy) = child_of(tx, ty, k);
             !has_terrain(self.bake, level - 1, cx, cy)
         });
-        if !eval.straddles && !padded {
+        if !eval.straddles() && !padded {
             return false;
         }
         let node = self.fixed(level, tx, ty);
@@ -74,7 +74,7 @@ impl Frame<'_> {
             };
             let (cx, cy) = child_of(tx, ty, k);
             let start = parts.len();
-            if q.straddles && sixteenths {
+            if q.straddles() && sixteenths {
                 let child = self.fixed(level - 1, cx, cy);
                 let subs = self.quadrants(&child, Some(&node), level - 1, cx, cy);
                 let mut ok = true;

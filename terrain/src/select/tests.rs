@@ -344,14 +344,7 @@ fn neighbour_eps_is_the_brute_force_edge_maximum() {
 #[test]
 fn choose_parts_draws_the_fewest_triangles_that_meet_tau() {
     use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant};
-    let eval = |rho_px: f64| NodeEval {
-        eps: 1.0,
-        rho_px,
-        rho_norm: rho_px,
-        gain: 0.0,
-        gain_slack: 0.0,
-        straddles: false,
-    };
+    let eval = |rho_px: f64| NodeEval::new(1.0, rho_px, rho_px, 0.0, 0.0, false);
     // ρ as a sixteenth (None: not measured), as a quadrant; own never read.
     let seen = |sub: Option<f64>, q: f64| Quadrant::Seen {
         q: eval(q),
@@ -439,4 +432,25 @@ fn choose_parts_draws_the_fewest_triangles_that_meet_tau() {
         choose_parts(&[unseen, none, unseen, none], false, cost),
         Parts::Children
     );
+}
+
+/// `NodeEval` keeps the gain slack and the crossing flag in one word: each reads back as
+/// given, for every combination (a slack of zero with the flag set included), and the record
+/// stays five words — the three an evaluation returns are copied inline, not through `memcpy`.
+#[test]
+fn node_eval_keeps_gain_slack_and_straddles_apart_in_five_words() {
+    use super::parts::NodeEval;
+    assert_eq!(std::mem::size_of::<NodeEval>(), 5 * 8);
+    for slack in [0.0, 1e-300, 0.25, 3.5, f64::MAX] {
+        for straddles in [false, true] {
+            let e = NodeEval::new(1.5, 2.0, 0.5, 7.0, slack, straddles);
+            assert_eq!(
+                e.gain_slack().to_bits(),
+                slack.to_bits(),
+                "{slack} {straddles}"
+            );
+            assert_eq!(e.straddles(), straddles, "{slack}");
+            assert_eq!((e.eps, e.rho_px, e.rho_norm, e.gain), (1.5, 2.0, 0.5, 7.0));
+        }
+    }
 }

@@ -423,14 +423,14 @@ impl Frame<'_> {
         }
         let eval = |k: usize| {
             let k = if k < errors.len() { k } else { 0 };
-            NodeEval {
-                eps: errors[k].0,
-                rho_px: rho[k].0,
-                rho_norm: rho[k].1,
-                gain: gain_max,
-                gain_slack: slack_max,
+            NodeEval::new(
+                errors[k].0,
+                rho[k].0,
+                rho[k].1,
+                gain_max,
+                slack_max,
                 straddles,
-            }
+            )
         };
         seen.then(|| [eval(0), eval(1), eval(2)])
     }
