@@ -186,10 +186,10 @@ fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)]) -> (Vec<f32>, Vec
     let NodeSkirts { reach, mut edges } = node_skirts(&nodes, &resolution);
     let q = f.tile_quads as u64;
     let projected = f.earth.is_some_and(|g| g.projected.is_some());
+    let [last_x, last_y] = f.valid_samples.map(|v| (v as u64).saturating_sub(1));
     for ((item, _), e) in draw_list.iter().zip(&mut edges) {
         let end = |t: u32| (t as u64 + 1) * (q << item.node_level);
         let [east, north] = [item.node_tx, item.node_ty].map(end);
-        let [last_x, last_y] = f.valid_samples.map(|v| (v as u64).saturating_sub(1));
         if f.skirts == SkirtRule::Everywhere || projected || east > last_x || north > last_y {
             *e = ALL_EDGES;
         }
