@@ -12,7 +12,7 @@ use bytemuck::Zeroable;
 use glam::DVec3;
 
 use aerie_terrain::geodesy::GeoGrid;
-use aerie_terrain::select::{node_skirts, DrawItem, LodMode, NodeSkirts, ALL_EDGES};
+use aerie_terrain::select::{node_skirts, DrawItem, LodMode, NodeSkirts, SeamLimit, ALL_EDGES};
 
 use crate::render::geo_instances::{GeoEye, GeoNodeCache};
 use crate::render::gpu::{DrawIndexedIndirect, TileInstance};
@@ -41,14 +41,24 @@ pub enum SkirtRule {
     None,
     /// Every edge of every node.
     Everywhere,
-    /// The edges not shared with a node drawn at the same resolution, and not facing a
-    /// place where nothing is drawn — culled — inside the grid (`select::node_skirts`);
-    /// every edge of a node that reaches past the grid's last
-    /// sample (its vertices there fold onto the last sample, each node by its own step) and
-    /// every node of a projected grid (its nodes' polynomials meet within their fit error,
-    /// not exactly).
+    /// The edges shared with a node drawn at another resolution (`select::node_skirts`), not
+    /// those shared with one at the same resolution nor those facing a place where nothing
+    /// is drawn — culled — inside the grid; the edges on or past the grid's first and last
+    /// samples; between two nodes that reach past the last sample (their vertices there fold
+    /// onto the first vertex at or past it, each node by its own step) unless both are of one
+    /// level and resolution; and every edge of every node of a projected grid (its nodes'
+    /// polynomials meet within their fit error, not exactly).
     #[default]
     WhereResolutionsDiffer,
+    /// As `WhereResolutionsDiffer`, but where a node drawn finer meets one coarser node across
+    /// its whole edge, its edge is stitched instead (`select::node_skirts`): its vertices
+    /// between the coarse ones are laid on the coarse edge, and neither edge gets a skirt.
+    /// Nodes of a projected grid and nodes that reach past the grid's last sample never
+    /// stitch.
+    Stitched,
+    /// `Stitched`'s surface with a skirt under every edge besides: every crack closed over the
+    /// same surface (the tests' reference for `Stitched`).
+    StitchedUnderSkirts,
 }
 
 impl SkirtRule {
@@ -167,41 +177,68 @@ fn group_of(item: &DrawItem) -> usize {
     item.refinement as usize + item.morph.levels_up() as usize * RESOLUTIONS
 }
 
-/// Each drawn node's skirt: how far it reaches and the edges that
-/// get one under `f.skirts` (see [`SkirtRule`]), in the list's order; one walk over the nodes
-/// gives both.
-fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)]) -> (Vec<f32>, Vec<u8>) {
+/// Each drawn node's seams: how far its skirt reaches, the edges that get one and the
+/// stitched edges under `f.skirts` (see [`SkirtRule`]), in the list's order; one walk over the
+/// nodes gives all three.
+fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)]) -> NodeSkirts {
+    let n = draw_list.len();
     if f.skirts == SkirtRule::None {
-        return (vec![0.0; draw_list.len()], vec![0; draw_list.len()]);
+        return NodeSkirts {
+            reach: vec![0.0; n],
+            edges: vec![0; n],
+            stitch: vec![0; n],
+        };
     }
-    let (nodes, resolution): (Vec<_>, Vec<_>) = draw_list
-        .iter()
-        .map(|(i, _)| {
-            (
-                (i.node_level, i.node_tx, i.node_ty, i.eps_m),
-                i.node_level + i.morph.levels_up(),
-            )
-        })
-        .unzip();
-    let NodeSkirts { reach, mut edges } = node_skirts(&nodes, &resolution);
     let q = f.tile_quads as u64;
     let projected = f.earth.is_some_and(|g| g.projected.is_some());
     let [last_x, last_y] = f.valid_samples.map(|v| (v as u64).saturating_sub(1));
-    for ((item, _), e) in draw_list.iter().zip(&mut edges) {
+    // A node's far corner in samples, east and north.
+    let ends = |item: &DrawItem| {
         let end = |t: u32| (t as u64 + 1) * (q << item.node_level);
-        let [east, north] = [item.node_tx, item.node_ty].map(end);
-        if f.skirts == SkirtRule::Everywhere || projected || east > last_x || north > last_y {
+        [item.node_tx, item.node_ty].map(end)
+    };
+    // Every edge of every node keeps a skirt under these rules (a projected grid's nodes'
+    // polynomials meet only within their fit), and none is stitched.
+    let all_edges = matches!(
+        f.skirts,
+        SkirtRule::Everywhere | SkirtRule::StitchedUnderSkirts
+    ) || projected;
+    // The largest stride a node can stitch at: its whole edge (log2 of its quads a side).
+    let stitches = matches!(
+        f.skirts,
+        SkirtRule::Stitched | SkirtRule::StitchedUnderSkirts
+    );
+    let stitch_max = if stitches && !projected && f.tile_quads.is_power_of_two() {
+        f.tile_quads.trailing_zeros() as u8
+    } else {
+        0
+    };
+    let mut nodes = Vec::with_capacity(n);
+    let mut resolution = Vec::with_capacity(n);
+    let mut limits = Vec::with_capacity(n);
+    for (i, _) in draw_list {
+        nodes.push((i.node_level, i.node_tx, i.node_ty, i.eps_m));
+        resolution.push(i.node_level + i.morph.levels_up());
+        // A node reaching past the grid's last sample folds its vertices there by its own step.
+        let [east, north] = ends(i);
+        let folds = east > last_x || north > last_y;
+        limits.push(SeamLimit { stitch_max, folds });
+    }
+    let mut skirts = node_skirts(&nodes, &resolution, &limits);
+    for ((item, _), e) in draw_list.iter().zip(&mut skirts.edges) {
+        if all_edges {
             *e = ALL_EDGES;
         }
-        // The grid's last sample: its edge keeps the skirt its first one keeps.
-        if east == last_x {
+        // The grid's last sample: an edge on it or past it keeps the skirt its first one keeps.
+        let [east, north] = ends(item);
+        if east >= last_x {
             *e |= 1 << 1;
         }
-        if north == last_y {
+        if north >= last_y {
             *e |= 1 << 2;
         }
     }
-    (reach, edges)
+    skirts
 }
 
 /// What the instance records need from the frame: the clipmap's tile size, the grid spacing,
@@ -253,7 +290,11 @@ pub fn build_instances(
 ) -> (Vec<TileInstance>, [u32; INSTANCE_KEYS]) {
     let q = f.tile_quads;
     let eye = f.eye;
-    let (reach, edges) = skirts_of(f, draw_list);
+    let NodeSkirts {
+        reach,
+        edges,
+        stitch,
+    } = skirts_of(f, draw_list);
     let key_of = |k: usize| group_of(&draw_list[k].0) * EDGE_SETS + edges[k] as usize;
     let geo = f.earth.map(|g| {
         geo_cache.begin(g);
@@ -310,6 +351,7 @@ pub fn build_instances(
         t.skirt_m = 0.5 * f.skirt_factor * (item.eps_m + reach_m) + f.skirt_min_m;
         (t.slot_x, t.slot_y, t.slot_stride) = (slot_x, slot_y, slot_stride);
         t.morph = item.morph.to_gpu();
+        t.stitch = stitch[k as usize] as u32;
         if let Some(e) = &geo {
             let (g, rel) = e.node_fields_in(geo_cache, origin, 1 << item.node_level, q);
             t.geo_origin = [rel[0], rel[1], rel[2], g.geo_origin[3]];
@@ -624,8 +666,9 @@ mod tests {
     /// and the grid's first samples, and goes without them against the holes east and north
     /// of it (nothing drawn there: culled); a quadrant drawn at its parent's resolution goes
     /// without one against the tile of that resolution south of it and the holes around it; a
-    /// tile reaching past the grid's last sample keeps all four, one ending on it the skirt
-    /// there; CDLOD's rule draws none, and the default fewer triangles than skirts
+    /// tile reaching past the grid's last sample keeps the skirts on the grid's first and
+    /// last samples, one ending on the last the skirt there; stitched, the finer tile lays its edge on the coarser one's and neither keeps a
+    /// skirt there; CDLOD's rule draws none, and the default fewer triangles than skirts
     /// everywhere.
     #[test]
     fn skirts_go_where_resolutions_differ() {
@@ -648,23 +691,36 @@ mod tests {
         // The second tile spans samples 64..=128: past the last one.
         let f = frame(SkirtRule::WhereResolutionsDiffer, [100, 1000], &[]);
         let (s, e, n, w) = (1u8, 2u8, 4u8, 8u8);
-        assert_eq!(skirts_of(&f, &list).1, [s | n | w, ALL_EDGES, s | w, 0]);
+        assert_eq!(skirts_of(&f, &list).edges, [s | n | w, s | e, s | w, 0]);
         let inside = InstanceFrame {
             valid_samples: [1000, 1000],
             ..f
         };
-        assert_eq!(skirts_of(&inside, &list).1[1], s | n);
+        assert_eq!(skirts_of(&inside, &list).edges[1], s);
         let on_the_last = InstanceFrame {
             valid_samples: [129, 1000],
             ..f
         };
-        assert_eq!(skirts_of(&on_the_last, &list).1[1], s | n | e);
+        assert_eq!(skirts_of(&on_the_last, &list).edges[1], s | e);
+        // Stitched: the finer tile lays its south edge on the coarser tile's (a stride of 2^1
+        // of its vertex steps), and neither keeps a skirt there; the tile past the last sample
+        // never stitches.
+        let stitched = skirts_of(
+            &InstanceFrame {
+                skirts: SkirtRule::Stitched,
+                ..f
+            },
+            &list,
+        );
+        assert_eq!(stitched.edges, [s | w, s | e, w, 0]);
+        assert_eq!(stitched.stitch, [0, 0, 1, 0]);
+        assert_eq!(skirts_of(&f, &list).stitch, [0; 4]);
         for (rule, want) in [
             (SkirtRule::None, [0; 4]),
             (SkirtRule::Everywhere, [ALL_EDGES; 4]),
         ] {
             let g = InstanceFrame { skirts: rule, ..f };
-            assert_eq!(skirts_of(&g, &list).1, want);
+            assert_eq!(skirts_of(&g, &list).edges, want);
         }
         let (_, meshes) = TileMeshes::indices(17);
         let tris = |rule| {
@@ -675,12 +731,14 @@ mod tests {
         let grids = 3 * 512 + 128;
         assert_eq!(tris(SkirtRule::None), grids);
         assert_eq!(tris(SkirtRule::Everywhere), grids + 3 * 128 + 64);
-        // Bare: the first tile's east edge (32 triangles), the finer tile's east and north
-        // (64) and the quadrant's four (64).
+        // Bare: the first tile's east edge and the second's west and north (96 triangles),
+        // the finer tile's east and north (64) and the quadrant's four (64).
         assert_eq!(
             tris(SkirtRule::WhereResolutionsDiffer),
-            grids + 3 * 128 + 64 - 160
+            grids + 3 * 128 + 64 - 224
         );
+        // Stitched: besides, the first tile's north edge (32) and the finer tile's south (32).
+        assert_eq!(tris(SkirtRule::Stitched), grids + 3 * 128 + 64 - 224 - 64);
     }
 
     #[test]
