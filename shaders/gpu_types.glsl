@@ -50,8 +50,6 @@ struct TileInstance {
     uint slot_x;         // texel of this node's south-west vertex in that layer (its slot's cell + its place in the slot; r > 0)
     uint slot_y;
     uint slot_stride;    // pool texels between adjacent vertices: 2^(node level - (L - r))
-    uint stitch;         // per edge e (bits 4e..4e+3, 0 south, 1 east, 2 north, 3 west): s > 0 draws the edge through every 2^s-th vertex only, each one between moved onto the nearer (select::node_skirts, terrain.vert)
-    uint stitch_pad[3];
     // CDLOD's geomorph (terrain/src/select/cdlod_morph.rs `Morph::to_gpu`); all zero in other modes.
     vec4 morph;          // xy: the node's zone (start, end), metres from the eye, y = 0 none; x = -1: a quadrant drawn for its parent (fully morphed), zw its parent's zone
     // Geographic grids on the WGS84 ellipsoid (render/geo_instances.rs); all zero on the flat path.

@@ -87,28 +87,6 @@ vec2 morph_vertex(TileInstance t, ivec2 ij, float k1, float k2, inout float h) {
     return f;
 }
 
-// A stitched edge (terrain/src/select/skirts.rs `node_skirts`): edge e's vertices between
-// every 2^s-th (s = bits 4e.. of t.stitch) are those vertices, so that the edge is drawn
-// through the coarser neighbour's vertices only: each moves onto the nearer of the two it lies
-// between (the lower on a tie), as CDLOD's morph moves a vertex onto the coarser grid
-// (Strugar 2009), leaving zero-area triangles. Placing them on the straight line between
-// instead would leave T-junctions, which rasterization does not close (pinholes along the
-// seam). For vertex ij of an `n`-quad node: the vertex it is drawn as.
-ivec2 stitched_vertex(uint stitch, ivec2 ij, int n) {
-    int e = ij.y == 0 ? 0 : ij.x == n ? 1 : ij.y == n ? 2 : ij.x == 0 ? 3 : -1;
-    if (e < 0) {
-        return ij;
-    }
-    int s = int((stitch >> (4u * uint(e))) & 15u);
-    // Along the edge: x on the south and north edges, y on the east and west.
-    bool along_x = e == 0 || e == 2;
-    int at = along_x ? ij.x : ij.y;
-    int stride = 1 << s;
-    int r = at & (stride - 1);
-    int to = 2 * r <= stride ? at - r : at - r + stride;
-    return along_x ? ivec2(to, ij.y) : ivec2(ij.x, to);
-}
-
 void main() {
     TileInstance t = tiles[gl_InstanceIndex];
     // Every instance is one m×m node; its vertex spacing is `step` samples.
@@ -125,9 +103,6 @@ void main() {
         int e = k / n;
         int s = k % n;
         ij = e == 0 ? ivec2(s, 0) : e == 1 ? ivec2(n, s) : e == 2 ? ivec2(n - s, n) : ivec2(0, n - s);
-    }
-    if (!skirt && t.stitch != 0u) {
-        ij = stitched_vertex(t.stitch, ij, n);
     }
     int step = int(t.step);
     // Vertices past the last valid sample collapse onto the first vertex at or past it, so the

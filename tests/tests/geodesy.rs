@@ -169,8 +169,6 @@ fn instance(eye: &GeoEye, origin: [i64; 2], step: u32) -> TileInstance {
         slot_x: 0,
         slot_y: 0,
         slot_stride: 1,
-        stitch: 0,
-        stitch_pad: [0; 3],
         morph: [0.0; 4],
         geo_origin: f.geo_origin,
         geo_axis_r: f.geo_axis_r,

@@ -1,15 +1,12 @@
-//! Skirts only where the neighbours' resolutions differ, and stitched edges, on lavapipe with
-//! validation on. A bounded frame at τ = 3 px, 20–30 m above rough hills (many nodes at
-//! different resolutions side by side, cracks wide enough to see) is drawn four ways: skirts
-//! on every edge, skirts where resolutions differ (the default), stitched (a finer node's
-//! edge laid on the coarser one's, no skirt on either), and none. Without skirts the frame
-//! must show cracks — pixels that see past the surface the frame with every skirt drew — so
-//! the scene can see a missing skirt; with the default rule it must show none, and stitched
-//! none against its own surface with every skirt, each in fewer triangles than the rule
-//! before. On the flat plane and on a geographic grid
-//! (each node's vertices from its own frame on the ellipsoid). A rule that also left out the
-//! skirts against coarser nodes at another resolution shows 33 and 19 such pixels here; the
-//! stitched rule with the vertex shader's stitch left out shows them too.
+//! Skirts only where the neighbours' resolutions differ, on lavapipe with validation on. A
+//! bounded frame at τ = 3 px, 20–30 m above rough hills (many nodes at different resolutions
+//! side by side, cracks wide enough to see) is drawn three ways: skirts on every edge, skirts
+//! where resolutions differ (the default), and none. Without skirts the frame must show
+//! cracks — pixels that see past the surface the frame with every skirt drew — so the scene
+//! can see a missing skirt; with the default rule it must show none, in fewer triangles. On
+//! the flat plane and on a geographic grid (each node's vertices from its own frame on the
+//! ellipsoid). A rule that also left out the skirts against coarser nodes at another
+//! resolution shows 33 and 19 such pixels here.
 
 use aerie::camera::{Attitude, Camera, Frustum};
 use aerie::render::frame::TerrainRenderer;
@@ -90,23 +87,18 @@ fn check(name: &str, hf: &Heightfield, eye: DVec3, heading: f64, pitch: f64) {
         &[
             SkirtRule::Everywhere,
             SkirtRule::WhereResolutionsDiffer,
-            SkirtRule::Stitched,
-            SkirtRule::StitchedUnderSkirts,
             SkirtRule::None,
         ],
     );
-    let (everywhere, needed, stitched, none) = (&f[0], &f[1], &f[2], &f[4]);
+    let (everywhere, needed, none) = (&f[0], &f[1], &f[2]);
     let terrain = everywhere.0.iter().filter(|&&z| z != 0.0).count();
-    let (needed_cracks, stitched_cracks, bare_cracks) = (
+    let (needed_cracks, bare_cracks) = (
         cracks(&needed.0, &everywhere.0),
-        // Against the same surface with every skirt: a stitched surface is not the fine
-        // nodes' own near their stitched edges.
-        cracks(&stitched.0, &f[3].0),
         cracks(&none.0, &everywhere.0),
     );
     eprintln!(
-        "{name}: {terrain} terrain pixels; triangles {} everywhere, {} where needed, {} stitched, {} without; pixels through a crack where needed {needed_cracks}, stitched {stitched_cracks}, without {bare_cracks}",
-        everywhere.1, needed.1, stitched.1, none.1
+        "{name}: {terrain} terrain pixels; triangles {} everywhere, {} where needed, {} without; pixels through a crack where needed {needed_cracks}, without {bare_cracks}",
+        everywhere.1, needed.1, none.1
     );
     assert!(terrain > (W * H / 3) as usize, "{terrain}");
     assert!(
@@ -117,11 +109,7 @@ fn check(name: &str, hf: &Heightfield, eye: DVec3, heading: f64, pitch: f64) {
         needed_cracks, 0,
         "{name}: skirts left out where a crack opens"
     );
-    assert_eq!(
-        stitched_cracks, 0,
-        "{name}: a stitched edge (or a skirt left out) opens a crack"
-    );
-    assert!(none.1 < stitched.1 && stitched.1 < needed.1 && needed.1 < everywhere.1);
+    assert!(none.1 < needed.1 && needed.1 < everywhere.1);
 }
 
 #[test]

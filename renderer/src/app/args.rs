@@ -71,10 +71,8 @@ pub struct GpuArgs {
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub carry_selection: Switch,
     /// Skirts under the tiles' edges: needed (only where the tile across is drawn at another
-    /// resolution: the default), stitch (as needed, but a tile drawn finer than the one tile
-    /// across its edge lays that edge on the coarser one's instead: no skirt on either side),
-    /// everywhere (every edge of every tile), none (shows the cracks). CDLOD draws none
-    /// whatever this says.
+    /// resolution: the default), everywhere (every edge of every tile), none (shows the
+    /// cracks). CDLOD draws none whatever this says.
     #[arg(long, value_enum, default_value_t = SkirtsArg::Needed)]
     pub skirts: SkirtsArg,
 }
@@ -83,7 +81,6 @@ pub struct GpuArgs {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum SkirtsArg {
     Needed,
-    Stitch,
     Everywhere,
     None,
 }
@@ -92,7 +89,6 @@ impl SkirtsArg {
     pub fn rule(self) -> SkirtRule {
         match self {
             SkirtsArg::Needed => SkirtRule::WhereResolutionsDiffer,
-            SkirtsArg::Stitch => SkirtRule::Stitched,
             SkirtsArg::Everywhere => SkirtRule::Everywhere,
             SkirtsArg::None => SkirtRule::None,
         }

@@ -12,7 +12,7 @@ use bytemuck::Zeroable;
 use glam::DVec3;
 
 use aerie_terrain::geodesy::GeoGrid;
-use aerie_terrain::select::{node_skirts, DrawItem, LodMode, NodeSkirts, SeamLimit, ALL_EDGES};
+use aerie_terrain::select::{node_skirts, DrawItem, LodMode, NodeSkirts, ALL_EDGES};
 
 use crate::render::geo_instances::{GeoEye, GeoNodeCache};
 use crate::render::gpu::{DrawIndexedIndirect, TileInstance};
@@ -50,15 +50,6 @@ pub enum SkirtRule {
     /// polynomials meet within their fit error, not exactly).
     #[default]
     WhereResolutionsDiffer,
-    /// As `WhereResolutionsDiffer`, but where a node drawn finer meets one coarser node across
-    /// its whole edge, its edge is stitched instead (`select::node_skirts`): its vertices
-    /// between the coarse ones are laid on the coarse edge, and neither edge gets a skirt.
-    /// Nodes of a projected grid and nodes that reach past the grid's last sample never
-    /// stitch.
-    Stitched,
-    /// `Stitched`'s surface with a skirt under every edge besides: every crack closed over the
-    /// same surface (the tests' reference for `Stitched`).
-    StitchedUnderSkirts,
 }
 
 impl SkirtRule {
@@ -177,16 +168,14 @@ fn group_of(item: &DrawItem) -> usize {
     item.refinement as usize + item.morph.levels_up() as usize * RESOLUTIONS
 }
 
-/// Each drawn node's seams: how far its skirt reaches, the edges that get one and the
-/// stitched edges under `f.skirts` (see [`SkirtRule`]), in the list's order; one walk over the
-/// nodes gives all three.
+/// Each drawn node's skirt: how far it reaches and the edges that get one under `f.skirts`
+/// (see [`SkirtRule`]), in the list's order; one walk over the nodes gives both.
 fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)]) -> NodeSkirts {
     let n = draw_list.len();
     if f.skirts == SkirtRule::None {
         return NodeSkirts {
             reach: vec![0.0; n],
             edges: vec![0; n],
-            stitch: vec![0; n],
         };
     }
     let q = f.tile_quads as u64;
@@ -198,33 +187,19 @@ fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)]) -> NodeSkirts {
         [item.node_tx, item.node_ty].map(end)
     };
     // Every edge of every node keeps a skirt under these rules (a projected grid's nodes'
-    // polynomials meet only within their fit), and none is stitched.
-    let all_edges = matches!(
-        f.skirts,
-        SkirtRule::Everywhere | SkirtRule::StitchedUnderSkirts
-    ) || projected;
-    // The largest stride a node can stitch at: its whole edge (log2 of its quads a side).
-    let stitches = matches!(
-        f.skirts,
-        SkirtRule::Stitched | SkirtRule::StitchedUnderSkirts
-    );
-    let stitch_max = if stitches && !projected && f.tile_quads.is_power_of_two() {
-        f.tile_quads.trailing_zeros() as u8
-    } else {
-        0
-    };
+    // polynomials meet only within their fit).
+    let all_edges = f.skirts == SkirtRule::Everywhere || projected;
     let mut nodes = Vec::with_capacity(n);
     let mut resolution = Vec::with_capacity(n);
-    let mut limits = Vec::with_capacity(n);
+    let mut folds = Vec::with_capacity(n);
     for (i, _) in draw_list {
         nodes.push((i.node_level, i.node_tx, i.node_ty, i.eps_m));
         resolution.push(i.node_level + i.morph.levels_up());
         // A node reaching past the grid's last sample folds its vertices there by its own step.
         let [east, north] = ends(i);
-        let folds = east > last_x || north > last_y;
-        limits.push(SeamLimit { stitch_max, folds });
+        folds.push(east > last_x || north > last_y);
     }
-    let mut skirts = node_skirts(&nodes, &resolution, &limits);
+    let mut skirts = node_skirts(&nodes, &resolution, &folds);
     for ((item, _), e) in draw_list.iter().zip(&mut skirts.edges) {
         if all_edges {
             *e = ALL_EDGES;
@@ -290,11 +265,7 @@ pub fn build_instances(
 ) -> (Vec<TileInstance>, [u32; INSTANCE_KEYS]) {
     let q = f.tile_quads;
     let eye = f.eye;
-    let NodeSkirts {
-        reach,
-        edges,
-        stitch,
-    } = skirts_of(f, draw_list);
+    let NodeSkirts { reach, edges } = skirts_of(f, draw_list);
     let key_of = |k: usize| group_of(&draw_list[k].0) * EDGE_SETS + edges[k] as usize;
     let geo = f.earth.map(|g| {
         geo_cache.begin(g);
@@ -351,7 +322,6 @@ pub fn build_instances(
         t.skirt_m = 0.5 * f.skirt_factor * (item.eps_m + reach_m) + f.skirt_min_m;
         (t.slot_x, t.slot_y, t.slot_stride) = (slot_x, slot_y, slot_stride);
         t.morph = item.morph.to_gpu();
-        t.stitch = stitch[k as usize] as u32;
         if let Some(e) = &geo {
             let (g, rel) = e.node_fields_in(geo_cache, origin, 1 << item.node_level, q);
             t.geo_origin = [rel[0], rel[1], rel[2], g.geo_origin[3]];
@@ -667,8 +637,7 @@ mod tests {
     /// of it (nothing drawn there: culled); a quadrant drawn at its parent's resolution goes
     /// without one against the tile of that resolution south of it and the holes around it; a
     /// tile reaching past the grid's last sample keeps the skirts on the grid's first and
-    /// last samples, one ending on the last the skirt there; stitched, the finer tile lays its edge on the coarser one's and neither keeps a
-    /// skirt there; CDLOD's rule draws none, and the default fewer triangles than skirts
+    /// last samples, one ending on the last the skirt there; CDLOD's rule draws none, and the default fewer triangles than skirts
     /// everywhere.
     #[test]
     fn skirts_go_where_resolutions_differ() {
@@ -702,19 +671,6 @@ mod tests {
             ..f
         };
         assert_eq!(skirts_of(&on_the_last, &list).edges[1], s | e);
-        // Stitched: the finer tile lays its south edge on the coarser tile's (a stride of 2^1
-        // of its vertex steps), and neither keeps a skirt there; the tile past the last sample
-        // never stitches.
-        let stitched = skirts_of(
-            &InstanceFrame {
-                skirts: SkirtRule::Stitched,
-                ..f
-            },
-            &list,
-        );
-        assert_eq!(stitched.edges, [s | w, s | e, w, 0]);
-        assert_eq!(stitched.stitch, [0, 0, 1, 0]);
-        assert_eq!(skirts_of(&f, &list).stitch, [0; 4]);
         for (rule, want) in [
             (SkirtRule::None, [0; 4]),
             (SkirtRule::Everywhere, [ALL_EDGES; 4]),
@@ -737,8 +693,6 @@ mod tests {
             tris(SkirtRule::WhereResolutionsDiffer),
             grids + 3 * 128 + 64 - 224
         );
-        // Stitched: besides, the first tile's north edge (32) and the finer tile's south (32).
-        assert_eq!(tris(SkirtRule::Stitched), grids + 3 * 128 + 64 - 224 - 64);
     }
 
     #[test]
