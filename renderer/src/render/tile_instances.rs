@@ -192,26 +192,19 @@ fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)]) -> NodeSkirts {
     let mut nodes = Vec::with_capacity(n);
     let mut resolution = Vec::with_capacity(n);
     let mut folds = Vec::with_capacity(n);
+    let mut on_last = Vec::with_capacity(n);
     for (i, _) in draw_list {
         nodes.push((i.node_level, i.node_tx, i.node_ty, i.eps_m));
         resolution.push(i.node_level + i.morph.levels_up());
-        // A node reaching past the grid's last sample folds its vertices there by its own step.
         let [east, north] = ends(i);
+        // A node reaching past the grid's last sample folds its vertices there by its own step.
         folds.push(east > last_x || north > last_y);
+        // The grid's last sample: an edge on it or past it keeps the skirt its first one keeps.
+        on_last.push(((east >= last_x) as u8) << 1 | ((north >= last_y) as u8) << 2);
     }
     let mut skirts = node_skirts(&nodes, &resolution, &folds);
-    for ((item, _), e) in draw_list.iter().zip(&mut skirts.edges) {
-        if all_edges {
-            *e = ALL_EDGES;
-        }
-        // The grid's last sample: an edge on it or past it keeps the skirt its first one keeps.
-        let [east, north] = ends(item);
-        if east >= last_x {
-            *e |= 1 << 1;
-        }
-        if north >= last_y {
-            *e |= 1 << 2;
-        }
+    for (e, last) in skirts.edges.iter_mut().zip(on_last) {
+        *e |= if all_edges { ALL_EDGES } else { last };
     }
     skirts
 }
@@ -227,7 +220,8 @@ pub struct InstanceFrame<'a> {
     pub skirt_min_m: f32,
     /// Which edges get a skirt.
     pub skirts: SkirtRule,
-    /// The grid's samples east and north (a node reaching past the last keeps every skirt).
+    /// The grid's samples east and north (a node reaching past the last folds its vertices
+    /// there; the edges on or past it keep their skirts).
     pub valid_samples: [u32; 2],
     /// The pools r = 1.. (index r − 1): where each slot lies in its image.
     pub pools: &'a [PoolSlots],
