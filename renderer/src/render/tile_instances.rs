@@ -631,8 +631,8 @@ mod tests {
     /// of it (nothing drawn there: culled); a quadrant drawn at its parent's resolution goes
     /// without one against the tile of that resolution south of it and the holes around it; a
     /// tile reaching past the grid's last sample keeps the skirts on the grid's first and
-    /// last samples, one ending on the last the skirt there; CDLOD's rule draws none, and the default fewer triangles than skirts
-    /// everywhere.
+    /// last samples, one ending on the last the skirt there; CDLOD's rule draws none, and the
+    /// default fewer triangles than skirts everywhere.
     #[test]
     fn skirts_go_where_resolutions_differ() {
         use aerie_terrain::select::cdlod_morph::Morph;
