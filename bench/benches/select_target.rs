@@ -1,7 +1,7 @@
 //! Issue 15's selection target: one channel at 1280×720, τ = 1 px, 300 m above the ground, on
 //! a generated 16385² dataset (`AERIE_BENCH_SIZE` overrides) on the flat plane and on the
 //! ellipsoid (a 1″ geographic grid), with ring tiles carried across frames where they may be
-//! (`SelectParams::carry`, the default: one view on the plane) and walked afresh every frame
+//! (`SelectParams::carry`, the default: one view, plane or ellipsoid) and walked afresh every frame
 //! (`_walked_afresh`). Besides criterion's figures, the flight is flown three more times in
 //! order (thread CPU time, each frame's least) for the per-frame median and p99; and with the
 //! seen parts (`SelectParams::seen_quadrants`) on and off, interleaved frame by frame, for what

@@ -5,6 +5,7 @@ pub mod bins;
 pub mod cigi_host;
 pub mod drape_fixtures;
 pub mod flat_oracle;
+pub mod geo_oracle;
 pub mod hills;
 pub mod imports;
 pub mod ridges;

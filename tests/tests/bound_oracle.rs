@@ -10,13 +10,11 @@
 use aerie::camera::{Attitude, Camera, Frustum};
 use aerie::terrain::clipmap::place_levels;
 use aerie::terrain::gen::{generate, DemKind, GenParams};
-use aerie::terrain::geodesy::wgs84::{WGS84_A, WGS84_E2};
-use aerie::terrain::geodesy::{GeoGrid, Geodetic};
-use aerie::terrain::load::geographic_spacing_m;
+use aerie::terrain::geodesy::Geodetic;
 use aerie::terrain::select::{select_tiles, DrawItem, SelectParams, Selection};
-use aerie::terrain::GeoReference;
 use aerie::terrain::Heightfield;
 use aerie_tests::flat_oracle::{self, alpine, Scene};
+use aerie_tests::geo_oracle::{geo_scene, geo_tile_error_px, utm_geo_scene, GeoScene};
 use glam::{DVec2, DVec3};
 
 const W: u32 = 320;
@@ -224,103 +222,6 @@ fn drawn_tiles_cover_the_visible_ground_exactly_once() {
     }
 }
 
-/// A scene on the ellipsoid with the per-row and per-column trigonometry of its samples, so
-/// that the oracle's exact positions cost a few products each.
-struct GeoScene {
-    s: Scene,
-    grid: GeoGrid,
-    /// Per row: (N + 0)·cos φ, N·(1 − e²)·sin φ, cos φ, sin φ.
-    rows: Vec<[f64; 4]>,
-    /// Per column: cos λ, sin λ.
-    cols: Vec<[f64; 2]>,
-    /// A projected grid's samples instead: ECEF at height 0 and the unit normal, row-major.
-    samples: Vec<[DVec3; 2]>,
-}
-
-fn geo_scene(name: &'static str, mut hf: Heightfield, lat: f64, lon: f64, d: f64) -> GeoScene {
-    let (sx, sy) = geographic_spacing_m(lat + d * (hf.height - 1) as f64 / 2.0, d, d);
-    hf.spacing_x = sx;
-    hf.spacing_y = sy;
-    hf.geo = Some(GeoReference::Geographic {
-        south_lat_deg: lat,
-        west_lon_deg: lon,
-        dlat_deg: d,
-        dlon_deg: d,
-    });
-    let grid = GeoGrid::of(hf.geo.as_ref(), sx, sy).unwrap();
-    let rows = (0..hf.height)
-        .map(|r| {
-            let (sp, cp) = (lat + r as f64 * d).to_radians().sin_cos();
-            let n = WGS84_A / (1.0 - WGS84_E2 * sp * sp).sqrt();
-            [n * cp, n * (1.0 - WGS84_E2) * sp, cp, sp]
-        })
-        .collect();
-    let cols = (0..hf.width)
-        .map(|c| {
-            let (sl, cl) = (lon + c as f64 * d).to_radians().sin_cos();
-            [cl, sl]
-        })
-        .collect();
-    GeoScene {
-        s: scene(name, hf),
-        grid,
-        rows,
-        cols,
-        samples: Vec::new(),
-    }
-}
-
-/// A UTM scene: `hf` placed with its south-west sample at (easting, northing) in `crs`.
-fn utm_geo_scene(
-    name: &'static str,
-    mut hf: Heightfield,
-    crs: &str,
-    easting: f64,
-    northing: f64,
-) -> GeoScene {
-    hf.geo = Some(GeoReference::Projected {
-        crs: crs.into(),
-        easting,
-        northing,
-    });
-    let extent = DVec2::from(hf.extent_m());
-    let grid = GeoGrid::of_projected(hf.geo.as_ref(), hf.spacing_x, hf.spacing_y, extent)
-        .unwrap()
-        .unwrap();
-    let mut samples = Vec::with_capacity(hf.width * hf.height);
-    for row in 0..hf.height {
-        for c in 0..hf.width {
-            let g = DVec2::new(c as f64 * hf.spacing_x, row as f64 * hf.spacing_y);
-            let (lat, lon) = grid.lat_lon_of_grid(g);
-            let p0 = aerie::terrain::geodesy::geodetic_to_ecef(Geodetic::new(lat, lon, 0.0));
-            let p1 = aerie::terrain::geodesy::geodetic_to_ecef(Geodetic::new(lat, lon, 1.0));
-            samples.push([p0, p1 - p0]);
-        }
-    }
-    GeoScene {
-        s: scene(name, hf),
-        grid,
-        rows: Vec::new(),
-        cols: Vec::new(),
-        samples,
-    }
-}
-
-impl GeoScene {
-    /// World position of sample (col, row) at height h, exact (f64 ECEF into the world frame).
-    fn world(&self, col: usize, row: usize, h: f64) -> DVec3 {
-        if !self.samples.is_empty() {
-            let [p0, n] = self.samples[row * self.s.ds.hf.width + col];
-            return self.grid.world.ecef_to_enu(p0 + n * h);
-        }
-        let [ncp, nsp, cp, sp] = self.rows[row];
-        let [cl, sl] = self.cols[col];
-        let r = ncp + h * cp;
-        let ecef = DVec3::new(r * cl, r * sl, nsp + h * sp);
-        self.grid.world.ecef_to_enu(ecef)
-    }
-}
-
 fn random_geo_camera(rng: &mut Rng, g: &GeoScene) -> Camera {
     let hf = &g.s.ds.hf;
     let (ex, ey) = hf.extent_m();
@@ -370,50 +271,6 @@ fn select_geo(g: &GeoScene, cam: &Camera, tau: f64) -> Selection {
     sel
 }
 
-/// [`tile_error_px`] on the ellipsoid: each true sample at its exact position; the drawn
-/// point at that sample is the GPU's interpolation (SW–NE diagonal) of the level's vertices,
-/// each at its exact position.
-/// [`tile_error_px`] on the ellipsoid: the level-`drawn` grid over level-`level` tile (tx, ty).
-fn geo_tile_error_px(g: &GeoScene, cam: &Camera, level: u32, tx: u32, ty: u32, drawn: u32) -> f64 {
-    let hf = &g.s.ds.hf;
-    let q = (M - 1) as usize;
-    let side = q << level;
-    let step = 1usize << drawn;
-    let (c0, r0) = (tx as usize * side, ty as usize * side);
-    let vertex = |c: usize, row: usize| g.world(c, row, hf.at(c, row) as f64);
-    let on_screen = |p: DVec2| p.x >= 0.0 && p.x <= W as f64 && p.y >= 0.0 && p.y <= H as f64;
-    let mut worst: f64 = 0.0;
-    for row in r0..=(r0 + side).min(hf.height - 1) {
-        for c in c0..=(c0 + side).min(hf.width - 1) {
-            let truth = vertex(c, row);
-            let (ci, ri) = (
-                ((c - c0) / step).min(side / step - 1),
-                ((row - r0) / step).min(side / step - 1),
-            );
-            let (vc, vr) = (c0 + ci * step, r0 + ri * step);
-            let u = (c - vc) as f64 / step as f64;
-            let v = (row - vr) as f64 / step as f64;
-            let sw = vertex(vc, vr);
-            let se = vertex(vc + step, vr);
-            let nw = vertex(vc, vr + step);
-            let ne = vertex(vc + step, vr + step);
-            let drawn = if u >= v {
-                sw * (1.0 - u) + se * (u - v) + ne * v
-            } else {
-                sw * (1.0 - v) + nw * (v - u) + ne * u
-            };
-            let a = cam.project_px(truth, W, H);
-            let b = cam.project_px(drawn, W, H);
-            if let (Some((pa, _)), Some((pb, _))) = (a, b) {
-                if on_screen(pa) || on_screen(pb) {
-                    worst = worst.max((pa - pb).length());
-                }
-            }
-        }
-    }
-    worst
-}
-
 /// The oracle over `cameras` random cameras on `scenes`: returns (tiles, refined) checked.
 fn geodetic_oracle(scenes: &[GeoScene], cameras: usize, seed: u64, what: &str) -> (u64, u64) {
     let tau = 1.0;
@@ -437,8 +294,16 @@ fn geodetic_oracle(scenes: &[GeoScene], cameras: usize, seed: u64, what: &str) -
             let drawn = item.node_level + item.morph.levels_up();
             quadrants_checked += (item.morph.levels_up() == 1) as u64;
             sixteenths_checked += (item.morph.levels_up() == 2) as u64;
-            let err =
-                geo_tile_error_px(g, &cam, item.node_level, item.node_tx, item.node_ty, drawn);
+            let err = geo_tile_error_px(
+                g,
+                &cam,
+                (W, H),
+                M,
+                item.node_level,
+                item.node_tx,
+                item.node_ty,
+                drawn,
+            );
             assert!(
                 err <= tau + 1e-6,
                 "{}: camera {k} {:?}: node L{} ({}, {}) of tile L{} r{} projects {err:.4} px > τ (bound said {:.4})",
@@ -481,6 +346,7 @@ fn every_drawn_geodetic_tile_is_within_tau_for_a_thousand_random_cameras() {
             47.0 + 88.0 / 1200.0,
             11.0 + 88.0 / 1200.0,
             1.0 / 1200.0,
+            M,
         ),
         // High latitude: a longitude step is a third of a latitude step.
         geo_scene(
@@ -489,6 +355,7 @@ fn every_drawn_geodetic_tile_is_within_tau_for_a_thousand_random_cameras() {
             70.0,
             -20.0,
             1.0 / 1200.0,
+            M,
         ),
         // A 10° region across the seam at 60°S: nodes of degrees, the normal turning 10°.
         geo_scene(
@@ -497,6 +364,7 @@ fn every_drawn_geodetic_tile_is_within_tau_for_a_thousand_random_cameras() {
             -65.0,
             175.0,
             0.01,
+            M,
         ),
     ];
     let (tiles, refined) = geodetic_oracle(&scenes, 1002, 1414, "geodetic");
@@ -517,6 +385,7 @@ fn every_drawn_utm_tile_is_within_tau_for_random_cameras() {
             "EPSG:32632",
             255_000.0,
             5_150_000.0,
+            M,
         ),
         utm_geo_scene(
             "ridged UTM 33N 70°N",
@@ -524,6 +393,7 @@ fn every_drawn_utm_tile_is_within_tau_for_random_cameras() {
             "EPSG:32633",
             420_000.0,
             7_760_000.0,
+            M,
         ),
         utm_geo_scene(
             "cliffs UTM 19S",
@@ -531,6 +401,7 @@ fn every_drawn_utm_tile_is_within_tau_for_random_cameras() {
             "EPSG:32719",
             600_000.0,
             6_200_000.0,
+            M,
         ),
     ];
     let (tiles, refined) = geodetic_oracle(&scenes, 501, 3232, "UTM");
@@ -555,6 +426,7 @@ fn geodetic_tiles_cover_the_visible_ground_exactly_once() {
         55.0,
         10.0,
         0.01,
+        M,
     );
     let hf = &g.s.ds.hf;
     let q = (M - 1) as usize;

@@ -79,7 +79,7 @@ pub struct RendererChoice {
     pub normal_source: NormalSource,
     /// Bounded: drop tiles hidden behind nearer terrain.
     pub horizon_cull: bool,
-    /// Bounded, one view on the plane: carry refined ring tiles across frames.
+    /// Bounded, one view (plane or ellipsoid): carry refined ring tiles across frames.
     pub carry: bool,
     /// Which tile edges get a skirt.
     pub skirts: SkirtRule,

@@ -4,8 +4,8 @@
 //! nodes were drawn the same way the frame before (`select_target`'s coherence figures).
 //!
 //! **What is carried.** The refinement of one ring tile from the pools (`refine_ring_tile`:
-//! the nodes, their parts, no node missing τ), made with one view on the flat plane and no
-//! horizon culling. The walk above the ring tiles is made afresh every frame; where it reaches
+//! the nodes, their parts, no node missing τ), made with one view and no horizon culling, on
+//! the flat plane or on the ellipsoid. The walk above the ring tiles is made afresh every frame; where it reaches
 //! a ring tile with a record that still holds, the record's nodes are drawn.
 //!
 //! **Why a record still holds** (DESIGN.md's bound `ρ = ε·f·g / (z_min − ε)`). Every bound the
@@ -23,8 +23,19 @@
 //!   while R stays wholly in front of the eye (z_R its smallest depth, unclamped): the view
 //!   ratios a = x/z, b = y/z of a box in R, clamped to the frustum's tangents (at most A and
 //!   B), each move by at most μ_R·(1 + A)/(z_R − μ_R) (resp. B), the gain is |w_z|-Lipschitz
-//!   in them, and √(2 + A² + B²)·|Δw| bounds what the turn of the world vertical w does; over
-//!   g₀ that is the relative growth.
+//!   in them (|w_z| when the record was made: the turn adds at most k), and √(2 + A² + B²)·|Δw|
+//!   bounds what the turn of the world vertical w does; over g₀ — the least gain when the
+//!   record was made, which every gain then was at least — that is the relative growth.
+//!
+//! **On the ellipsoid** (geographic and UTM grids) a node's boxes are fixed in the world (no
+//! curvature drop moves with the eye; μ keeps that term, which only adds room), and its gain
+//! is `g(u) + s·c` (`bound::spread_gain_of`): u the node's normal in view space, s its slack,
+//! c = √(1 + a² + b²) over its (a, b). Every node of the ring tile has its normal within the
+//! tile's spread σ of the tile's normal u_R, and g is √(1 + A² + B²)-Lipschitz in u, so the
+//! record's least gain is the frustum's for u_R less σ·√(2 + A² + B²), and its |w_z| is
+//! |u_R,z| + σ; c moves by at most |Δa| + |Δb| and is ≥ 1, so the slack's part grows by at most
+//! the ratio `(2 + A + B)·μ_R/(z_R − μ_R)` of itself — added to the relative growth. A
+//! record whose least gain is not positive is not kept.
 //!
 //! So each node's bound times the two factors bounds its error now; a record is drawn again
 //! while every node's stays ≤ τ (with a margin far beyond rounding), every part the walk
@@ -40,7 +51,9 @@ use glam::{DMat3, DVec3};
 use crate::fast_hash::FastHash;
 use crate::tiles::Aabb;
 
-use super::bound::{ViewCorners, EARTH_RADIUS_M};
+use crate::camera::Frustum;
+
+use super::bound::{frustum_gain_floor, ViewCorners, EARTH_RADIUS_M};
 use super::cdlod_morph::Morph;
 
 /// A node as `refine_ring_tile` lists it: (level, tx, ty, ε, ρ px).
@@ -103,10 +116,69 @@ struct CarriedTile {
     morphs: Vec<(usize, Morph)>,
     certs: Vec<NodeCert>,
     culled: Vec<CulledCert>,
-    /// The ring tile's box: smallest depth (unclamped) and reach (every gain came from a box
-    /// within it).
+    /// How much its gains can grow.
+    growth: Growth,
+}
+
+/// What bounds a record's gains as the eye moves: its ring tile's box (smallest depth,
+/// unclamped, and reach: every gain came from a box within it) and, when the record was made,
+/// the least gain of any of its nodes (> 0), the largest |w_z| of their verticals in view
+/// space, and whether their gains hold a slack part (the ellipsoid's).
+#[derive(Debug, Clone, Copy)]
+struct Growth {
     ring_z: f64,
     ring_reach: f64,
+    floor: f64,
+    w_z: f64,
+    slack: bool,
+}
+
+impl Growth {
+    /// A record's, made at `now` with `optics`, its ring tile's box at (`ring_z`, `ring_reach`)
+    /// and its normal on the ellipsoid; `None` where its least gain is not positive.
+    fn of(
+        optics: &Optics,
+        now: &ViewNow,
+        normal: Option<RingNormal>,
+        ring_z: f64,
+        ring_reach: f64,
+    ) -> Option<Self> {
+        let (floor, w_z) = match normal {
+            None => (optics.floor, optics.w_z),
+            Some(n) => {
+                let u = now.rotation * n.up;
+                let floor = frustum_gain_floor(&optics.frustum, u) - n.spread * optics.turn;
+                (floor, u.z.abs() + n.spread)
+            }
+        };
+        // NaN is no floor either.
+        (floor > 0.0).then_some(Self {
+            ring_z,
+            ring_reach,
+            floor,
+            w_z,
+            slack: normal.is_some(),
+        })
+    }
+
+    /// The factor by which no gain of the record has grown after the eye moved by `m` and
+    /// turned by `k` (the module's bound); `None` once the ring tile may reach the eye plane.
+    fn gain(&self, m: f64, k: f64, optics: &Optics) -> Option<f64> {
+        let mu_ring = moved(self.ring_reach, m, k);
+        if self.ring_z - mu_ring <= 1e-6 {
+            return None;
+        }
+        // Σ: how far a and b together move, at most, for a box within the ring tile.
+        let sigma = (2.0 + optics.a + optics.b) * mu_ring / (self.ring_z - mu_ring);
+        let slack = if self.slack { sigma } else { 0.0 };
+        Some(1.0 + ((self.w_z + k) * sigma + k * optics.turn) / self.floor + slack)
+    }
+}
+
+/// μ(D): how far a point at distance `reach` from the eye moves in view space, at most, when
+/// the eye moves by `m` and turns by `k`, the plane's curvature drop included.
+fn moved(reach: f64, m: f64, k: f64) -> f64 {
+    m + (2.0 * reach + m) * m / (2.0 * EARTH_RADIUS_M) + k * reach
 }
 
 /// The frame's frustum and gains, what every certificate of it uses.
@@ -125,6 +197,16 @@ pub(super) struct Optics {
     pub floor: f64,
     /// |w_z| of the world vertical in view space.
     pub w_z: f64,
+    /// The frustum, for a ring tile's own least gain on the ellipsoid.
+    pub frustum: Frustum,
+}
+
+/// The normal of a ring tile on the ellipsoid: its centre's (world axes) and how far every
+/// normal within it turns from it (`NodeGeometry::spread`).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct RingNormal {
+    pub up: DVec3,
+    pub spread: f64,
 }
 
 /// Counts of one frame.
@@ -135,6 +217,9 @@ pub struct CarryStats {
     pub carried_nodes: u32,
     /// Ring tiles walked (a record made of each that can be carried).
     pub walked_tiles: u32,
+    /// Walked ring tiles not recorded: at this frame's motion their record would not hold
+    /// one frame.
+    pub unkept_tiles: u32,
 }
 
 /// The records of the ring tiles of the last frame, for selections with parameters `P`.
@@ -143,15 +228,26 @@ pub struct Carry<P> {
     key: Option<CarryKey<P>>,
     frame: u64,
     tiles: HashMap<(u32, u32, u32), CarriedTile, FastHash>,
+    /// The view of the frame before, and how far the eye moved and turned since (m, k).
+    last: Option<ViewNow>,
+    motion: Option<(f64, f64)>,
     /// This frame's counts.
     pub stats: CarryStats,
 }
 
 impl<P: PartialEq> Carry<P> {
-    /// A frame begins: records of another key are dropped.
-    pub(super) fn begin(&mut self, key: Option<CarryKey<P>>) {
+    /// A frame begins with view `now` (`None`: not carrying): records of another key are
+    /// dropped.
+    pub(super) fn begin(&mut self, key: Option<CarryKey<P>>, now: Option<ViewNow>) {
         self.frame += 1;
         self.stats = CarryStats::default();
+        self.motion = match (self.last, now) {
+            (Some(a), Some(b)) => {
+                Some(((b.eye - a.eye).length(), frobenius(b.rotation - a.rotation)))
+            }
+            _ => None,
+        };
+        self.last = now;
         if key.is_none() || key != self.key {
             self.tiles.clear();
         }
@@ -197,13 +293,10 @@ impl<P: PartialEq> Carry<P> {
         }
         let m = (now.eye - t.view.eye).length();
         let k = frobenius(now.rotation - t.view.rotation);
-        let mu = |reach: f64| m + (2.0 * reach + m) * m / (2.0 * EARTH_RADIUS_M) + k * reach;
-        let mu_ring = mu(t.ring_reach);
-        if t.ring_z - mu_ring <= 1e-6 {
+        let mu = |reach: f64| moved(reach, m, k);
+        let Some(gain) = t.growth.gain(m, k, optics) else {
             return false;
-        }
-        let lip = (optics.w_z + k) * (2.0 + optics.a + optics.b);
-        let gain = 1.0 + (lip * mu_ring / (t.ring_z - mu_ring) + k * optics.turn) / optics.floor;
+        };
         if t.culled
             .iter()
             .any(|c| mu(c.reach) >= c.margin * (1.0 - ROOM))
@@ -235,14 +328,16 @@ impl<P: PartialEq> Carry<P> {
 
     /// Keeps ring tile `key`'s refinement just walked at `now`: `nodes` and `morphs` as
     /// `refine_ring_tile` left them, `culled` the parts its walk found outside the frustum
-    /// (level, tx, ty), `boxes` the box of a node (level, tx, ty) with the sag of cells
-    /// `drawn` levels up, in view space (corners) with the eye at the origin.
+    /// (level, tx, ty), `corners` the box of a node (level, tx, ty) with the sag of cells two
+    /// levels up, in view space (corners) with the eye at the origin, and its world box;
+    /// `normal` the ring tile's on the ellipsoid (`None` on the plane).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn record(
         &mut self,
         key: (u32, u32, u32),
         now: &ViewNow,
         optics: &Optics,
+        normal: Option<RingNormal>,
         nodes: &[Node],
         morphs: &[(usize, Morph)],
         culled: &[(u32, u32, u32)],
@@ -260,9 +355,28 @@ impl<P: PartialEq> Carry<P> {
             (z, reach(&b, now.eye), c)
         };
         let (ring_z, ring_reach, _) = depth_reach(key.0, key.1, key.2);
+        let Some(growth) = Growth::of(optics, now, normal, ring_z, ring_reach) else {
+            self.tiles.remove(&key);
+            return;
+        };
+        let floor = growth.floor;
+        // A record is worth its certificates only if it could hold a frame of the motion just
+        // seen: its nodes' bounds grow at least by the gains' factor. (A cost rule: whether
+        // a record holds is decided when it is taken.)
+        if let Some((m, k)) = self.motion {
+            let worst = nodes.iter().fold(0f32, |a, n| a.max(n.4)) as f64 / optics.tau;
+            let holds = growth
+                .gain(m, k, optics)
+                .is_some_and(|g| worst * g <= 1.0 - ROOM);
+            if !holds {
+                self.tiles.remove(&key);
+                self.stats.unkept_tiles += 1;
+                return;
+            }
+        }
         // Stored ε and ρ are f32: rounded up by more than their rounding.
         let up = |v: f32| v as f64 * (1.0 + ROOM);
-        let least_gain = optics.floor * optics.focal / optics.tau;
+        let least_gain = floor * optics.focal / optics.tau;
         // The tile's earlier record, if any, lends its vectors (walked again, it is replaced).
         let frame = self.frame;
         let t = self.tiles.entry(key).or_insert_with(|| CarriedTile {
@@ -273,11 +387,9 @@ impl<P: PartialEq> Carry<P> {
             morphs: Vec::new(),
             certs: Vec::new(),
             culled: Vec::new(),
-            ring_z,
-            ring_reach,
+            growth,
         });
-        (t.made_at, t.used_at, t.view) = (frame, frame, *now);
-        (t.ring_z, t.ring_reach) = (ring_z, ring_reach);
+        (t.made_at, t.used_at, t.view, t.growth) = (frame, frame, *now, growth);
         t.nodes.clear();
         t.nodes.extend_from_slice(nodes);
         t.morphs.clear();
@@ -403,6 +515,180 @@ mod tests {
             max: DVec3::new(1.0, 1.0, 0.5),
         };
         assert!((planes.outside_margin(&corners_of(&behind)) - 0.5).abs() < 1e-12);
+    }
+
+    /// splitmix64, so failures reproduce.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        }
+        fn range(&mut self, lo: f64, hi: f64) -> f64 {
+            lo + (hi - lo) * self.next()
+        }
+        fn unit(&mut self) -> DVec3 {
+            loop {
+                let v = DVec3::new(
+                    self.range(-1.0, 1.0),
+                    self.range(-1.0, 1.0),
+                    self.range(-1.0, 1.0),
+                );
+                if (0.1..1.0).contains(&v.length()) {
+                    return v.normalize();
+                }
+            }
+        }
+    }
+
+    /// The growth bound of the module's doc, by brute force: a node's gain over a box within
+    /// its ring tile's box, formed afresh after the eye moved by m and turned by k, is never
+    /// more than its gain when the record was made times `Growth::gain` — on the plane (the
+    /// world vertical, no slack) and on the ellipsoid (the node's normal within the tile's
+    /// spread of the tile's, a slack part).
+    #[test]
+    fn a_gain_grows_at_most_by_the_records_factor() {
+        use super::super::bound::{spread_gain_of, vertical_gain_of};
+        let mut rng = Rng(0x15_0f);
+        let (mut checked, mut tight) = (0u32, 0f64);
+        for case in 0..20_000 {
+            let ellipsoid = case % 2 == 1;
+            let f = crate::camera::Frustum::symmetric(rng.range(40f64, 110.0).to_radians(), 16, 9);
+            // World → view at the record: looking along a random direction, below the horizon
+            // mostly; the world vertical is +Z.
+            let r0 = DMat3::from_euler(
+                glam::EulerRot::ZXY,
+                rng.range(0.0, 6.3),
+                rng.range(-1.6, 1.6),
+                rng.range(-0.6, 0.6),
+            );
+            let eye0 = DVec3::new(
+                rng.range(-50.0, 50.0),
+                rng.range(-50.0, 50.0),
+                rng.range(0.0, 900.0),
+            );
+            // The ring tile's box: somewhere in front of the eye at the record.
+            let ahead =
+                r0.transpose() * DVec3::new(rng.range(-0.5, 0.5), rng.range(-0.3, 0.3), 1.0);
+            let centre = eye0 + ahead * rng.range(200.0, 20_000.0);
+            let half = DVec3::new(
+                rng.range(5.0, 3000.0),
+                rng.range(5.0, 3000.0),
+                rng.range(1.0, 500.0),
+            );
+            let ring = Aabb {
+                min: centre - half,
+                max: centre + half,
+            };
+            // A node's box within it.
+            let pick = |rng: &mut Rng, lo: f64, hi: f64| {
+                let (a, b) = (rng.range(lo, hi), rng.range(lo, hi));
+                (a.min(b), a.max(b))
+            };
+            let (x0, x1) = pick(&mut rng, ring.min.x, ring.max.x);
+            let (y0, y1) = pick(&mut rng, ring.min.y, ring.max.y);
+            let (z0, z1) = pick(&mut rng, ring.min.z, ring.max.z);
+            let node = Aabb {
+                min: DVec3::new(x0, y0, z0),
+                max: DVec3::new(x1, y1, z1),
+            };
+            // The tile's normal, its spread, the node's normal within it and the node's slack.
+            let (up_ring, spread, up_node, slack) = if ellipsoid {
+                let up = (DVec3::Z + rng.unit() * 0.05).normalize();
+                let spread = rng.range(0.0, 0.02);
+                let tilt = rng.unit() * spread * rng.next();
+                (up, spread, (up + tilt).normalize(), rng.range(0.0, 1.0))
+            } else {
+                (DVec3::Z, 0.0, DVec3::Z, 0.0)
+            };
+            let corners = |r: DMat3, eye: DVec3, b: &Aabb| {
+                let c = b.corners().map(|p| r * (p - eye));
+                (
+                    c,
+                    ViewCorners {
+                        x: c.map(|p| p.x),
+                        y: c.map(|p| p.y),
+                        z: c.map(|p| p.z),
+                    },
+                )
+            };
+            let (ring0, ring_c) = corners(r0, eye0, &ring);
+            let ring_z = ring0.iter().fold(f64::INFINITY, |a, p| a.min(p.z));
+            if ring_z <= 1.0 {
+                continue;
+            }
+            let _ = ring_c;
+            let a = f.tan_left.abs().max(f.tan_right.abs());
+            let b = f.tan_up.abs().max(f.tan_down.abs());
+            let turn = (2.0 + a * a + b * b).sqrt();
+            let u0 = r0 * DVec3::Z;
+            let optics = Optics {
+                tau: 1.0,
+                focal: 1000.0,
+                near: 0.5,
+                a,
+                b,
+                turn,
+                floor: frustum_gain_floor(&f, u0),
+                w_z: u0.z.abs(),
+                frustum: f,
+            };
+            let view = ViewNow {
+                eye: eye0,
+                rotation: r0,
+            };
+            let normal = ellipsoid.then_some(RingNormal {
+                up: up_ring,
+                spread,
+            });
+            let Some(growth) = Growth::of(&optics, &view, normal, ring_z, reach(&ring, eye0))
+            else {
+                continue;
+            };
+            if growth.floor <= 1e-3 {
+                continue;
+            }
+            // What the record takes of every normal within the tile's spread: its least gain
+            // and |w_z| (a normal turned by the whole spread, any way).
+            if ellipsoid {
+                let turned = r0 * (up_ring + rng.unit() * spread).normalize();
+                assert!(
+                    frustum_gain_floor(&f, turned) >= growth.floor,
+                    "case {case}: floor"
+                );
+                assert!(turned.z.abs() <= growth.w_z, "case {case}: w_z");
+            }
+            let gain = |r: DMat3, eye: DVec3| {
+                let (c, _) = corners(r, eye, &node);
+                if ellipsoid {
+                    spread_gain_of(&c, &f, r * up_node, slack)
+                } else {
+                    vertical_gain_of(&c, &f, r * up_node)
+                }
+            };
+            let then = gain(r0, eye0);
+            // The eye moves and turns a little (a frame or a few of a fast flight).
+            let turned = DMat3::from_axis_angle(rng.unit(), rng.range(0.0, 0.02)) * r0;
+            let eye1 = eye0 + rng.unit() * rng.range(0.0, 30.0);
+            let (m, k) = ((eye1 - eye0).length(), frobenius(turned - r0));
+            let Some(factor) = growth.gain(m, k, &optics) else {
+                continue;
+            };
+            let now = gain(turned, eye1);
+            assert!(
+                now <= then * factor * (1.0 + 1e-9),
+                "case {case}: gain {then} → {now}, more than ×{factor} (m {m}, k {k})"
+            );
+            if now > then {
+                tight = tight.max((now - then) / (then * (factor - 1.0)));
+            }
+            checked += 1;
+        }
+        eprintln!("{checked} gains checked; the largest growth used {tight:.3} of the bound's");
+        assert!(checked > 5_000, "{checked}");
     }
 
     #[test]

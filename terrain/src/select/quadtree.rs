@@ -8,7 +8,7 @@ use crate::camera::Camera;
 use crate::clipmap::{ring_tiles, ClipmapDesc, LevelPlacement};
 
 use super::bound::{frustum_gain_floor, frustum_vertical_gain};
-use super::carry::{Carry, CarryKey, FrustumPlanes, Optics, ViewNow};
+use super::carry::{Carry, CarryKey, FrustumPlanes, Optics, RingNormal, ViewNow};
 use super::cdlod_morph::Morph;
 use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant, Upgrade};
 use super::selection::{
@@ -131,14 +131,17 @@ pub fn select_tiles_multi_ready(
     let key = carry_key(bake, params, views.len(), optics);
     #[cfg(test)]
     let key = key.filter(|_| !super::walk::reference::active());
+    // On the plane every record shares the frustum's least gain, which must be positive; on
+    // the ellipsoid each record forms its own (`carry.rs`).
     let floor = frustum_gain_floor(&f, v.up);
-    let key = key.filter(|_| floor > 0.0);
-    carry.begin(key);
+    let key = key.filter(|_| params.earth.is_some() || floor > 0.0);
+    let now = ViewNow {
+        eye: v.camera.position,
+        rotation: v.rotation,
+    };
+    carry.begin(key, key.map(|_| now));
     let carrying = key.map(|_| Carrying {
-        now: ViewNow {
-            eye: v.camera.position,
-            rotation: v.rotation,
-        },
+        now,
         optics: {
             let a = f.tan_left.abs().max(f.tan_right.abs());
             let b = f.tan_up.abs().max(f.tan_down.abs());
@@ -151,6 +154,7 @@ pub fn select_tiles_multi_ready(
                 turn: (2.0 + a * a + b * b).sqrt(),
                 floor,
                 w_z: v.up.z.abs(),
+                frustum: f,
             }
         },
         planes: FrustumPlanes::of(&f, v.camera.near),
@@ -503,10 +507,15 @@ fn select_coarsest_first(
                         refine_ring_tile(frame, level, tx, ty, eval, retry, i, &mut nodes, out);
                     if missed == 0 {
                         let culled = frame.culled.as_ref().map(|c| c.borrow());
+                        let normal = frame.fixed(level, tx, ty).geo.map(|g| RingNormal {
+                            up: g.up,
+                            spread: g.spread,
+                        });
                         carry.record(
                             key,
                             &c.now,
                             &c.optics,
+                            normal,
                             &nodes,
                             &frame.quadrants.borrow(),
                             culled.as_deref().map_or(&[], |v| v.as_slice()),
@@ -532,8 +541,8 @@ fn select_coarsest_first(
     }
 }
 
-/// [`CarryKey`] of a frame that may carry: one view on the flat plane, no horizon culling,
-/// the bounded quadtree with parts; `None` else.
+/// [`CarryKey`] of a frame that may carry: one view (on the plane or the ellipsoid), no
+/// horizon culling, the bounded quadtree with parts; `None` else.
 fn carry_key(
     bake: &ErrorBake,
     params: &SelectParams,
@@ -542,7 +551,6 @@ fn carry_key(
 ) -> Option<CarryKey<SelectParams>> {
     let fits = params.carry
         && views == 1
-        && params.earth.is_none()
         && !params.horizon_cull
         && params.mode == LodMode::Bounded
         && params.coarsen

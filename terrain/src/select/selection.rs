@@ -80,7 +80,7 @@ pub struct SelectParams {
     /// texture, when that draws fewer triangles (`Frame::seen_parts`) — what CDLOD's quadtree
     /// does with a node it culls in part.
     pub seen_quadrants: bool,
-    /// `Bounded` with one view on the flat plane: a ring tile refined in an earlier frame is
+    /// `Bounded` with one view (plane or ellipsoid): a ring tile refined in an earlier frame is
     /// drawn again while its certificate says every node still meets τ (`carry.rs`), instead
     /// of walked afresh.
     pub carry: bool,

@@ -183,8 +183,10 @@ impl Frame<'_> {
         ty: u32,
     ) -> (super::bound::ViewCorners, Aabb) {
         let v = &self.views[0];
-        let node = self.compute_fixed(level, tx, ty);
-        let aabb = self.aabb(level + 2, &node, v.camera.position);
+        // From the node cache on the ellipsoid (the box's lattice is dear to form again).
+        let aabb = self.with_fixed(level, tx, ty, |node| {
+            self.aabb(level + 2, node, v.camera.position)
+        });
         (view_corners(&v.to_view, &aabb), aabb)
     }
 

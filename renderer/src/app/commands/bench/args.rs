@@ -119,7 +119,7 @@ pub struct BenchArgs {
     /// Bounded: drop tiles hidden behind nearer terrain (a conservative CPU horizon).
     #[arg(long, value_enum, default_value_t = Switch::Off)]
     pub horizon_cull: Switch,
-    /// Bounded, one view on the flat plane: draw a ring tile refined in an earlier frame again
+    /// Bounded, one view (plane or ellipsoid): draw a ring tile refined in an earlier frame again
     /// while a certificate says its nodes still meet τ (on), or walk every frame afresh (off).
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub carry_selection: Switch,
