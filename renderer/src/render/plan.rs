@@ -47,7 +47,6 @@ use crate::render::gathered::Gatherer;
 
 use aerie_terrain::geodesy::GeoGrid;
 
-use crate::render::geo_instances::GeoNodeCache;
 use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, TileInstance};
 use crate::render::jobs::{
     eye_samples, split_level_uploads, within_data_cap, ImageUpload, PlanError, StagingBudget,
@@ -56,7 +55,9 @@ use crate::render::normal_map::normal_bytes;
 pub use crate::render::pool_atlas::PoolSlots;
 use crate::render::pool_atlas::{PoolAtlas, PoolLimits};
 use crate::render::stats::FrameStats;
-use crate::render::tile_instances::{build_instances, InstanceFrame, MAX_TERRAIN_DRAWS};
+use crate::render::tile_instances::{
+    build_instances, InstanceCaches, InstanceFrame, MAX_TERRAIN_DRAWS,
+};
 pub use crate::render::tile_instances::{indirect_draws, slot_placement, SkirtRule, TileMeshes};
 
 /// Largest number of m×m instances one frame may draw (48 bytes each per frame in flight): the
@@ -108,8 +109,8 @@ pub struct PlanState {
     pub shared_selections: u64,
     /// A geographic dataset drawn on the WGS84 ellipsoid (`GeoGrid::of`); None: the flat plane.
     pub earth: Option<GeoGrid>,
-    /// The drawn nodes' eye-independent ellipsoid fields, kept across frames.
-    pub geo_cache: GeoNodeCache,
+    /// The drawn nodes' eye-independent ellipsoid fields and their skirts, kept across frames.
+    pub instance_caches: InstanceCaches,
     /// The grid's valid samples east and north.
     pub valid_samples: [u32; 2],
 }
@@ -157,7 +158,7 @@ impl PlanState {
             shared: SharedSelection::default(),
             shared_selections: 0,
             earth,
-            geo_cache: GeoNodeCache::default(),
+            instance_caches: InstanceCaches::default(),
             valid_samples,
         }
     }
@@ -434,7 +435,7 @@ pub fn plan_frame(
             pools: &state.pools,
         },
         &plan.draw_list,
-        &mut state.geo_cache,
+        &mut state.instance_caches,
     );
     // Quadrants drawn for their parents (bounded's and CDLOD's) draw the coarse mesh: the
     // parent's quarter mesh they show.

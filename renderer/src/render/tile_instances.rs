@@ -12,7 +12,7 @@ use bytemuck::Zeroable;
 use glam::DVec3;
 
 use aerie_terrain::geodesy::GeoGrid;
-use aerie_terrain::select::{node_skirts, DrawItem, LodMode, NodeSkirts, ALL_EDGES};
+use aerie_terrain::select::{DrawItem, LodMode, NodeSkirts, SkirtMemo, ALL_EDGES};
 
 use crate::render::geo_instances::{GeoEye, GeoNodeCache};
 use crate::render::gpu::{DrawIndexedIndirect, TileInstance};
@@ -170,7 +170,7 @@ fn group_of(item: &DrawItem) -> usize {
 
 /// Each drawn node's skirt: how far it reaches and the edges that get one under `f.skirts`
 /// (see [`SkirtRule`]), in the list's order; one walk over the nodes gives both.
-fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)]) -> NodeSkirts {
+fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)], memo: &mut SkirtMemo) -> NodeSkirts {
     let n = draw_list.len();
     if f.skirts == SkirtRule::None {
         return NodeSkirts {
@@ -202,11 +202,19 @@ fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)]) -> NodeSkirts {
         // The grid's last sample: an edge on it or past it keeps the skirt its first one keeps.
         on_last.push(((east >= last_x) as u8) << 1 | ((north >= last_y) as u8) << 2);
     }
-    let mut skirts = node_skirts(&nodes, &resolution, &folds);
+    let mut skirts = memo.skirts(&nodes, &resolution, &folds).clone();
     for (e, last) in skirts.edges.iter_mut().zip(on_last) {
         *e |= if all_edges { ALL_EDGES } else { last };
     }
     skirts
+}
+
+/// What [`build_instances`] keeps across frames: the drawn nodes' eye-independent ellipsoid
+/// fields and the last node list's skirts.
+#[derive(Default)]
+pub struct InstanceCaches {
+    pub geo: GeoNodeCache,
+    pub skirts: SkirtMemo,
 }
 
 /// What the instance records need from the frame: the clipmap's tile size, the grid spacing,
@@ -255,11 +263,12 @@ pub fn slot_placement(item: &DrawItem, tile_quads: u32) -> (u32, u32, u32) {
 pub fn build_instances(
     f: &InstanceFrame,
     draw_list: &[(DrawItem, u32)],
-    geo_cache: &mut GeoNodeCache,
+    caches: &mut InstanceCaches,
 ) -> (Vec<TileInstance>, [u32; INSTANCE_KEYS]) {
     let q = f.tile_quads;
     let eye = f.eye;
-    let NodeSkirts { reach, edges } = skirts_of(f, draw_list);
+    let NodeSkirts { reach, edges } = skirts_of(f, draw_list, &mut caches.skirts);
+    let geo_cache = &mut caches.geo;
     let key_of = |k: usize| group_of(&draw_list[k].0) * EDGE_SETS + edges[k] as usize;
     let geo = f.earth.map(|g| {
         geo_cache.begin(g);
@@ -450,7 +459,7 @@ mod tests {
         .collect();
         let pools: Vec<PoolSlots> = (1..=6).map(|r| PoolSlots::new((16 << r) + 1, 16)).collect();
         let f = frame(SkirtRule::Everywhere, [1 << 20, 1 << 20], &pools);
-        let (instances, sizes) = build_instances(&f, &list, &mut GeoNodeCache::default());
+        let (instances, sizes) = build_instances(&f, &list, &mut InstanceCaches::default());
         let mut want = [0u32; DRAW_GROUPS];
         want[..3].copy_from_slice(&[2, 1, 2]);
         want[RESOLUTIONS] = 2;
@@ -481,7 +490,7 @@ mod tests {
             pools: &packed,
             ..f
         };
-        let (placed, _) = build_instances(&g, &list, &mut GeoNodeCache::default());
+        let (placed, _) = build_instances(&g, &list, &mut InstanceCaches::default());
         for (t, o) in placed.iter().zip(&instances) {
             if t.refinement == 0 {
                 assert_eq!(t, o);
@@ -654,28 +663,37 @@ mod tests {
         // The second tile spans samples 64..=128: past the last one.
         let f = frame(SkirtRule::WhereResolutionsDiffer, [100, 1000], &[]);
         let (s, e, n, w) = (1u8, 2u8, 4u8, 8u8);
-        assert_eq!(skirts_of(&f, &list).edges, [s | n | w, s | e, s | w, 0]);
+        assert_eq!(
+            skirts_of(&f, &list, &mut SkirtMemo::default()).edges,
+            [s | n | w, s | e, s | w, 0]
+        );
         let inside = InstanceFrame {
             valid_samples: [1000, 1000],
             ..f
         };
-        assert_eq!(skirts_of(&inside, &list).edges[1], s);
+        assert_eq!(
+            skirts_of(&inside, &list, &mut SkirtMemo::default()).edges[1],
+            s
+        );
         let on_the_last = InstanceFrame {
             valid_samples: [129, 1000],
             ..f
         };
-        assert_eq!(skirts_of(&on_the_last, &list).edges[1], s | e);
+        assert_eq!(
+            skirts_of(&on_the_last, &list, &mut SkirtMemo::default()).edges[1],
+            s | e
+        );
         for (rule, want) in [
             (SkirtRule::None, [0; 4]),
             (SkirtRule::Everywhere, [ALL_EDGES; 4]),
         ] {
             let g = InstanceFrame { skirts: rule, ..f };
-            assert_eq!(skirts_of(&g, &list).edges, want);
+            assert_eq!(skirts_of(&g, &list, &mut SkirtMemo::default()).edges, want);
         }
         let (_, meshes) = TileMeshes::indices(17);
         let tris = |rule| {
             let g = InstanceFrame { skirts: rule, ..f };
-            let (_, sizes) = build_instances(&g, &list, &mut GeoNodeCache::default());
+            let (_, sizes) = build_instances(&g, &list, &mut InstanceCaches::default());
             indirect_draws(&sizes, meshes).1
         };
         let grids = 3 * 512 + 128;

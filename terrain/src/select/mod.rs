@@ -35,7 +35,7 @@ pub use selection::{
 };
 #[cfg(test)]
 use skirts::neighbour_eps;
-pub use skirts::{node_skirts, NodeSkirts, ALL_EDGES};
+pub use skirts::{node_skirts, NodeSkirts, SkirtMemo, ALL_EDGES};
 pub use tess_density::{sample_density, TessDensity, DEFAULT_TOL_M, TESS_LEVEL_CAP, TESS_PATCH};
 pub use tessellation::{
     distance_factor, edge_factor, rounded_level, select_patches, triangles_emitted, Spacing,
