@@ -92,8 +92,7 @@ fn carried_nodes_cover_the_ground_once_and_stay_within_tau() {
         ),
     ];
     let mut rng = Rng(0x15_0c);
-    let (mut carried, mut drawn, mut fresh_drawn, mut checked) = (0u64, 0u64, 0u64, 0u64);
-    let mut worst_ratio: f64 = 0.0;
+    let mut tally = Tally::default();
     for f in 0..8 {
         let s = &scenes[f % scenes.len()];
         let hf = &s.ds.hf;
@@ -102,53 +101,86 @@ fn carried_nodes_cover_the_ground_once_and_stay_within_tau() {
             let what = format!("{} flight {f} frame {k}", s.name);
             select(s, cam, true, &mut sel);
             select(s, cam, false, &mut fresh);
-            assert_eq!(sel.unbounded, 0, "{what}: unbounded nodes");
-            carried += sel.carry.stats.carried_nodes as u64;
-            drawn += sel.items.len() as u64;
-            fresh_drawn += fresh.items.len() as u64;
             if k % 3 == 2 {
                 flat_oracle::assert_covered_once(hf, cam, (W, H), M, &sel.items, &what);
             }
-            if sel.carry.stats.carried_nodes == 0 {
-                continue;
-            }
-            // The nodes nearest τ and a few more at random, each against the true surface.
-            let mut order: Vec<usize> = (0..sel.items.len()).collect();
-            order.sort_by(|&a, &b| sel.items[b].rho_px.total_cmp(&sel.items[a].rho_px));
-            let mut pick: Vec<usize> = order.iter().take(3).copied().collect();
-            for _ in 0..3 {
-                pick.push((rng.next() * sel.items.len() as f64) as usize % sel.items.len());
-            }
-            for i in pick {
-                let item = sel.items[i];
-                let up = item.morph.levels_up();
-                let (l, x, y) = (item.node_level, item.node_tx, item.node_ty);
-                let err = flat_oracle::tile_error_px(hf, cam, (W, H), M, l, x, y, l + up);
-                assert!(
-                    err <= 1.0 + 1e-6 && err <= item.rho_px as f64 + 1e-6,
-                    "{what}: node L{l} ({x}, {y}) +{up} projects {err:.4} px (bound {:.4})",
-                    item.rho_px
-                );
-                if item.rho_px > 0.0 {
-                    worst_ratio = worst_ratio.max(err / item.rho_px as f64);
-                }
-                checked += 1;
-            }
+            tally.frame(&sel, &fresh, &mut rng, &what, |l, x, y, drawn| {
+                flat_oracle::tile_error_px(hf, cam, (W, H), M, l, x, y, drawn)
+            });
         }
     }
-    eprintln!(
-        "carried selection: {carried} of {drawn} nodes carried; {fresh_drawn} drawn by fresh walks; {checked} nodes checked, tightest measured/bound {worst_ratio:.3}"
-    );
-    assert!(
-        carried * 2 > drawn,
-        "too little carried to tell: {carried} of {drawn}"
-    );
-    assert!(checked > 200, "{checked} nodes checked");
-    // Carried nodes are those of an earlier frame's walk: never far more than a fresh walk's.
-    assert!(
-        drawn * 100 <= fresh_drawn * 110,
-        "carrying drew {drawn} nodes, fresh walks {fresh_drawn}"
-    );
+    tally.finish("carried selection", 2);
+}
+
+/// A carried flight's counts: nodes carried and drawn, nodes fresh walks drew, nodes checked,
+/// and the tightest measured error over its bound.
+#[derive(Default)]
+struct Tally {
+    carried: u64,
+    drawn: u64,
+    fresh_drawn: u64,
+    checked: u64,
+    worst_ratio: f64,
+}
+
+impl Tally {
+    /// One frame, `sel` carried and `fresh` walked afresh: where nodes were carried, the nodes
+    /// nearest τ and three at random are checked with `error_px(level, tx, ty, drawn level)`
+    /// against τ and their bound.
+    fn frame(
+        &mut self,
+        sel: &Selection,
+        fresh: &Selection,
+        rng: &mut Rng,
+        what: &str,
+        error_px: impl Fn(u32, u32, u32, u32) -> f64,
+    ) {
+        assert_eq!(sel.unbounded, 0, "{what}: unbounded nodes");
+        self.carried += sel.carry.stats.carried_nodes as u64;
+        self.drawn += sel.items.len() as u64;
+        self.fresh_drawn += fresh.items.len() as u64;
+        if sel.carry.stats.carried_nodes == 0 || sel.items.is_empty() {
+            return;
+        }
+        for item in picked(sel, rng, 3) {
+            let up = item.morph.levels_up();
+            let (l, x, y) = (item.node_level, item.node_tx, item.node_ty);
+            let err = error_px(l, x, y, l + up);
+            assert!(
+                err <= 1.0 + 1e-6 && err <= item.rho_px as f64 + 1e-6,
+                "{what}: node L{l} ({x}, {y}) +{up} projects {err:.4} px (bound {:.4})",
+                item.rho_px
+            );
+            if item.rho_px > 0.0 {
+                self.worst_ratio = self.worst_ratio.max(err / item.rho_px as f64);
+            }
+            self.checked += 1;
+        }
+    }
+
+    /// The summary line; more than one node in `share` carried, enough checked, and carried
+    /// nodes — an earlier frame's walk's — never far more than a fresh walk's.
+    fn finish(&self, name: &str, share: u64) {
+        let Self {
+            carried,
+            drawn,
+            fresh_drawn,
+            checked,
+            worst_ratio,
+        } = *self;
+        eprintln!(
+            "{name}: {carried} of {drawn} nodes carried; {fresh_drawn} drawn by fresh walks; {checked} nodes checked, tightest measured/bound {worst_ratio:.3}"
+        );
+        assert!(
+            carried * share > drawn,
+            "too little carried to tell: {carried} of {drawn}"
+        );
+        assert!(checked > 200, "{checked} nodes checked");
+        assert!(
+            drawn * 100 <= fresh_drawn * 110,
+            "carrying drew {drawn} nodes, fresh walks {fresh_drawn}"
+        );
+    }
 }
 
 /// The nodes nearest τ in `sel` and `random` more at random.
@@ -237,8 +269,7 @@ fn carried_nodes_on_the_ellipsoid_stay_within_tau() {
         ),
     ];
     let mut rng = Rng(0x15_0e);
-    let (mut carried, mut drawn, mut fresh_drawn, mut checked) = (0u64, 0u64, 0u64, 0u64);
-    let mut worst_ratio: f64 = 0.0;
+    let mut tally = Tally::default();
     for f in 0..8 {
         let g = &scenes[f % scenes.len()];
         let (mut sel, mut fresh) = (Selection::default(), Selection::default());
@@ -246,42 +277,13 @@ fn carried_nodes_on_the_ellipsoid_stay_within_tau() {
             let what = format!("{} flight {f} frame {k}", g.s.name);
             select_geo(g, cam, true, &mut sel);
             select_geo(g, cam, false, &mut fresh);
-            assert_eq!(sel.unbounded, 0, "{what}: unbounded nodes");
-            carried += sel.carry.stats.carried_nodes as u64;
-            drawn += sel.items.len() as u64;
-            fresh_drawn += fresh.items.len() as u64;
-            if sel.carry.stats.carried_nodes == 0 || sel.items.is_empty() {
-                continue;
-            }
-            for item in picked(&sel, &mut rng, 3) {
-                let up = item.morph.levels_up();
-                let (l, x, y) = (item.node_level, item.node_tx, item.node_ty);
-                let err = geo_tile_error_px(g, cam, (W, H), M, l, x, y, l + up);
-                assert!(
-                    err <= 1.0 + 1e-6 && err <= item.rho_px as f64 + 1e-6,
-                    "{what}: node L{l} ({x}, {y}) +{up} projects {err:.4} px (bound {:.4})",
-                    item.rho_px
-                );
-                if item.rho_px > 0.0 {
-                    worst_ratio = worst_ratio.max(err / item.rho_px as f64);
-                }
-                checked += 1;
-            }
+            tally.frame(&sel, &fresh, &mut rng, &what, |l, x, y, drawn| {
+                geo_tile_error_px(g, cam, (W, H), M, l, x, y, drawn)
+            });
         }
     }
-    eprintln!(
-        "carried selection on the ellipsoid: {carried} of {drawn} nodes carried; {fresh_drawn} drawn by fresh walks; {checked} nodes checked, tightest measured/bound {worst_ratio:.3}"
-    );
     // A third, not half as on the plane: these grids are 3× as wide (far ring tiles reach
     // 40 km), and a turn moves a far box by k·D — the turning flights' records hold fewer
     // frames.
-    assert!(
-        carried * 3 > drawn,
-        "too little carried to tell: {carried} of {drawn}"
-    );
-    assert!(checked > 200, "{checked} nodes checked");
-    assert!(
-        drawn * 100 <= fresh_drawn * 110,
-        "carrying drew {drawn} nodes, fresh walks {fresh_drawn}"
-    );
+    tally.finish("carried selection on the ellipsoid", 3);
 }
