@@ -72,6 +72,40 @@ pub fn curvature_drop(eye: DVec3, x: f64, y: f64) -> f64 {
     (DVec2::new(x, y) - eye.truncate()).length_squared() / (2.0 * EARTH_RADIUS_M)
 }
 
+/// The drawn surface at sample (c, row) of a node starting at sample `origin` and `side`
+/// samples wide, drawn every `step` samples: the GPU's interpolation (SW–NE diagonal) of its
+/// cell's vertices, `vertex(c, row)` a height (the plane) or a position (the ellipsoid).
+pub fn drawn_at<T>(
+    c: usize,
+    row: usize,
+    origin: (usize, usize),
+    side: usize,
+    step: usize,
+    vertex: impl Fn(usize, usize) -> T,
+) -> T
+where
+    T: Copy + std::ops::Mul<f64, Output = T> + std::ops::Add<Output = T>,
+{
+    let (c0, r0) = origin;
+    // The drawn cell and the position inside it.
+    let (ci, ri) = (
+        ((c - c0) / step).min(side / step - 1),
+        ((row - r0) / step).min(side / step - 1),
+    );
+    let (vc, vr) = (c0 + ci * step, r0 + ri * step);
+    let u = (c - vc) as f64 / step as f64;
+    let v = (row - vr) as f64 / step as f64;
+    let sw = vertex(vc, vr);
+    let se = vertex(vc + step, vr);
+    let nw = vertex(vc, vr + step);
+    let ne = vertex(vc + step, vr + step);
+    if u >= v {
+        sw * (1.0 - u) + se * (u - v) + ne * v
+    } else {
+        sw * (1.0 - v) + nw * (v - u) + ne * u
+    }
+}
+
 /// The worst projected distance (px, on a `size` viewport) between the true samples of
 /// level-`level` tile (tx, ty) of `m`-vertex tiles and the surface drawn over it: the
 /// level-`drawn` grid (the tile's own level, its parent's for a quadrant drawn at the
@@ -104,23 +138,7 @@ pub fn tile_error_px(
         for c in c0..=c0 + side {
             let (x, y) = (c as f64 * hf.spacing_x, row as f64 * hf.spacing_y);
             let truth = hf.at(c, row) as f64 - curvature_drop(eye, x, y);
-            // The drawn cell and the position inside it.
-            let (ci, ri) = (
-                ((c - c0) / step).min(side / step - 1),
-                ((row - r0) / step).min(side / step - 1),
-            );
-            let (vc, vr) = (c0 + ci * step, r0 + ri * step);
-            let u = (c - vc) as f64 / step as f64;
-            let v = (row - vr) as f64 / step as f64;
-            let sw = vertex(vc, vr);
-            let se = vertex(vc + step, vr);
-            let nw = vertex(vc, vr + step);
-            let ne = vertex(vc + step, vr + step);
-            let drawn = if u >= v {
-                sw * (1.0 - u) + se * (u - v) + ne * v
-            } else {
-                sw * (1.0 - v) + nw * (v - u) + ne * u
-            };
+            let drawn = drawn_at(c, row, (c0, r0), side, step, vertex);
             let a = cam.project_px(DVec3::new(x, y, truth), w, h);
             let b = cam.project_px(DVec3::new(x, y, drawn), w, h);
             if let (Some((pa, _)), Some((pb, _))) = (a, b) {

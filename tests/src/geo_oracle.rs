@@ -11,7 +11,7 @@ use aerie::terrain::GeoReference;
 use aerie::terrain::Heightfield;
 use glam::{DVec2, DVec3};
 
-use crate::flat_oracle::{scene, Scene};
+use crate::flat_oracle::{alpine, drawn_at, scene, Scene};
 
 /// A scene on the ellipsoid with the per-row and per-column trigonometry of its samples, so
 /// that the oracle's exact positions cost a few products each.
@@ -148,22 +148,7 @@ pub fn geo_tile_error_px(
     for row in r0..=(r0 + side).min(hf.height - 1) {
         for c in c0..=(c0 + side).min(hf.width - 1) {
             let truth = vertex(c, row);
-            let (ci, ri) = (
-                ((c - c0) / step).min(side / step - 1),
-                ((row - r0) / step).min(side / step - 1),
-            );
-            let (vc, vr) = (c0 + ci * step, r0 + ri * step);
-            let u = (c - vc) as f64 / step as f64;
-            let v = (row - vr) as f64 / step as f64;
-            let sw = vertex(vc, vr);
-            let se = vertex(vc + step, vr);
-            let nw = vertex(vc, vr + step);
-            let ne = vertex(vc + step, vr + step);
-            let drawn = if u >= v {
-                sw * (1.0 - u) + se * (u - v) + ne * v
-            } else {
-                sw * (1.0 - v) + nw * (v - u) + ne * u
-            };
+            let drawn = drawn_at(c, row, (c0, r0), side, step, vertex);
             let a = cam.project_px(truth, w, h);
             let b = cam.project_px(drawn, w, h);
             if let (Some((pa, _)), Some((pb, _))) = (a, b) {
@@ -174,4 +159,22 @@ pub fn geo_tile_error_px(
         }
     }
     worst
+}
+
+/// The Inn valley crop where SRTM has it (its south-west sample 88 rows and columns in), on
+/// the ellipsoid at 47° N, tiles of `m` samples.
+pub fn alpine_47n(m: u32) -> GeoScene {
+    let (lat, lon) = (47.0 + 88.0 / 1200.0, 11.0 + 88.0 / 1200.0);
+    geo_scene("alpine 47°N", alpine(), lat, lon, 1.0 / 1200.0, m)
+}
+
+/// `cliffs` (seed 7, 1025²) at 70° N, where a longitude step is a third of a latitude step.
+pub fn cliffs_70n(m: u32) -> GeoScene {
+    let hf = aerie::terrain::gen::generate(&aerie::terrain::gen::GenParams {
+        size: 1025,
+        spacing: 30.0,
+        kind: aerie::terrain::gen::DemKind::Cliffs,
+        seed: 7,
+    });
+    geo_scene("cliffs 70°N", hf, 70.0, -20.0, 1.0 / 1200.0, m)
 }

@@ -14,7 +14,9 @@ use aerie::terrain::geodesy::Geodetic;
 use aerie::terrain::select::{select_tiles, DrawItem, SelectParams, Selection};
 use aerie::terrain::Heightfield;
 use aerie_tests::flat_oracle::{self, alpine, Scene};
-use aerie_tests::geo_oracle::{geo_scene, geo_tile_error_px, utm_geo_scene, GeoScene};
+use aerie_tests::geo_oracle::{
+    alpine_47n, cliffs_70n, geo_scene, geo_tile_error_px, utm_geo_scene, GeoScene,
+};
 use glam::{DVec2, DVec3};
 
 const W: u32 = 320;
@@ -340,23 +342,9 @@ fn geodetic_oracle(scenes: &[GeoScene], cameras: usize, seed: u64, what: &str) -
 fn every_drawn_geodetic_tile_is_within_tau_for_a_thousand_random_cameras() {
     let scenes = [
         // The Inn valley crop where SRTM has it (its south-west sample 88 rows and columns in).
-        geo_scene(
-            "alpine 47°N",
-            alpine(),
-            47.0 + 88.0 / 1200.0,
-            11.0 + 88.0 / 1200.0,
-            1.0 / 1200.0,
-            M,
-        ),
+        alpine_47n(M),
         // High latitude: a longitude step is a third of a latitude step.
-        geo_scene(
-            "cliffs 70°N",
-            generated(DemKind::Cliffs, 7),
-            70.0,
-            -20.0,
-            1.0 / 1200.0,
-            M,
-        ),
+        cliffs_70n(M),
         // A 10° region across the seam at 60°S: nodes of degrees, the normal turning 10°.
         geo_scene(
             "ridged 10° 60°S seam",

@@ -12,7 +12,7 @@ use aerie::terrain::geodesy::Geodetic;
 use aerie::terrain::select::DrawItem;
 use aerie::terrain::select::{select_tiles, SelectParams, Selection};
 use aerie_tests::flat_oracle::{self, alpine, scene, Scene};
-use aerie_tests::geo_oracle::{geo_scene, geo_tile_error_px, GeoScene};
+use aerie_tests::geo_oracle::{alpine_47n, cliffs_70n, geo_tile_error_px, GeoScene};
 use glam::{DVec2, DVec3};
 
 const W: u32 = 320;
@@ -245,29 +245,7 @@ fn select_geo(g: &GeoScene, cam: &Camera, carry: bool, sel: &mut Selection) {
 
 #[test]
 fn carried_nodes_on_the_ellipsoid_stay_within_tau() {
-    let scenes = [
-        geo_scene(
-            "alpine 47°N",
-            alpine(),
-            47.0 + 88.0 / 1200.0,
-            11.0 + 88.0 / 1200.0,
-            1.0 / 1200.0,
-            M,
-        ),
-        geo_scene(
-            "cliffs 70°N",
-            generate(&GenParams {
-                size: 1025,
-                spacing: 30.0,
-                kind: DemKind::Cliffs,
-                seed: 7,
-            }),
-            70.0,
-            -20.0,
-            1.0 / 1200.0,
-            M,
-        ),
-    ];
+    let scenes = [alpine_47n(M), cliffs_70n(M)];
     let mut rng = Rng(0x15_0e);
     let mut tally = Tally::default();
     for f in 0..8 {

@@ -517,29 +517,18 @@ mod tests {
         assert!((planes.outside_margin(&corners_of(&behind)) - 0.5).abs() < 1e-12);
     }
 
-    /// splitmix64, so failures reproduce.
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            lo + (hi - lo) * self.next()
-        }
-        fn unit(&mut self) -> DVec3 {
-            loop {
-                let v = DVec3::new(
-                    self.range(-1.0, 1.0),
-                    self.range(-1.0, 1.0),
-                    self.range(-1.0, 1.0),
-                );
-                if (0.1..1.0).contains(&v.length()) {
-                    return v.normalize();
-                }
+    use super::super::equivalence_tests::Rng;
+
+    /// A random unit vector.
+    fn unit(rng: &mut Rng) -> DVec3 {
+        loop {
+            let v = DVec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            );
+            if (0.1..1.0).contains(&v.length()) {
+                return v.normalize();
             }
         }
     }
@@ -597,9 +586,9 @@ mod tests {
             };
             // The tile's normal, its spread, the node's normal within it and the node's slack.
             let (up_ring, spread, up_node, slack) = if ellipsoid {
-                let up = (DVec3::Z + rng.unit() * 0.05).normalize();
+                let up = (DVec3::Z + unit(&mut rng) * 0.05).normalize();
                 let spread = rng.range(0.0, 0.02);
-                let tilt = rng.unit() * spread * rng.next();
+                let tilt = unit(&mut rng) * spread * rng.next();
                 (up, spread, (up + tilt).normalize(), rng.range(0.0, 1.0))
             } else {
                 (DVec3::Z, 0.0, DVec3::Z, 0.0)
@@ -654,7 +643,7 @@ mod tests {
             // What the record takes of every normal within the tile's spread: its least gain
             // and |w_z| (a normal turned by the whole spread, any way).
             if ellipsoid {
-                let turned = r0 * (up_ring + rng.unit() * spread).normalize();
+                let turned = r0 * (up_ring + unit(&mut rng) * spread).normalize();
                 assert!(
                     frustum_gain_floor(&f, turned) >= growth.floor,
                     "case {case}: floor"
@@ -671,8 +660,8 @@ mod tests {
             };
             let then = gain(r0, eye0);
             // The eye moves and turns a little (a frame or a few of a fast flight).
-            let turned = DMat3::from_axis_angle(rng.unit(), rng.range(0.0, 0.02)) * r0;
-            let eye1 = eye0 + rng.unit() * rng.range(0.0, 30.0);
+            let turned = DMat3::from_axis_angle(unit(&mut rng), rng.range(0.0, 0.02)) * r0;
+            let eye1 = eye0 + unit(&mut rng) * rng.range(0.0, 30.0);
             let (m, k) = ((eye1 - eye0).length(), frobenius(turned - r0));
             let Some(factor) = growth.gain(m, k, &optics) else {
                 continue;
