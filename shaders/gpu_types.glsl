@@ -26,8 +26,9 @@ struct FrameUniforms {
 };
 
 // std430: a node's place on the WGS84 ellipsoid (render/geo_instances.rs `GeoEye::node_fields`,
-// read by geo_node.glsl): the same fields, in the same order, as the tail of TileInstance; one
-// per base-mesh cell of the tessellation baseline (terrain_tess.tese). All zero on the flat path.
+// read by geo_node.glsl): TileInstance's tail and then GeoPolynomial's fields, in the same order;
+// one per base-mesh cell of the tessellation baseline (terrain_tess.tese). All zero on the flat
+// path.
 struct GeoFields {
     vec4 geo_origin;
     vec4 geo_axis_r;
@@ -57,10 +58,15 @@ struct TileInstance {
     vec4 geo_axis_r;     // xyz: world axis of the centre's meridian frame pointing away from the polar axis; w: sin(lat0)
     vec4 geo_axis_t;     // xyz: world axis of that frame pointing east; w: cos(lat0)
     vec4 geo_axis_z;     // xyz: world axis of that frame along the polar axis; w: W0 = sqrt(1 - e2 sin2(lat0))
-    vec4 geo_radius;     // x: longitude step per sample (rad); y, z: N(lat0) cos(lat0) as f32 hi + lo; w: 1 = projected grid (below), 0 = geographic
-    // Projected (UTM) grids (geodesy/projected.rs NodePolynomial): a vertex at (u, v) = offset from
-    // the centre in samples times geo_origin.w, height h, is drawn at geo_origin.xyz + S(u, v) +
-    // h N(u, v), S and N cubic in (u, v) on the basis [u, v, uu, uv, vv, uuu, uuv, uvv, vvv].
+    vec4 geo_radius;     // x: longitude step per sample (rad); y, z: N(lat0) cos(lat0) as f32 hi + lo; w: 1 = projected grid (GeoPolynomial), 0 = geographic
+};
+
+// std430, a projected (UTM) node's polynomials (geodesy/projected.rs NodePolynomial), element i
+// for tile instance i, in a buffer of their own written only for projected grids (the tiles of
+// other grids leave 304 bytes each unstaged): a vertex at (u, v) = offset from the centre in
+// samples times geo_origin.w, height h, is drawn at geo_origin.xyz + S(u, v) + h N(u, v), S and N
+// cubic in (u, v) on the basis [u, v, uu, uv, vv, uuu, uuv, uvv, vvv].
+struct GeoPolynomial {
     vec4 geo_s[9];       // xyz: S's coefficients, world axes, metres; w of [0..2]: the centre's north (world axes)
     vec4 geo_n[10];      // xyz: N's constant term, then its coefficients; w: unused
 };

@@ -14,6 +14,8 @@ layout(set = 0, binding = 0, std140) uniform FrameBlock { FrameUniforms frame; }
 layout(set = 0, binding = 1, std430) readonly buffer Instances { TileInstance tiles[]; };
 layout(set = 0, binding = 2) uniform sampler2DArray clipmap;
 layout(set = 0, binding = 3) uniform sampler2DArray pools[6];
+// A projected grid's node polynomials, element i for instance i (one zero element otherwise).
+layout(set = 0, binding = 8, std430) readonly buffer Polynomials { GeoPolynomial polys[]; };
 
 layout(location = 0) out vec3 v_rel;
 layout(location = 1) out vec3 v_normal;
@@ -121,8 +123,23 @@ void main() {
     vec2 dh = vec2(fetch(t, ivec2(hi.x, ij.y)) - fetch(t, ivec2(lo.x, ij.y)),
         fetch(t, ivec2(ij.x, hi.y)) - fetch(t, ivec2(ij.x, lo.y))) / (vec2(hi - lo) * float(step));
     bool geo = t.geo_origin.w != 0.0;
-    GeoFields g = GeoFields(t.geo_origin, t.geo_axis_r, t.geo_axis_t, t.geo_axis_z,
-        t.geo_radius, t.geo_s, t.geo_n);
+    GeoFields g;
+    g.geo_origin = t.geo_origin;
+    g.geo_axis_r = t.geo_axis_r;
+    g.geo_axis_t = t.geo_axis_t;
+    g.geo_axis_z = t.geo_axis_z;
+    g.geo_radius = t.geo_radius;
+    // Only a projected node reads its polynomials (geo_vertex's branch on geo_radius.w).
+    if (t.geo_radius.w != 0.0) {
+        g.geo_s = polys[gl_InstanceIndex].geo_s;
+        g.geo_n = polys[gl_InstanceIndex].geo_n;
+    } else {
+        for (int k = 0; k < 9; k++) {
+            g.geo_s[k] = vec4(0.0);
+            g.geo_n[k] = vec4(0.0);
+        }
+        g.geo_n[9] = vec4(0.0);
+    }
     float skirt_m = skirt ? t.skirt_m : 0.0;
     // CDLOD: the factors from the unmorphed vertex's distance to the eye (the reference's
     // `eyeDist`), then the vertex morphed.

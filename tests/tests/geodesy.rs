@@ -9,7 +9,6 @@
 
 use aerie::camera::{Attitude, Camera, Frustum};
 use aerie::render::geo_instances::{emulate_vertex, GeoEye};
-use aerie::render::gpu::TileInstance;
 use aerie::terrain::bake::{bake, BakeParams, ErrorBake};
 use aerie::terrain::clipmap::{place_levels, ClipmapDesc};
 use aerie::terrain::dataset::Dataset;
@@ -156,30 +155,6 @@ fn select(s: &GeoScene, cam: &Camera) -> Selection {
     sel
 }
 
-fn instance(eye: &GeoEye, origin: [i64; 2], step: u32) -> TileInstance {
-    let f = eye.node_fields(origin, step, Q);
-    TileInstance {
-        origin_rel: [0.0; 2],
-        origin_sample: [origin[0] as i32, origin[1] as i32],
-        step,
-        level: 0,
-        refinement: 0,
-        slot: 0,
-        skirt_m: 0.0,
-        slot_x: 0,
-        slot_y: 0,
-        slot_stride: 1,
-        morph: [0.0; 4],
-        geo_origin: f.geo_origin,
-        geo_axis_r: f.geo_axis_r,
-        geo_axis_t: f.geo_axis_t,
-        geo_axis_z: f.geo_axis_z,
-        geo_radius: f.geo_radius,
-        geo_s: f.geo_s,
-        geo_n: f.geo_n,
-    }
-}
-
 /// The exact position of sample (col, row) at height h relative to the eye, world axes.
 fn exact_rel(s: &GeoScene, cam: &Camera, col: f64, row: f64, h: f64) -> DVec3 {
     let eye = s.grid.world.enu_to_ecef(cam.position);
@@ -212,13 +187,13 @@ fn check_drawn_vertices(s: &GeoScene, cam: &Camera, worst: &mut Worst) {
         let step = 1u32 << item.node_level;
         let node = (Q as i64) << item.node_level;
         let origin = [item.node_tx as i64 * node, item.node_ty as i64 * node];
-        let t = instance(&eye, origin, step);
+        let t = eye.node_fields(origin, step, Q);
         for j in 0..=Q as i32 {
             for i in 0..=Q as i32 {
                 let col = origin[0] + (i as i64) * step as i64;
                 let row = origin[1] + (j as i64) * step as i64;
                 let h = hf.at(col as usize, row as usize);
-                let got = emulate_vertex(&t, [i, j], Q as i32, h).as_dvec3();
+                let got = emulate_vertex(&t, step, [i, j], Q as i32, h).as_dvec3();
                 let want = exact_rel(s, cam, col as f64, row as f64, h as f64);
                 let err = (got - want).length();
                 let dist = want.length();
@@ -385,8 +360,8 @@ fn a_fixed_point_stays_within_an_eighth_of_a_pixel_at_the_equator_60n_the_seam_a
                             ((col as i64 - ox) / step as i64) as i32,
                             ((row as i64 - oy) / step as i64) as i32,
                         ];
-                        let t = instance(&GeoEye::new(&s.grid, cam.position), [ox, oy], step);
-                        let got = shader_px(&cam, emulate_vertex(&t, ij, Q as i32, h));
+                        let t = GeoEye::new(&s.grid, cam.position).node_fields([ox, oy], step, Q);
+                        let got = shader_px(&cam, emulate_vertex(&t, step, ij, Q as i32, h));
                         let err = (got - want).length();
                         worst = worst.max(err);
                         checked += 1;
@@ -507,9 +482,9 @@ fn drawn(s: &GeoScene, samples: &[(i64, i64, f32)]) -> Vec<DVec3> {
         .iter()
         .map(|&(col, row, h)| {
             let origin = [col.div_euclid(q) * q, row.div_euclid(q) * q];
-            let t = instance(&eye, origin, 1);
+            let t = eye.node_fields(origin, 1, Q);
             let ij = [(col - origin[0]) as i32, (row - origin[1]) as i32];
-            emulate_vertex(&t, ij, Q as i32, h).as_dvec3()
+            emulate_vertex(&t, 1, ij, Q as i32, h).as_dvec3()
         })
         .collect()
 }

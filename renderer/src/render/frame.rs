@@ -556,7 +556,8 @@ impl TerrainRenderer {
         };
         let mut cpu_select_us = t0.elapsed().as_secs_f64() * 1e6;
         // Instance records share the staging region: one they would crowd grows first.
-        let reserve = fixed_reserve(self.selection.items.len(), inputs.overlay_bytes);
+        let nodes = self.selection.items.len();
+        let reserve = fixed_reserve(nodes, t.plan.projected(), inputs.overlay_bytes);
         if let Some(b) = fit_staging(&mut self.ring, d, self.desc.staging_budget, reserve)? {
             inputs.staging = b;
         }
@@ -602,7 +603,8 @@ impl TerrainRenderer {
             None => 0,
         };
         let mut frame = self.ring.begin_frame(d)?;
-        reserve_instances(&mut t.frame_buffers, d, &mut frame, plan.instances.len())?;
+        let records = (plan.instances.len(), plan.polynomials.len());
+        reserve_instances(&mut t.frame_buffers, d, &mut frame, records)?;
         let tess_stats = match self.tess.as_mut() {
             Some(tess) if tess_mode => {
                 let t3 = Instant::now();

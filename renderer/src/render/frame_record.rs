@@ -80,8 +80,8 @@ impl RecordParts<'_> {
                 size: size as u64,
             };
             // `size` bytes were staged at `offset` of the live staging buffer, and `dst` is this
-            // frame's live buffer, sized for them (the instance buffer was grown to the plan's
-            // count before staging).
+            // frame's live buffer, sized for them (the instance and polynomial buffers were grown to
+            // the plan's counts before staging).
             // SAFETY: `cmd` is recording.
             unsafe { d.raw.cmd_copy_buffer(cmd, src, dst, &[region]) }
         };
@@ -100,6 +100,13 @@ impl RecordParts<'_> {
         if let Some(off) = staged.instances {
             let size = plan.instances.len() * std::mem::size_of::<TileInstance>();
             copy(fb.instances.raw, off, size);
+        }
+        if let Some(off) = staged.polynomials {
+            copy(
+                fb.polynomials.raw,
+                off,
+                std::mem::size_of_val(plan.polynomials.as_slice()),
+            );
         }
         record_image_copies(d, cmd, src, t.levels.raw, &staged.strip_copies);
         record_image_copies(d, cmd, src, t.normals.raw, &staged.normal_copies);

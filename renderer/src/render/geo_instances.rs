@@ -30,7 +30,6 @@ use aerie_terrain::geodesy::wgs84::{WGS84_A, WGS84_E2};
 use aerie_terrain::geodesy::{GeoGrid, Geodetic};
 
 pub use crate::render::gpu::GeoFields;
-use crate::render::gpu::TileInstance;
 
 /// The eye of a frame over a geographic grid: what every node's frame is computed from.
 #[derive(Debug, Clone, Copy)]
@@ -54,8 +53,8 @@ impl GeoEye {
         }
     }
 
-    /// Whether the grid is projected (UTM): its nodes carry polynomials (`geo_s`, `geo_n`);
-    /// a geographic grid's leave them zero.
+    /// Whether the grid is projected (UTM): its nodes carry polynomials (`geo_s`, `geo_n`,
+    /// drawn from the `GeoPolynomial` buffer); a geographic grid's leave them zero.
     pub fn projected(&self) -> bool {
         self.grid.projected.is_some()
     }
@@ -304,15 +303,16 @@ pub fn sincos_small(x: f32) -> (f32, f32) {
     (s, omc)
 }
 
-/// A vertex of a geographic node as the vertex shader computes it (f32): `ij` the vertex in
-/// the node (0..=q), `h` its height (skirt already subtracted). Returns the position relative
-/// to the eye in world axes.
-pub fn emulate_vertex(t: &TileInstance, ij: [i32; 2], q: i32, h: f32) -> Vec3 {
+/// A vertex of a node on the ellipsoid as the vertex shader computes it (f32): `t` the node's
+/// fields (what terrain.vert assembles from its instance and polynomial), `step` samples between
+/// its vertices, `ij` the vertex in the node (0..=q), `h` its height (skirt already
+/// subtracted). Returns the position relative to the eye in world axes.
+pub fn emulate_vertex(t: &GeoFields, step: u32, ij: [i32; 2], q: i32, h: f32) -> Vec3 {
     if t.geo_radius[3] != 0.0 {
-        return emulate_projected_vertex(t, ij, q, h);
+        return emulate_projected_vertex(t, step, ij, q, h);
     }
     let c = q / 2;
-    let step = t.step as i32;
+    let step = step as i32;
     let d = [((ij[0] - c) * step) as f32, ((ij[1] - c) * step) as f32];
     let dphi = d[1] * t.geo_origin[3];
     let dlam = d[0] * t.geo_radius[0];
@@ -345,9 +345,9 @@ pub fn emulate_vertex(t: &TileInstance, ij: [i32; 2], q: i32, h: f32) -> Vec3 {
 
 /// A vertex of a projected node as `projected_offset` in `shaders/terrain.vert` computes it
 /// (f32, same order of operations): the position relative to the eye in world axes.
-pub fn emulate_projected_vertex(t: &TileInstance, ij: [i32; 2], q: i32, h: f32) -> Vec3 {
+pub fn emulate_projected_vertex(t: &GeoFields, step: u32, ij: [i32; 2], q: i32, h: f32) -> Vec3 {
     let c = q / 2;
-    let step = t.step as i32;
+    let step = step as i32;
     let u = ((ij[0] - c) * step) as f32 * t.geo_origin[3];
     let v = ((ij[1] - c) * step) as f32 * t.geo_origin[3];
     let b = [
@@ -428,20 +428,6 @@ mod tests {
         }
     }
 
-    fn instance(f: GeoFields, step: u32) -> TileInstance {
-        TileInstance {
-            step,
-            geo_origin: f.geo_origin,
-            geo_axis_r: f.geo_axis_r,
-            geo_axis_t: f.geo_axis_t,
-            geo_axis_z: f.geo_axis_z,
-            geo_radius: f.geo_radius,
-            geo_s: f.geo_s,
-            geo_n: f.geo_n,
-            ..bytemuck::Zeroable::zeroed()
-        }
-    }
-
     #[test]
     fn a_flat_earth_is_refused_only_on_data_placed_on_the_ellipsoid() {
         let geo = GeoReference::Geographic {
@@ -495,7 +481,7 @@ mod tests {
         let eye_world = g.world_of_grid(glam::DVec2::new(40_000.0, 60_000.0), 3000.0);
         let eye = GeoEye::new(&g, eye_world);
         let (origin, step, q) = ([512i64, 768], 4u32, 16u32);
-        let t = instance(eye.node_fields(origin, step, q), step);
+        let t = eye.node_fields(origin, step, q);
         let eye_ecef = g.world.enu_to_ecef(eye_world);
         for (ij, h) in [
             ([8, 8], 0.0f32),
@@ -507,7 +493,7 @@ mod tests {
             let row = origin[1] as f64 + (ij[1] as u32 * step) as f64;
             let want =
                 g.ecef_to_world_rotation() * (g.ecef_of_sample(col, row, h as f64) - eye_ecef);
-            let got = emulate_vertex(&t, ij, q as i32, h).as_dvec3();
+            let got = emulate_vertex(&t, step, ij, q as i32, h).as_dvec3();
             assert!((got - want).length() < 0.01, "{ij:?}: {got:?} vs {want:?}");
         }
     }
@@ -526,7 +512,7 @@ mod tests {
         let eye = GeoEye::new(&g, eye_world);
         let eye_ecef = g.world.enu_to_ecef(eye_world);
         let (origin, step, q) = ([1024i64, 2048], 32u32, 16u32);
-        let t = instance(eye.node_fields(origin, step, q), step);
+        let t = eye.node_fields(origin, step, q);
         for (ij, h) in [
             ([8, 8], 0.0f32),
             ([0, 0], 1234.5),
@@ -538,7 +524,7 @@ mod tests {
             let row = origin[1] as f64 + (ij[1] as u32 * step) as f64;
             let want =
                 g.ecef_to_world_rotation() * (g.ecef_of_sample(col, row, h as f64) - eye_ecef);
-            let got = emulate_vertex(&t, ij, q as i32, h).as_dvec3();
+            let got = emulate_vertex(&t, step, ij, q as i32, h).as_dvec3();
             assert!((got - want).length() < 0.01, "{ij:?}: {got:?} vs {want:?}");
         }
     }

@@ -35,7 +35,9 @@ pub struct FrameUniforms {
 /// array's length in shaders/gpu_types.glsl).
 pub const IMAGERY_STREAM_LEVELS: usize = 12;
 
-/// Storage buffer element (std430), one per drawn tile.
+/// Storage buffer element (std430), one per drawn tile: 144 bytes. A projected grid's node
+/// polynomials travel apart ([`GeoPolynomial`], a parallel buffer written only for such grids),
+/// so a geographic or flat frame stages and copies a third of the bytes.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq)]
 pub struct TileInstance {
@@ -55,8 +57,26 @@ pub struct TileInstance {
     pub geo_axis_t: [f32; 4],
     pub geo_axis_z: [f32; 4],
     pub geo_radius: [f32; 4],
+}
+
+/// A projected (UTM) node's cubic polynomials (std430, `shaders/gpu_types.glsl`
+/// `GeoPolynomial`): element i of the polynomial buffer belongs to tile instance i. Only a
+/// projected grid's frames stage them.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable, PartialEq, Default)]
+pub struct GeoPolynomial {
     pub geo_s: [[f32; 4]; 9],
     pub geo_n: [[f32; 4]; 10],
+}
+
+impl GeoPolynomial {
+    /// The polynomials of `fields` (zero on a geographic grid).
+    pub fn of(fields: &GeoFields) -> Self {
+        GeoPolynomial {
+            geo_s: fields.geo_s,
+            geo_n: fields.geo_n,
+        }
+    }
 }
 
 /// A node's place on the WGS84 ellipsoid (`shaders/gpu_types.glsl` `GeoFields`, std430; see
@@ -254,9 +274,7 @@ mod tests {
                 geo_axis_r,
                 geo_axis_t,
                 geo_axis_z,
-                geo_radius,
-                geo_s,
-                geo_n
+                geo_radius
             ]
         );
     }
@@ -268,13 +286,23 @@ mod tests {
             Rules::Std430,
             [geo_origin, geo_axis_r, geo_axis_t, geo_axis_z, geo_radius, geo_s, geo_n]
         );
-        // terrain.vert builds a GeoFields from the instance's fields: same order, same sizes.
+        check!(GeoPolynomial, Rules::Std430, [geo_s, geo_n]);
+        // terrain.vert builds a GeoFields from the instance's tail and its polynomial: the
+        // tail is GeoFields up to its polynomials, which are GeoPolynomial.
         let tail = offset_of!(TileInstance, geo_origin);
-        assert_eq!(size_of::<TileInstance>() - tail, size_of::<GeoFields>());
         assert_eq!(
-            offset_of!(TileInstance, geo_n) - tail,
-            offset_of!(GeoFields, geo_n)
+            size_of::<TileInstance>() - tail,
+            offset_of!(GeoFields, geo_s)
         );
+        assert_eq!(
+            offset_of!(TileInstance, geo_radius) - tail,
+            offset_of!(GeoFields, geo_radius)
+        );
+        assert_eq!(
+            size_of::<GeoFields>() - offset_of!(GeoFields, geo_s),
+            size_of::<GeoPolynomial>()
+        );
+        assert_eq!(size_of::<TileInstance>(), 144);
     }
 
     #[test]

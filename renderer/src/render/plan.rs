@@ -47,35 +47,26 @@ use crate::render::gathered::Gatherer;
 
 use aerie_terrain::geodesy::GeoGrid;
 
-use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, TileInstance};
+use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, GeoPolynomial, TileInstance};
 use crate::render::jobs::{
     eye_samples, split_level_uploads, within_data_cap, ImageUpload, PlanError, StagingBudget,
+};
+pub use crate::render::jobs::{
+    fixed_reserve, FIXED_SLACK_BYTES, OVERLAY_SLACK_BYTES, POOL_UPLOAD_SLACK_BYTES,
+    STRIP_SLACK_BYTES,
 };
 use crate::render::normal_map::normal_bytes;
 pub use crate::render::pool_atlas::PoolSlots;
 use crate::render::pool_atlas::{PoolAtlas, PoolLimits};
 use crate::render::stats::FrameStats;
-use crate::render::tile_instances::{
-    build_instances, InstanceCaches, InstanceFrame, MAX_TERRAIN_DRAWS,
-};
+use crate::render::tile_instances::{build_instances, InstanceCaches, InstanceFrame};
 pub use crate::render::tile_instances::{indirect_draws, slot_placement, SkirtRule, TileMeshes};
 
-/// Largest number of m×m instances one frame may draw (48 bytes each per frame in flight): the
-/// instance buffers grow on demand up to this — `full` on a large dataset draws every visible
-/// finest node.
+/// Largest number of m×m instances one frame may draw (144 bytes each per frame in flight, 448
+/// on a projected grid): the instance buffers grow on demand up to this — `full` on a large
+/// dataset draws every visible finest node.
 pub const MAX_INSTANCES: usize = 1 << 20;
 
-/// Reserved besides the frame's listed fixed pushes: the frame uniforms (144 bytes) and the
-/// alignment padding in front of each of the fixed pushes (uniforms, indirect commands,
-/// instances, overlay), so that a frame whose uploads were admitted never fails its pushes.
-pub const FIXED_SLACK_BYTES: u64 = 1024;
-/// Alignment padding in front of the overlay panel's pixels, on top of [`FIXED_SLACK_BYTES`].
-pub const OVERLAY_SLACK_BYTES: u64 = 16;
-/// Alignment padding each in-frame clipmap strip copy may add (offset alignments up to 64).
-pub const STRIP_SLACK_BYTES: u64 = 64;
-/// Headroom a pool upload must leave above the reserve: its own alignment padding plus that of
-/// the uploads staged before it, which the reserve does not count.
-pub const POOL_UPLOAD_SLACK_BYTES: u64 = 256;
 /// A prefetch never evicts a slot drawn in this many most recent frames.
 pub const PREFETCH_PROTECT_FRAMES: u64 = 2;
 /// Frames between two selections of the view ahead: it looks `prefetch_frames` (20 by default)
@@ -187,7 +178,6 @@ impl PlanState {
         }
     }
 
-    /// The frame's selection parameters with this dataset's Earth model.
     /// The eye in the grid's metres (`viewer` × spacing, height kept): where the feed ranks
     /// what it asks for by nearness.
     pub fn grid_eye(&self, eye: DVec3) -> DVec3 {
@@ -195,6 +185,12 @@ impl PlanState {
         DVec3::new(v[0] * self.spacing[0], v[1] * self.spacing[1], eye.z)
     }
 
+    /// Whether the grid is projected (UTM): its instances carry polynomials.
+    pub fn projected(&self) -> bool {
+        self.earth.is_some_and(|g| g.projected.is_some())
+    }
+
+    /// The frame's selection parameters with this dataset's Earth model.
     pub fn select_params(&self, params: &SelectParams) -> SelectParams {
         SelectParams {
             earth: self.earth,
@@ -285,6 +281,8 @@ pub struct FramePlan {
     pub draw_list: Vec<(DrawItem, u32)>,
     /// Instance records, grouped by refinement (r = 0 first), whole nodes before quadrants.
     pub instances: Vec<TileInstance>,
+    /// On a projected grid each instance's polynomials, in the same order; else empty.
+    pub polynomials: Vec<GeoPolynomial>,
     /// The indirect commands: per group its grids, the skirts of each set of edges.
     pub draws: Vec<DrawIndexedIndirect>,
     /// Commands the multi-draw issues: `draws`' length.
@@ -294,16 +292,6 @@ pub struct FramePlan {
     /// Bytes staging the plan takes from the frame's region, padding included.
     pub staged_bytes: u64,
     pub stats: FrameStats,
-}
-
-/// Bytes the frame's fixed pushes need besides the uploads: indirect commands, one instance per
-/// selected node (coarsening only lowers the count), the overlay, and their slack.
-pub fn fixed_reserve(selected_nodes: usize, overlay_bytes: Option<u64>) -> u64 {
-    let overlay = overlay_bytes.map_or(0, |b| b + OVERLAY_SLACK_BYTES);
-    FIXED_SLACK_BYTES
-        + (std::mem::size_of::<DrawIndexedIndirect>() * MAX_TERRAIN_DRAWS) as u64
-        + (selected_nodes * std::mem::size_of::<TileInstance>()) as u64
-        + overlay
 }
 
 /// Places the levels around the eye, turns what the levels lack into strip uploads of the
@@ -383,7 +371,11 @@ pub fn plan_frame(
         ..Default::default()
     };
     let mut budget = inputs.staging;
-    let reserve = fixed_reserve(selection.items.len(), inputs.overlay_bytes);
+    let reserve = fixed_reserve(
+        selection.items.len(),
+        state.projected(),
+        inputs.overlay_bytes,
+    );
 
     // Strips first, mandatory: all in this frame, or all streamed before it; with normal maps
     // each strip's normal texels are staged right after its heights.
@@ -422,7 +414,7 @@ pub fn plan_frame(
     plan.stats.set_stream(&gatherer.stream_stats());
     plan.stats.cells_pending = state.feed.pending_cells();
 
-    let (instances, groups) = build_instances(
+    let (instances, polynomials, groups) = build_instances(
         &InstanceFrame {
             tile_quads: state.clipmap.tile_quads,
             spacing: state.spacing,
@@ -457,10 +449,14 @@ pub fn plan_frame(
     if total > 0 {
         budget.take((total * std::mem::size_of::<TileInstance>()) as u64)?;
     }
+    if !polynomials.is_empty() {
+        budget.take(std::mem::size_of_val(polynomials.as_slice()) as u64)?;
+    }
     if let Some(bytes) = inputs.overlay_bytes.filter(|&b| b > 0) {
         budget.take(bytes)?;
     }
     plan.instances = instances;
+    plan.polynomials = polynomials;
     plan.draws = draws;
     plan.staged_bytes = budget.used();
     plan.stats.bytes_uploaded = budget.used();

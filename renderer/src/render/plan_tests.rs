@@ -185,7 +185,7 @@ fn strips_come_first_and_pool_misses_get_what_is_left() {
     let strip_bytes: u64 = strips.iter().map(ImageUpload::bytes).sum();
     let slot = st.pools[0].slot_bytes();
     assert_eq!(slot, 33 * 33 * 4);
-    let reserve = fixed_reserve(sel.items.len(), None);
+    let reserve = fixed_reserve(sel.items.len(), false, None);
     // Room for the strips, the reserve and exactly two slots with their slack.
     let capacity = 2 * ALIGN + strip_bytes + reserve + 2 * (slot + ALIGN) + POOL_UPLOAD_SLACK_BYTES;
     let inp = inputs(0, &cam, &select, capacity);
@@ -237,7 +237,7 @@ fn strips_that_do_not_fit_spill_and_leave_the_region_to_the_pools() {
     let sel = selection(refined_tile(2, 1, 1, 1));
     let strips = vec![strip(0, 60), strip(1, 60), strip(2, 60)];
     let slot = st.pools[0].slot_bytes();
-    let reserve = fixed_reserve(sel.items.len(), None);
+    let reserve = fixed_reserve(sel.items.len(), false, None);
     // One strip fits with the reserve, three do not; one slot fits after the reserve.
     let capacity = reserve + slot + POOL_UPLOAD_SLACK_BYTES + 2 * ALIGN + strips[0].bytes();
     let plan = plan_frame(
@@ -318,7 +318,7 @@ fn a_late_tile_is_drawn_at_its_best_resident_resolution_coarsened_once() {
     let r1_slot = plan0.pool_uploads[0].upload.layer;
     // Frame 1: it needs r = 2 (16 nodes at level 1) but nothing fits: drawn at r = 1.
     let sel1 = selection(refined_tile(3, 1, 1, 2));
-    let tight = fixed_reserve(16, None) + POOL_UPLOAD_SLACK_BYTES;
+    let tight = fixed_reserve(16, false, None) + POOL_UPLOAD_SLACK_BYTES;
     let plan1 = plan_frame(&mut st, &inputs(1, &cam, &select, tight), &sel1, vec![]).unwrap();
     assert_eq!((plan1.stats.tiles_late, plan1.stats.pool_misses), (1, 0));
     let key = TileKey {
@@ -516,7 +516,7 @@ fn refining_frame(
     inp.prefetch_frames = prefetch;
     let mut sel = Selection::default();
     let strips = select_frame(st, &inp, &mut sel);
-    let fixed = fixed_reserve(sel.items.len(), None) + POOL_UPLOAD_SLACK_BYTES;
+    let fixed = fixed_reserve(sel.items.len(), false, None) + POOL_UPLOAD_SLACK_BYTES;
     inp.staging = StagingBudget::new(cap.unwrap_or(fixed), ALIGN);
     let plan = plan_frame(st, &inp, &sel, strips).unwrap();
     assert!(plan.staged_bytes <= inp.staging.capacity());
@@ -812,5 +812,9 @@ fn the_staging_region_grows_only_for_records_that_crowd_it() {
     assert_eq!(staging_to_hold(16 * MIB, 8 * MIB, 4 * MIB + 1), None);
     // The reserve counts every selected node's record.
     let per = std::mem::size_of::<TileInstance>() as u64;
-    assert!(fixed_reserve(10_000, None) >= 10_000 * per);
+    assert!(fixed_reserve(10_000, false, None) >= 10_000 * per);
+    // And on a projected grid each one's polynomials besides.
+    let poly = std::mem::size_of::<crate::render::gpu::GeoPolynomial>() as u64;
+    assert!(fixed_reserve(10_000, true, None) >= 10_000 * (per + poly));
+    assert!(fixed_reserve(10_000, false, None) < 10_000 * (per + poly));
 }

@@ -13,7 +13,7 @@ use aerie_terrain::select::MAX_REFINEMENT;
 use aerie_terrain::source::{SourceGrid, TerrainSource};
 
 use crate::render::desc::NormalSource;
-use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, TileInstance};
+use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, GeoPolynomial, TileInstance};
 use crate::render::normal_pass::NormalTargets;
 use crate::render::plan::{PlanState, MAX_INSTANCES};
 use crate::render::pool_atlas::PoolLimits;
@@ -37,13 +37,22 @@ const MIN_INITIAL_INSTANCES: usize = 4096;
 pub struct FrameBuffers {
     pub uniforms: Buffer,
     pub instances: Buffer,
+    /// A projected grid's node polynomials, parallel to `instances`.
+    pub polynomials: Buffer,
     pub indirect: Buffer,
     /// TileInstance slots in `instances`.
     pub instance_capacity: usize,
+    /// GeoPolynomial slots in `polynomials`: one (never read) until a projected grid's frame
+    /// needs more.
+    pub polynomial_capacity: usize,
 }
 
 impl FrameBuffers {
-    pub fn new(d: &Device, max_instances: usize) -> Result<FrameBuffers, VkError> {
+    pub fn new(
+        d: &Device,
+        max_instances: usize,
+        max_polynomials: usize,
+    ) -> Result<FrameBuffers, VkError> {
         let dst = vk::BufferUsageFlags::TRANSFER_DST;
         let mut uniforms = Buffer::new(
             d,
@@ -65,11 +74,11 @@ impl FrameBuffers {
                 return Err(e);
             }
         };
-        let indirect = match Buffer::new(
+        let mut polynomials = match Buffer::new(
             d,
-            "indirect draws",
-            (std::mem::size_of::<DrawIndexedIndirect>() * MAX_TERRAIN_DRAWS) as u64,
-            vk::BufferUsageFlags::INDIRECT_BUFFER | dst,
+            "tile polynomials",
+            (max_polynomials.max(1) * std::mem::size_of::<GeoPolynomial>()) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER | dst,
             MemoryLocation::GpuOnly,
         ) {
             Ok(b) => b,
@@ -79,17 +88,35 @@ impl FrameBuffers {
                 return Err(e);
             }
         };
+        let indirect = match Buffer::new(
+            d,
+            "indirect draws",
+            (std::mem::size_of::<DrawIndexedIndirect>() * MAX_TERRAIN_DRAWS) as u64,
+            vk::BufferUsageFlags::INDIRECT_BUFFER | dst,
+            MemoryLocation::GpuOnly,
+        ) {
+            Ok(b) => b,
+            Err(e) => {
+                polynomials.destroy(d);
+                instances.destroy(d);
+                uniforms.destroy(d);
+                return Err(e);
+            }
+        };
         Ok(FrameBuffers {
             uniforms,
             instances,
+            polynomials,
             indirect,
             instance_capacity: max_instances.max(1),
+            polynomial_capacity: max_polynomials.max(1),
         })
     }
 
     /// Call after the device is idle.
     pub fn destroy(&mut self, device: &Device) {
         self.indirect.destroy(device);
+        self.polynomials.destroy(device);
         self.instances.destroy(device);
         self.uniforms.destroy(device);
     }
@@ -222,7 +249,7 @@ impl GpuTerrain {
         let max_instances = (ring_tiles * INITIAL_INSTANCES_PER_TILE)
             .clamp(MIN_INITIAL_INSTANCES, INITIAL_MAX_INSTANCES);
         for _ in 0..FRAMES_IN_FLIGHT {
-            match FrameBuffers::new(d, max_instances) {
+            match FrameBuffers::new(d, max_instances, 1) {
                 Ok(b) => this.frame_buffers.push(b),
                 Err(e) => {
                     this.destroy(d);
@@ -253,15 +280,17 @@ impl GpuTerrain {
             .chain(self.pool_images.iter().map(|p| p.raw))
     }
 
-    /// Makes `frame`'s buffers hold `instances` records: a larger set replaces them, the old
-    /// one destroyed once this frame's submission has completed.
+    /// Makes `frame`'s buffers hold `instances` records and `polynomials` polynomials: a
+    /// larger set replaces them, the old one destroyed once this frame's submission has
+    /// completed.
     pub fn reserve_instances(
         &mut self,
         d: &Device,
         frame: &mut FrameContext,
         instances: usize,
+        polynomials: usize,
     ) -> Result<(), VkError> {
-        reserve_instances(&mut self.frame_buffers, d, frame, instances)
+        reserve_instances(&mut self.frame_buffers, d, frame, (instances, polynomials))
     }
 
     /// Call after the device is idle.
@@ -283,16 +312,28 @@ pub fn reserve_instances(
     frame_buffers: &mut [FrameBuffers],
     d: &Device,
     frame: &mut FrameContext,
-    instances: usize,
+    (instances, polynomials): (usize, usize),
 ) -> Result<(), VkError> {
     {
         let i = frame.index();
-        if instances <= frame_buffers[i].instance_capacity {
+        let fb = &frame_buffers[i];
+        if instances <= fb.instance_capacity && polynomials <= fb.polynomial_capacity {
             return Ok(());
         }
-        let grown = FrameBuffers::new(d, instances.next_power_of_two().min(MAX_INSTANCES))?;
+        let size = |n: usize, held: usize| n.max(held).next_power_of_two().min(MAX_INSTANCES);
+        let grown = FrameBuffers::new(
+            d,
+            size(instances, fb.instance_capacity),
+            // A grid without polynomials keeps its one element.
+            if polynomials > fb.polynomial_capacity {
+                size(polynomials, fb.polynomial_capacity)
+            } else {
+                fb.polynomial_capacity
+            },
+        )?;
         let old = std::mem::replace(&mut frame_buffers[i], grown);
         frame.defer_destroy(old.indirect);
+        frame.defer_destroy(old.polynomials);
         frame.defer_destroy(old.instances);
         frame.defer_destroy(old.uniforms);
         Ok(())

@@ -10,7 +10,8 @@ use crate::render::sky_pass::record_sky;
 use crate::render::uniforms::SKY_LINEAR;
 use crate::vk::pipeline::{
     TerrainPipeline, BINDING_CLASSES, BINDING_CLIPMAP, BINDING_FRAME, BINDING_IMAGERY,
-    BINDING_IMAGERY_STREAM, BINDING_INSTANCES, BINDING_NORMAL_MAPS, BINDING_POOLS,
+    BINDING_IMAGERY_STREAM, BINDING_INSTANCES, BINDING_NORMAL_MAPS, BINDING_POLYNOMIALS,
+    BINDING_POOLS,
 };
 use crate::vk::target::{OffscreenTarget, DEPTH_CLEAR};
 use crate::vk::Device;
@@ -24,7 +25,8 @@ pub fn descriptor_pool_sizes() -> [vk::DescriptorPoolSize; 3] {
         },
         vk::DescriptorPoolSize {
             ty: vk::DescriptorType::STORAGE_BUFFER,
-            // The tiles' instances, or the tessellation set's patches, heights and cells.
+            // The tiles' instances and polynomials, or the tessellation set's patches, heights
+            // and cells.
             descriptor_count: DESCRIPTOR_SETS * 3,
         },
         vk::DescriptorPoolSize {
@@ -59,6 +61,11 @@ pub fn write_descriptors(
         offset: 0,
         range: vk::WHOLE_SIZE,
     }];
+    let polynomial_info = [vk::DescriptorBufferInfo {
+        buffer: fb.polynomials.raw,
+        offset: 0,
+        range: vk::WHOLE_SIZE,
+    }];
     let image = |view| vk::DescriptorImageInfo {
         sampler,
         image_view: view,
@@ -89,6 +96,11 @@ pub fn write_descriptors(
             .dst_binding(BINDING_INSTANCES)
             .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
             .buffer_info(&instance_info),
+        vk::WriteDescriptorSet::default()
+            .dst_set(set)
+            .dst_binding(BINDING_POLYNOMIALS)
+            .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+            .buffer_info(&polynomial_info),
         vk::WriteDescriptorSet::default()
             .dst_set(set)
             .dst_binding(BINDING_CLIPMAP)

@@ -15,7 +15,7 @@ use aerie_terrain::geodesy::GeoGrid;
 use aerie_terrain::select::{DrawItem, LodMode, NodeSkirts, SkirtMemo, ALL_EDGES};
 
 use crate::render::geo_instances::{GeoEye, GeoNodeCache};
-use crate::render::gpu::{DrawIndexedIndirect, TileInstance};
+use crate::render::gpu::{DrawIndexedIndirect, GeoPolynomial, TileInstance};
 use crate::render::pool_atlas::PoolSlots;
 use crate::render::stats::RESOLUTIONS;
 
@@ -259,12 +259,13 @@ pub fn slot_placement(item: &DrawItem, tile_quads: u32) -> (u32, u32, u32) {
 /// 1.., then the quadrants likewise, then the sixteenths), each group sorted by the edges its
 /// nodes skirt ([`INSTANCE_KEYS`]): node origin relative to the eye (f64 → f32), sample
 /// origin, vertex step, level, pool slot and the node's place in it, skirt depth. Returns the
-/// concatenated records and each key's count.
+/// concatenated records, on a projected grid each record's polynomials in the same order (else
+/// none), and each key's count.
 pub fn build_instances(
     f: &InstanceFrame,
     draw_list: &[(DrawItem, u32)],
     caches: &mut InstanceCaches,
-) -> (Vec<TileInstance>, [u32; INSTANCE_KEYS]) {
+) -> (Vec<TileInstance>, Vec<GeoPolynomial>, [u32; INSTANCE_KEYS]) {
     let q = f.tile_quads;
     let eye = f.eye;
     let NodeSkirts { reach, edges } = skirts_of(f, draw_list, &mut caches.skirts);
@@ -276,7 +277,7 @@ pub fn build_instances(
     });
     // The records are written once, in their final place: a counting sort of the draw list by
     // key (stable, so each key keeps the list's order) into one vector of the exact size
-    // (records are ~450 bytes: growing and concatenating per-group vectors copied each
+    // (records are 144 bytes: growing and concatenating per-group vectors copied each
     // several times).
     let mut sizes = [0u32; INSTANCE_KEYS];
     for k in 0..draw_list.len() {
@@ -292,10 +293,11 @@ pub fn build_instances(
         order[*at] = k as u32;
         *at += 1;
     }
-    // Zeroed records filled in place: the ~450-byte records are not built aside and copied,
-    // and the fields a node does not use (the ellipsoid's on the plane, a UTM node's
-    // polynomials on a geographic grid) stay zero without being written.
+    // Zeroed records filled in place, the fields a node does not use (the ellipsoid's on the
+    // plane) left zero without being written.
     let mut instances = vec![TileInstance::zeroed(); draw_list.len()];
+    let projected = geo.as_ref().is_some_and(GeoEye::projected);
+    let mut polynomials = Vec::with_capacity(if projected { draw_list.len() } else { 0 });
     for (t, &k) in instances.iter_mut().zip(&order) {
         let (item, slot) = draw_list[k as usize];
         let reach_m = reach[k as usize];
@@ -332,13 +334,12 @@ pub fn build_instances(
             t.geo_axis_t = g.geo_axis_t;
             t.geo_axis_z = g.geo_axis_z;
             t.geo_radius = g.geo_radius;
-            if e.projected() {
-                t.geo_s = g.geo_s;
-                t.geo_n = g.geo_n;
+            if projected {
+                polynomials.push(GeoPolynomial::of(g));
             }
         }
     }
-    (instances, sizes)
+    (instances, polynomials, sizes)
 }
 
 /// Triangles of a skirted tile of `q` quads a side (grid 2q², skirt 2 per perimeter edge).
@@ -459,7 +460,7 @@ mod tests {
         .collect();
         let pools: Vec<PoolSlots> = (1..=6).map(|r| PoolSlots::new((16 << r) + 1, 16)).collect();
         let f = frame(SkirtRule::Everywhere, [1 << 20, 1 << 20], &pools);
-        let (instances, sizes) = build_instances(&f, &list, &mut InstanceCaches::default());
+        let (instances, _, sizes) = build_instances(&f, &list, &mut InstanceCaches::default());
         let mut want = [0u32; DRAW_GROUPS];
         want[..3].copy_from_slice(&[2, 1, 2]);
         want[RESOLUTIONS] = 2;
@@ -490,7 +491,7 @@ mod tests {
             pools: &packed,
             ..f
         };
-        let (placed, _) = build_instances(&g, &list, &mut InstanceCaches::default());
+        let (placed, _, _) = build_instances(&g, &list, &mut InstanceCaches::default());
         for (t, o) in placed.iter().zip(&instances) {
             if t.refinement == 0 {
                 assert_eq!(t, o);
@@ -509,6 +510,57 @@ mod tests {
             quadrant,
             [false, false, false, false, false, true, true, true, true]
         );
+    }
+
+    /// On a projected grid each record has its node's polynomials, in the records' order (the
+    /// counting sort's, not the list's), and the record's tail is its node's frame; a
+    /// geographic grid's records have none (nothing staged for them).
+    #[test]
+    fn polynomials_follow_the_records_on_a_projected_grid_only() {
+        use aerie_terrain::GeoReference;
+        let utm = GeoReference::Projected {
+            crs: "EPSG:32632".into(),
+            easting: 170_000.0,
+            northing: 5_200_000.0,
+        };
+        let geographic = GeoReference::Geographic {
+            south_lat_deg: 47.0,
+            west_lon_deg: 11.0,
+            dlat_deg: 1.0 / 1200.0,
+            dlon_deg: 1.0 / 1200.0,
+        };
+        let pools: Vec<PoolSlots> = (1..=6).map(|r| PoolSlots::new((16 << r) + 1, 16)).collect();
+        // Whole nodes at levels 3 and 2 here and there on the grid.
+        let list: Vec<(DrawItem, u32)> = [(3u32, 0u32), (3, 1), (2, 5)]
+            .iter()
+            .map(|&(level, k)| (DrawItem::whole(level, k, 1, 1.0, 0.5), 0))
+            .collect();
+        for (geo, want_polys) in [(&utm, true), (&geographic, false)] {
+            let g = GeoGrid::of(Some(geo), 30.0, 30.0).unwrap();
+            let eye = g.world_of_grid(glam::DVec2::new(4_000.0, 6_000.0), 2_000.0);
+            let f = InstanceFrame {
+                earth: Some(&g),
+                eye,
+                spacing: [30.0, 30.0],
+                ..frame(SkirtRule::Everywhere, [1 << 20, 1 << 20], &pools)
+            };
+            let (instances, polys, _) = build_instances(&f, &list, &mut InstanceCaches::default());
+            assert_eq!(instances.len(), list.len());
+            if !want_polys {
+                assert!(polys.is_empty(), "a geographic grid stages no polynomials");
+                continue;
+            }
+            assert_eq!(polys.len(), instances.len());
+            let e = GeoEye::new(&g, eye);
+            for (t, p) in instances.iter().zip(&polys) {
+                let origin = [t.origin_sample[0] as i64, t.origin_sample[1] as i64];
+                let fields = e.node_fields(origin, t.step, 16);
+                assert_eq!(*p, GeoPolynomial::of(&fields), "{origin:?}");
+                assert_ne!(*p, GeoPolynomial::default());
+                assert_eq!(t.geo_axis_r, fields.geo_axis_r);
+                assert_eq!(t.geo_radius, fields.geo_radius);
+            }
+        }
     }
 
     /// Whole nodes draw the tile's grid, quadrants the coarse one, sixteenths the stride-4
@@ -693,7 +745,7 @@ mod tests {
         let (_, meshes) = TileMeshes::indices(17);
         let tris = |rule| {
             let g = InstanceFrame { skirts: rule, ..f };
-            let (_, sizes) = build_instances(&g, &list, &mut InstanceCaches::default());
+            let (_, _, sizes) = build_instances(&g, &list, &mut InstanceCaches::default());
             indirect_draws(&sizes, meshes).1
         };
         let grids = 3 * 512 + 128;

@@ -219,12 +219,14 @@ pub struct StagedFrame {
     pub draws: u64,
     /// None when nothing is drawn.
     pub instances: Option<u64>,
+    /// None unless a projected grid's nodes are drawn.
+    pub polynomials: Option<u64>,
     /// None without an overlay (or an empty one).
     pub overlay: Option<u64>,
 }
 
 /// Stages everything `plan` says, in its order — strips, pool uploads, uniforms, indirect
-/// commands, instances, overlay — into the frame's open region (the uploads' samples from
+/// commands, instances, polynomials, overlay — into the frame's open region (the uploads' samples from
 /// `samples`, which must then be spent), and checks that it took exactly the bytes the plan
 /// counted (so the plan's budget decisions were about this region).
 pub fn stage_frame(
@@ -262,6 +264,11 @@ pub fn stage_frame(
     } else {
         Some(staging.push(&plan.instances, 16)?)
     };
+    let polynomials = if plan.polynomials.is_empty() {
+        None
+    } else {
+        Some(staging.push(&plan.polynomials, 16)?)
+    };
     let overlay = match overlay {
         Some(p) if p.bytes() > 0 => Some(staging.push(&p.rgba, 16)?),
         _ => None,
@@ -280,6 +287,7 @@ pub fn stage_frame(
         uniforms,
         draws,
         instances,
+        polynomials,
         overlay,
     })
 }

@@ -26,6 +26,9 @@ pub const BINDING_CLASSES: u32 = 6;
 /// The streamed imagery windows (RGBA8 sRGB array, a layer per level, toroidal: REPEAT):
 /// render/imagery_stream.rs, shaders/drape.glsl.
 pub const BINDING_IMAGERY_STREAM: u32 = 7;
+/// A projected grid's node polynomials, parallel to the instances (render/gpu.rs
+/// `GeoPolynomial`; one zero element on other grids).
+pub const BINDING_POLYNOMIALS: u32 = 8;
 /// Refined-tile pools bound as an array (r = 1..=POOL_BINDINGS).
 pub const POOL_BINDINGS: u32 = aerie_terrain::select::MAX_REFINEMENT;
 
@@ -110,6 +113,7 @@ impl TerrainPipeline {
                 1,
                 S::FRAGMENT,
             ),
+            set_binding(BINDING_POLYNOMIALS, T::STORAGE_BUFFER, 1, S::VERTEX),
         ];
         (self.set_layout, self.layout) = create_set_and_layout(device, &bindings, None)?;
 
