@@ -29,7 +29,10 @@ use aerie_terrain::geodesy::projected::ProjectedGrid;
 use aerie_terrain::geodesy::wgs84::{WGS84_A, WGS84_E2};
 use aerie_terrain::geodesy::{GeoGrid, Geodetic};
 
+use bytemuck::Zeroable;
+
 pub use crate::render::gpu::GeoFields;
+use crate::render::gpu::GeoPolynomial;
 
 /// The eye of a frame over a geographic grid: what every node's frame is computed from.
 #[derive(Debug, Clone, Copy)]
@@ -69,7 +72,9 @@ impl GeoEye {
     /// [`Self::node_fields`] and the f64 vector from the eye to the node's centre vertex (what
     /// `geo_origin.xyz` rounds): with the eye at the world origin, the centre's world position.
     pub fn node_fields_rel(&self, origin: [i64; 2], step: u32, q: u32) -> (GeoFields, DVec3) {
-        self.with_eye(&self.node_frame(origin, step, q))
+        let (frame, poly) = self.node_frame(origin, step, q);
+        let rel = self.centre_rel(&frame);
+        (frame.fields.with(&poly, f32x3(rel)), rel)
     }
 
     /// [`Self::node_fields`] through `cache`, which keeps each node's [`NodeFrame`] across
@@ -82,23 +87,23 @@ impl GeoEye {
         step: u32,
         q: u32,
     ) -> GeoFields {
-        let (fields, rel) = self.node_fields_in(cache, origin, step, q);
-        let mut out = *fields;
-        out.geo_origin[..3].copy_from_slice(&rel);
-        out
+        let (fields, poly, rel) = self.node_fields_in(cache, origin, step, q);
+        fields.with(poly.unwrap_or(&GeoPolynomial::zeroed()), rel)
     }
 
-    /// [`Self::node_fields_cached`] without copying the record: the cached fields, whose
+    /// [`Self::node_fields_cached`] without copying the record: the cached frame fields, whose
     /// `geo_origin.xyz` the caller replaces with the returned centre relative to this eye (the
-    /// rest is eye-independent). A frame of 1,400 nodes copied the ~400-byte record four times
-    /// per node on its way into the instance (6 % of `fly --no-draw`'s CPU on Sierra Nevada).
+    /// rest is eye-independent), and on a projected grid the node's polynomials. A frame of
+    /// 1,400 nodes copied the ~400-byte record four times per node on its way into the
+    /// instance (6 % of `fly --no-draw`'s CPU on Sierra Nevada); the frames are kept apart from
+    /// the polynomials so that a geographic grid's frame reads ~100 bytes a node, not ~400.
     pub fn node_fields_in<'c>(
         &self,
         cache: &'c mut GeoNodeCache,
         origin: [i64; 2],
         step: u32,
         q: u32,
-    ) -> (&'c GeoFields, [f32; 3]) {
+    ) -> (&'c FrameFields, Option<&'c GeoPolynomial>, [f32; 3]) {
         debug_assert_eq!(
             cache.grid.as_ref(),
             Some(&self.grid),
@@ -111,19 +116,15 @@ impl GeoEye {
         let next = cache.frames.len() as u32;
         let at = *cache.index.entry(key).or_insert(next);
         if at == next {
-            cache.frames.push(self.node_frame(origin, step, q));
+            let (frame, poly) = self.node_frame(origin, step, q);
+            cache.frames.push(frame);
+            if self.projected() {
+                cache.polys.push(poly);
+            }
         }
         let frame = &cache.frames[at as usize];
         let rel = self.centre_rel(frame);
-        (&frame.fields, [rel.x as f32, rel.y as f32, rel.z as f32])
-    }
-
-    /// The node's fields with `geo_origin.xyz` its centre relative to this eye.
-    fn with_eye(&self, frame: &NodeFrame) -> (GeoFields, DVec3) {
-        let rel = self.centre_rel(frame);
-        let mut fields = frame.fields;
-        fields.geo_origin[..3].copy_from_slice(&[rel.x as f32, rel.y as f32, rel.z as f32]);
-        (fields, rel)
+        (&frame.fields, cache.polys.get(at as usize), f32x3(rel))
     }
 
     /// The vector from this eye to the node's centre vertex, in world axes (f64).
@@ -131,8 +132,9 @@ impl GeoEye {
         self.to_world * (frame.centre_ecef - self.eye_ecef)
     }
 
-    /// Everything of a node's fields that does not depend on the eye.
-    fn node_frame(&self, origin: [i64; 2], step: u32, q: u32) -> NodeFrame {
+    /// Everything of a node's fields that does not depend on the eye: its frame, and on a
+    /// projected grid its polynomials (zero on a geographic one).
+    fn node_frame(&self, origin: [i64; 2], step: u32, q: u32) -> (NodeFrame, GeoPolynomial) {
         let half = (q / 2) as i64 * step as i64;
         if let Some(p) = &self.grid.projected {
             return self.projected_fields(p, origin, half);
@@ -151,23 +153,28 @@ impl GeoEye {
         let r0_hi = r0 as f32;
         let r0_lo = (r0 - r0_hi as f64) as f32;
         let v4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
-        let fields = GeoFields {
+        let fields = FrameFields {
             geo_origin: [0.0, 0.0, 0.0, self.dlat_rad as f32],
             geo_axis_r: v4(axis_r, sp),
             geo_axis_t: v4(axis_t, cp),
             geo_axis_z: v4(axis_z, w0),
             geo_radius: [self.dlon_rad as f32, r0_hi, r0_lo, 0.0],
-            ..Default::default()
         };
-        NodeFrame {
+        let frame = NodeFrame {
             centre_ecef: centre,
             fields,
-        }
+        };
+        (frame, GeoPolynomial::zeroed())
     }
 
     /// A projected grid's node (see the module documentation): `half` samples from its
     /// south-west vertex `origin` to its centre.
-    fn projected_fields(&self, p: &ProjectedGrid, origin: [i64; 2], half: i64) -> NodeFrame {
+    fn projected_fields(
+        &self,
+        p: &ProjectedGrid,
+        origin: [i64; 2],
+        half: i64,
+    ) -> (NodeFrame, GeoPolynomial) {
         let (sx, sy) = (self.grid.spacing_x, self.grid.spacing_y);
         let centre = DVec2::new(
             (origin[0] + half) as f64 * sx,
@@ -191,30 +198,60 @@ impl GeoEye {
             geo_n[k + 1] = v(poly.normal[k], 0.0);
         }
         geo_n[0] = v(poly.normal0, 0.0);
-        let fields = GeoFields {
+        let fields = FrameFields {
             geo_origin: [0.0, 0.0, 0.0, (1.0 / half.max(1) as f64) as f32],
             geo_radius: [0.0, 0.0, 0.0, 1.0],
-            geo_s,
-            geo_n,
             ..Default::default()
         };
-        NodeFrame {
+        let frame = NodeFrame {
             centre_ecef: poly.centre_ecef,
             fields,
+        };
+        (frame, GeoPolynomial { geo_s, geo_n })
+    }
+}
+
+fn f32x3(v: DVec3) -> [f32; 3] {
+    [v.x as f32, v.y as f32, v.z as f32]
+}
+
+/// A node's frame on the ellipsoid as the tail of its tile instance holds it: [`GeoFields`]
+/// less the polynomials (`GeoPolynomial`, a projected grid's alone).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameFields {
+    pub geo_origin: [f32; 4],
+    pub geo_axis_r: [f32; 4],
+    pub geo_axis_t: [f32; 4],
+    pub geo_axis_z: [f32; 4],
+    pub geo_radius: [f32; 4],
+}
+
+impl FrameFields {
+    /// The whole [`GeoFields`]: these, `poly`, and `geo_origin.xyz` = `rel`.
+    pub fn with(&self, poly: &GeoPolynomial, rel: [f32; 3]) -> GeoFields {
+        GeoFields {
+            geo_origin: [rel[0], rel[1], rel[2], self.geo_origin[3]],
+            geo_axis_r: self.geo_axis_r,
+            geo_axis_t: self.geo_axis_t,
+            geo_axis_z: self.geo_axis_z,
+            geo_radius: self.geo_radius,
+            geo_s: poly.geo_s,
+            geo_n: poly.geo_n,
         }
     }
 }
 
-/// A node's fields on the ellipsoid without the eye: its centre in ECEF and every field but
-/// `geo_origin.xyz` (the centre relative to the eye, formed each frame).
+/// A node's frame on the ellipsoid without the eye: its centre in ECEF and every frame field
+/// but `geo_origin.xyz` (the centre relative to the eye, formed each frame).
 #[derive(Debug, Clone, Copy)]
 struct NodeFrame {
     centre_ecef: DVec3,
-    fields: GeoFields,
+    fields: FrameFields,
 }
 
 /// Nodes held before the cache starts afresh: a frame draws one to two thousand, a record is
-/// ~400 bytes, so at most ~7 MB; starting afresh costs one frame its trigonometry again.
+/// 104 bytes (and on a projected grid 304 more), so at most ~7 MB; starting afresh costs one
+/// frame its trigonometry again.
 const GEO_CACHE_CAPACITY: usize = 1 << 14;
 
 /// Each drawn node's [`NodeFrame`] kept across frames (a frame's nodes are mostly the last
@@ -227,9 +264,11 @@ pub struct GeoNodeCache {
     /// Each node's place in `frames`, keyed by (south-west sample column << 32 | row,
     /// step << 16 | quads): two hashing rounds (sample indices of a grid at most 2^32 wide,
     /// steps and quads far below 2^16). The records sit apart from the table, so growing it
-    /// moves 20-byte entries, not 400-byte records.
+    /// moves 20-byte entries, not the records.
     index: std::collections::HashMap<(u64, u64), u32, FastHash>,
     frames: Vec<NodeFrame>,
+    /// On a projected grid each node's polynomials, beside its frame in `frames`; else empty.
+    polys: Vec<GeoPolynomial>,
 }
 
 /// Nodes room is made for at the start (a frame draws one to two thousand): the cache grows
@@ -242,6 +281,7 @@ impl GeoNodeCache {
         if self.grid.as_ref() != Some(grid) || self.frames.len() >= GEO_CACHE_CAPACITY {
             self.index.clear();
             self.frames.clear();
+            self.polys.clear();
             self.index.reserve(GEO_CACHE_RESERVE);
             self.frames.reserve(GEO_CACHE_RESERVE);
             self.grid = Some(*grid);

@@ -6,9 +6,7 @@ use aerie_terrain::clipmap::{
     toroidal_pieces, update_cache, CacheRegion, ClipmapDesc, LevelPlacement,
 };
 
-use crate::render::gpu::{DrawIndexedIndirect, GeoPolynomial, TileInstance};
 use crate::render::normal_map::normal_bytes;
-use crate::render::tile_instances::MAX_TERRAIN_DRAWS;
 
 /// Bytes per texel of every height texture (R32_SFLOAT).
 pub const TEXEL_BYTES: u64 = 4;
@@ -28,18 +26,6 @@ pub const STRIP_SLACK_BYTES: u64 = 64;
 /// Headroom a pool upload must leave above the reserve: its own alignment padding plus that of
 /// the uploads staged before it, which the reserve does not count.
 pub const POOL_UPLOAD_SLACK_BYTES: u64 = 256;
-/// Bytes the frame's fixed pushes need besides the uploads: indirect commands, one instance (and
-/// on a `projected` grid one polynomial) per selected node (coarsening only lowers the count),
-/// the overlay, and their slack.
-pub fn fixed_reserve(selected_nodes: usize, projected: bool, overlay_bytes: Option<u64>) -> u64 {
-    let overlay = overlay_bytes.map_or(0, |b| b + OVERLAY_SLACK_BYTES);
-    let polynomial = projected as usize * std::mem::size_of::<GeoPolynomial>();
-    FIXED_SLACK_BYTES
-        + (std::mem::size_of::<DrawIndexedIndirect>() * MAX_TERRAIN_DRAWS) as u64
-        + (selected_nodes * (std::mem::size_of::<TileInstance>() + polynomial)) as u64
-        + overlay
-}
-
 /// One region of a texture to fill from the dataset: texel rectangle in `layer`, and the
 /// dataset samples `origin + (i, j)·step`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -52,15 +52,16 @@ use crate::render::jobs::{
     eye_samples, split_level_uploads, within_data_cap, ImageUpload, PlanError, StagingBudget,
 };
 pub use crate::render::jobs::{
-    fixed_reserve, FIXED_SLACK_BYTES, OVERLAY_SLACK_BYTES, POOL_UPLOAD_SLACK_BYTES,
-    STRIP_SLACK_BYTES,
+    FIXED_SLACK_BYTES, OVERLAY_SLACK_BYTES, POOL_UPLOAD_SLACK_BYTES, STRIP_SLACK_BYTES,
 };
 use crate::render::normal_map::normal_bytes;
 pub use crate::render::pool_atlas::PoolSlots;
 use crate::render::pool_atlas::{PoolAtlas, PoolLimits};
 use crate::render::stats::FrameStats;
 use crate::render::tile_instances::{build_instances, InstanceCaches, InstanceFrame};
-pub use crate::render::tile_instances::{indirect_draws, slot_placement, SkirtRule, TileMeshes};
+pub use crate::render::tile_instances::{
+    fixed_reserve, indirect_draws, slot_placement, SkirtRule, TileMeshes,
+};
 
 /// Largest number of m×m instances one frame may draw (144 bytes each per frame in flight, 448
 /// on a projected grid): the instance buffers grow on demand up to this — `full` on a large

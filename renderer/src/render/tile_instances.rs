@@ -16,6 +16,7 @@ use aerie_terrain::select::{DrawItem, LodMode, NodeSkirts, SkirtMemo, ALL_EDGES}
 
 use crate::render::geo_instances::{GeoEye, GeoNodeCache};
 use crate::render::gpu::{DrawIndexedIndirect, GeoPolynomial, TileInstance};
+use crate::render::jobs::{FIXED_SLACK_BYTES, OVERLAY_SLACK_BYTES};
 use crate::render::pool_atlas::PoolSlots;
 use crate::render::stats::RESOLUTIONS;
 
@@ -328,18 +329,30 @@ pub fn build_instances(
         (t.slot_x, t.slot_y, t.slot_stride) = (slot_x, slot_y, slot_stride);
         t.morph = item.morph.to_gpu();
         if let Some(e) = &geo {
-            let (g, rel) = e.node_fields_in(geo_cache, origin, 1 << item.node_level, q);
+            let (g, poly, rel) = e.node_fields_in(geo_cache, origin, 1 << item.node_level, q);
             t.geo_origin = [rel[0], rel[1], rel[2], g.geo_origin[3]];
             t.geo_axis_r = g.geo_axis_r;
             t.geo_axis_t = g.geo_axis_t;
             t.geo_axis_z = g.geo_axis_z;
             t.geo_radius = g.geo_radius;
-            if projected {
-                polynomials.push(GeoPolynomial::of(g));
+            if let Some(p) = poly {
+                polynomials.push(*p);
             }
         }
     }
     (instances, polynomials, sizes)
+}
+
+/// Bytes the frame's fixed pushes need besides the uploads: indirect commands, one instance (and
+/// on a `projected` grid one polynomial) per selected node (coarsening only lowers the count),
+/// the overlay, and their slack.
+pub fn fixed_reserve(selected_nodes: usize, projected: bool, overlay_bytes: Option<u64>) -> u64 {
+    let overlay = overlay_bytes.map_or(0, |b| b + OVERLAY_SLACK_BYTES);
+    let polynomial = projected as usize * std::mem::size_of::<GeoPolynomial>();
+    FIXED_SLACK_BYTES
+        + (std::mem::size_of::<DrawIndexedIndirect>() * MAX_TERRAIN_DRAWS) as u64
+        + (selected_nodes * (std::mem::size_of::<TileInstance>() + polynomial)) as u64
+        + overlay
 }
 
 /// Triangles of a skirted tile of `q` quads a side (grid 2q², skirt 2 per perimeter edge).
