@@ -651,6 +651,47 @@ fn prefetch_follows_the_motion_only_and_spares_recent_draws() {
     assert!(tight.pool_uploads.is_empty());
 }
 
+/// The digest names the selection: equal lists give equal digests, and changing any field of
+/// any node, or the order of two nodes, changes it.
+#[test]
+fn the_selection_digest_changes_with_any_node_field_or_order() {
+    let sel = Selection {
+        items: (0..40u32)
+            .map(|k| DrawItem {
+                refinement: k % 3,
+                node_level: 4 - k % 3,
+                node_tx: 7 * k,
+                node_ty: 3 * k + 1,
+                ..DrawItem::whole(4, k, 2 * k, 1.0, 0.5)
+            })
+            .collect(),
+        ..Selection::default()
+    };
+    let base = selection_digest(&sel);
+    assert_eq!(base, selection_digest(&sel.clone()));
+    let fields: [fn(&mut DrawItem); 7] = [
+        |i| i.level += 1,
+        |i| i.tx += 1,
+        |i| i.ty += 1,
+        |i| i.refinement += 1,
+        |i| i.node_level += 1,
+        |i| i.node_tx += 1,
+        |i| i.node_ty += 1,
+    ];
+    for k in [0, 17, 39] {
+        for (f, change) in fields.iter().enumerate() {
+            let mut other = sel.clone();
+            change(&mut other.items[k]);
+            assert_ne!(selection_digest(&other), base, "node {k}, field {f}");
+        }
+    }
+    let mut swapped = sel.clone();
+    swapped.items.swap(3, 4);
+    assert_ne!(selection_digest(&swapped), base);
+    swapped.items.truncate(39);
+    assert_ne!(selection_digest(&swapped), base);
+}
+
 #[test]
 fn channels_share_one_selection_whichever_is_drawn() {
     let select = SelectParams {
