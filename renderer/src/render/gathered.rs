@@ -150,6 +150,23 @@ impl Gatherer {
         got
     }
 
+    /// Fills `out` with `rect`'s samples (a prefetched tile's band, kept outside the frame's
+    /// samples until the tile is whole: `banded.rs`); the time counts as the frame's.
+    pub fn gather_rect(&mut self, rect: &SampleRect, out: &mut [f32]) -> Result<(), NotResident> {
+        let t = Instant::now();
+        let got = self.source.gather(rect, out);
+        self.time += t.elapsed();
+        got
+    }
+
+    /// Appends samples gathered in earlier frames as the next upload's (a banded tile made
+    /// whole).
+    pub fn append(&mut self, samples: &[f32]) {
+        let t = Instant::now();
+        self.samples.extend_from_slice(samples);
+        self.time += t.elapsed();
+    }
+
     /// Asks the source for `rect` with `priority` (larger first) at the end of the frame.
     pub fn want(&mut self, rect: SampleRect, priority: f32) {
         self.wants.push(SampleWant { rect, priority });

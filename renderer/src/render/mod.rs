@@ -21,6 +21,7 @@
 
 pub mod ahead_select;
 pub mod atmosphere;
+pub mod banded;
 pub mod content;
 pub mod cpu_clock;
 pub mod desc;

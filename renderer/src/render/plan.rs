@@ -20,7 +20,9 @@
 //!   indirect command r starts at the sum of the groups before it; triangles = instances ×
 //!   triangles per skirted tile.
 //! - **Prefetch** happens only along the eye's motion, never evicts a slot drawn in the last
-//!   [`PREFETCH_PROTECT_FRAMES`] frames, and stops at the first tile the budget cannot take.
+//!   [`PREFETCH_PROTECT_FRAMES`] frames, and stops at the first tile the budget cannot take; a
+//!   tile larger than a band is gathered a band of rows a frame and uploaded whole
+//!   (`banded.rs`).
 //! - **Streaming.** Every upload is admitted only with its samples gathered from the source
 //!   (`gathered.rs`): a level strip whose samples are not resident stays pending in
 //!   [`LevelContent`] and is retried each frame, the selection draws a level tile only when its
@@ -42,6 +44,7 @@ use aerie_terrain::select::{select_tiles_multi_ready, DrawItem, SelectParams, Se
 use aerie_terrain::source::TerrainSource;
 
 use crate::render::ahead_select::{AheadJob, AheadSelector};
+use crate::render::banded::{Banded, BandedTile};
 use crate::render::feed::{Feed, DRAWN_PRIORITY, PREFETCH_PRIORITY};
 use crate::render::gathered::Gatherer;
 
@@ -57,7 +60,8 @@ pub use crate::render::jobs::{
 use crate::render::normal_map::normal_bytes;
 pub use crate::render::pool_atlas::PoolSlots;
 use crate::render::pool_atlas::{PoolAtlas, PoolLimits};
-use crate::render::stats::FrameStats;
+pub use crate::render::stats::selection_digest;
+use crate::render::stats::{selection_stats, FrameStats};
 use crate::render::tile_instances::{build_instances, InstanceCaches, InstanceFrame};
 pub use crate::render::tile_instances::{
     fixed_reserve, indirect_draws, slot_placement, SkirtRule, TileMeshes,
@@ -96,6 +100,8 @@ pub struct PlanState {
     /// The frame of the last reselect of the view ahead, and how many reselects were made.
     prefetch_selected_at: Option<u64>,
     pub prefetch_selections: u64,
+    /// The one prefetched tile too large for one frame, gathered a band a frame (`banded.rs`).
+    pub banded: BandedTile,
     shared: SharedSelection,
     /// Shared (multi-channel) selections made so far: one per frame, whatever the channel count.
     pub shared_selections: u64,
@@ -147,6 +153,7 @@ impl PlanState {
             ahead: AheadSelector::threaded(),
             prefetch_selected_at: None,
             prefetch_selections: 0,
+            banded: BandedTile::default(),
             shared: SharedSelection::default(),
             shared_selections: 0,
             earth,
@@ -466,52 +473,6 @@ pub fn plan_frame(
 }
 
 /// The statistics the selection alone decides.
-fn selection_stats(frame: u64, sel: &Selection) -> FrameStats {
-    let mut stats = FrameStats {
-        frame,
-        selection_digest: selection_digest(sel),
-        finest_level: sel.finest_level,
-        tiles_unbounded: sel.unbounded,
-        tiles_hidden: sel.hidden,
-        tiles_late: sel.stream_late,
-        tiles_late_stream: sel.stream_late,
-        ..Default::default()
-    };
-    for l in &sel.levels {
-        stats.tiles_considered += l.considered;
-        stats.tiles_culled += l.culled;
-        stats.tiles_drawn += l.drawn;
-        for (sum, n) in stats.tiles_by_refinement.iter_mut().zip(l.refined) {
-            *sum += n;
-        }
-    }
-    stats
-}
-
-/// A digest of every selected node, in order: channels drawn from one shared selection report
-/// the same; `bench` replays compare it. Each node's values are mixed on their own (the CPU
-/// overlaps the nodes) and then folded in order with one multiply: FNV-1a over every value, one
-/// dependent multiply after another, was 12 µs of a 1,400-node frame.
-pub fn selection_digest(sel: &Selection) -> u64 {
-    let mix = |mut x: u64| {
-        // splitmix64's finaliser.
-        x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        x ^ (x >> 31)
-    };
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for i in &sel.items {
-        let place = i.tx as u64 | (i.ty as u64) << 32;
-        let node = i.node_tx as u64 | (i.node_ty as u64) << 32;
-        let levels = i.level as u64 | (i.refinement as u64) << 21 | (i.node_level as u64) << 42;
-        let x = mix(place)
-            ^ mix(node ^ 0x9e37_79b9_7f4a_7c15).rotate_left(21)
-            ^ mix(levels).rotate_left(42);
-        h = (h ^ x).wrapping_mul(0x0100_0000_01b3).rotate_left(29);
-    }
-    h
-}
-
 /// Samples an upload gathers.
 fn job_samples(job: &ImageUpload) -> usize {
     job.size[0] as usize * job.size[1] as usize
@@ -729,6 +690,12 @@ fn prefetch(
         state.prefetch_selections += 1;
     }
     let q = state.clipmap.tile_quads;
+    if let Some(k) = state.banded.key() {
+        // Drawn (so uploaded whole) since: its rows in hand are not needed.
+        if state.pools[k.refinement as usize - 1].lru.is_resident(&k) {
+            state.banded.forget();
+        }
+    }
     let mut last = None;
     let mut rank = 0u32;
     let items = std::mem::take(&mut state.prefetch_selection.items);
@@ -751,14 +718,33 @@ fn prefetch(
         let job = pool.atlas.upload(q, &key, 0);
         let gatherer = &mut state.feed.gatherer;
         let mut not_resident = false;
+        // A tile too large for one frame's gathering comes a band a frame; it is admitted
+        // (slot and staging) once whole.
+        let banded = &mut state.banded;
+        let in_bands = banded.bands_needed(&job.sample_rect());
+        if in_bands {
+            match banded.advance(key, job.sample_rect(), inputs.frame, gatherer) {
+                Banded::Ready => {}
+                Banded::Gathering | Banded::Waiting => continue,
+                Banded::NotResident => not_resident = true,
+            }
+        }
         let cap = state.feed.data_cap_samples;
         let request = pool.lru.prefetch(
             key,
             &mut || {
-                if !upload_fits(budget, slot_bytes, reserve)
+                if not_resident
+                    || !upload_fits(budget, slot_bytes, reserve)
                     || !within_data_cap(gatherer.samples().len(), job_samples(&job), cap)
                 {
                     return false;
+                }
+                if in_bands {
+                    let Some(samples) = banded.take(key) else {
+                        return false;
+                    };
+                    gatherer.append(samples);
+                    return true;
                 }
                 not_resident = gatherer.gather(&job).is_err();
                 !not_resident

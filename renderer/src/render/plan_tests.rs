@@ -591,6 +591,52 @@ fn the_view_ahead_selected_off_the_frame_thread_plans_as_inline() {
     }
 }
 
+/// With bands of 1,000 samples every prefetched tile larger than that (the 33² slots and up)
+/// comes a band a frame: a frame's prefetch gathers at most one band of such a tile; each pool
+/// upload, banded or not, stages exactly the samples one gather of its rectangle gives; and a
+/// banded tile is staged only once whole, in a frame after its last band.
+#[test]
+fn large_prefetches_come_a_band_a_frame_and_stage_their_whole_tile() {
+    use crate::render::banded::BandedTile;
+    use crate::render::gathered::SampleCursor;
+    let mut st = state(&[64, 64, 64, 64, 64, 0]);
+    st.banded = BandedTile::new(1000);
+    let source = st.feed.gatherer.source().clone();
+    let cam = |x: f64| camera(x, 1280.0, 300.0, 90.0);
+    let (mut banded_uploads, mut bands_before) = (0, 0);
+    for f in 0..24u64 {
+        let in_hand = st.banded.key();
+        let p = refining_frame(&mut st, f, &cam(600.0 - 25.0 * f as f64), 20.0, BIG);
+        let bands = st.banded.bands - bands_before;
+        bands_before = st.banded.bands;
+        assert!(bands <= 1, "frame {f}: {bands} bands");
+        // The frame's samples in staging order: spilled strips, strips, then pool uploads.
+        let mut cursor = SampleCursor::new(st.feed.gatherer.samples());
+        for job in p.spilled_strips.iter().flatten().chain(&p.strips) {
+            cursor.next(job).unwrap();
+        }
+        for u in &p.pool_uploads {
+            let got = cursor.next(&u.upload).expect("samples for every upload");
+            let mut want = vec![0.0; got.len()];
+            source.gather(&u.upload.sample_rect(), &mut want).unwrap();
+            assert_eq!(got, want.as_slice(), "frame {f}: {:?}", u.key);
+            if u.prefetch && u.upload.sample_rect().len() > 1000 {
+                banded_uploads += 1;
+                // In hand before the frame, whole (a frame that gathers a tile's last band
+                // does not stage it), and let go.
+                assert_eq!(in_hand, Some(u.key), "frame {f}");
+                assert_ne!(st.banded.key(), Some(u.key), "frame {f}");
+            }
+        }
+        assert_eq!(cursor.left(), 0);
+    }
+    assert!(banded_uploads > 0, "the flight prefetches banded tiles");
+    assert!(
+        st.banded.bands >= 2 * banded_uploads,
+        "each of them in bands"
+    );
+}
+
 #[test]
 fn prefetch_follows_the_motion_only_and_spares_recent_draws() {
     let mut st = state(&[64, 64, 64, 64, 64, 0]);

@@ -1,7 +1,7 @@
 //! What a frame and a dataset upload did (DESIGN.md "Every stage reports what it did"), and the
 //! CSV row every headless run writes per frame.
 
-use aerie_terrain::select::MAX_REFINEMENT;
+use aerie_terrain::select::{Selection, MAX_REFINEMENT};
 
 /// Instance groups drawn: unrefined (r = 0) and r = 1..=MAX_REFINEMENT.
 pub const RESOLUTIONS: usize = MAX_REFINEMENT as usize + 1;
@@ -154,6 +154,53 @@ pub struct UploadStats {
     /// Submissions the upload was split into (by the per-frame staging budget).
     pub submissions: u32,
     pub levels: u32,
+}
+
+/// A frame's statistics as far as its selection tells them.
+pub fn selection_stats(frame: u64, sel: &Selection) -> FrameStats {
+    let mut stats = FrameStats {
+        frame,
+        selection_digest: selection_digest(sel),
+        finest_level: sel.finest_level,
+        tiles_unbounded: sel.unbounded,
+        tiles_hidden: sel.hidden,
+        tiles_late: sel.stream_late,
+        tiles_late_stream: sel.stream_late,
+        ..Default::default()
+    };
+    for l in &sel.levels {
+        stats.tiles_considered += l.considered;
+        stats.tiles_culled += l.culled;
+        stats.tiles_drawn += l.drawn;
+        for (sum, n) in stats.tiles_by_refinement.iter_mut().zip(l.refined) {
+            *sum += n;
+        }
+    }
+    stats
+}
+
+/// A digest of every selected node, in order: channels drawn from one shared selection report
+/// the same; `bench` replays compare it. Each node's values are mixed on their own (the CPU
+/// overlaps the nodes) and then folded in order with one multiply: FNV-1a over every value, one
+/// dependent multiply after another, was 12 µs of a 1,400-node frame.
+pub fn selection_digest(sel: &Selection) -> u64 {
+    let mix = |mut x: u64| {
+        // splitmix64's finaliser.
+        x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        x ^ (x >> 31)
+    };
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for i in &sel.items {
+        let place = i.tx as u64 | (i.ty as u64) << 32;
+        let node = i.node_tx as u64 | (i.node_ty as u64) << 32;
+        let levels = i.level as u64 | (i.refinement as u64) << 21 | (i.node_level as u64) << 42;
+        let x = mix(place)
+            ^ mix(node ^ 0x9e37_79b9_7f4a_7c15).rotate_left(21)
+            ^ mix(levels).rotate_left(42);
+        h = (h ^ x).wrapping_mul(0x0100_0000_01b3).rotate_left(29);
+    }
+    h
 }
 
 #[cfg(test)]
