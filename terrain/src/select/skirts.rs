@@ -76,6 +76,7 @@ pub fn node_skirts(
             folds,
             |l, x, y| grids.get(l, x, y),
             grids.overlap,
+            true,
         ),
         None => node_skirts_hashed(nodes, resolution, folds),
     }
@@ -167,6 +168,7 @@ fn node_skirts_hashed(
             None => Cell::Empty,
         },
         overlap,
+        true,
     )
 }
 
@@ -183,22 +185,34 @@ enum Cell {
 }
 
 /// The walk itself, over any lookup (a `Split` cell ends the walk); `overlap`: drawn nodes
-/// overlap (every edge keeps its skirt).
+/// overlap (every edge keeps its skirt); `pairs_once`: a pair of same-level neighbours is
+/// looked up from one side only (what every caller asks; the tests compare it with both).
 fn walk_neighbours(
     nodes: &[(u32, u32, u32, f32)],
     resolution: &[u32],
     folds: &[bool],
     find: impl Fn(u32, u32, u32) -> Cell,
     overlap: bool,
+    pairs_once: bool,
 ) -> NodeSkirts {
     let top = nodes.iter().map(|n| n.0).max().unwrap_or(0);
     let mut reach: Vec<f32> = nodes.iter().map(|n| n.3).collect();
     // Edges start bare and are given a skirt by the pairs that need one.
     let mut edges = vec![0u8; nodes.len()];
+    // Per node, the edges whose same-level neighbour has been met from the other side
+    // already: the pair's updates are symmetric (both reaches, both edges, `apart` the same
+    // either way), so each such pair is looked up once instead of twice.
+    let mut met = vec![0u8; nodes.len()];
     // The perimeter walk's edges: south, east, north, west.
     const ACROSS: [(i64, i64); 4] = [(0, -1), (1, 0), (0, 1), (-1, 0)];
     for (i, &(l, x, y, e)) in nodes.iter().enumerate() {
+        // Whether the lookup finds this node at its own place (not a repeat of a later one):
+        // only then does its neighbour's lookup across the shared edge find it in turn.
+        let found_here = find(l, x, y) == Cell::Drawn(i);
         for (edge, (dx, dy)) in ACROSS.into_iter().enumerate() {
+            if met[i] & (1 << edge) != 0 {
+                continue;
+            }
             let (nx, ny) = (x as i64 + dx, y as i64 + dy);
             if nx < 0 || ny < 0 {
                 // The grid's first sample.
@@ -220,6 +234,9 @@ fn walk_neighbours(
                             if apart {
                                 edges[i] |= 1 << edge;
                                 edges[j] |= 1 << ((edge + 2) % 4);
+                            }
+                            if k == 0 && found_here && pairs_once {
+                                met[j] |= 1 << ((edge + 2) % 4);
                             }
                         }
                         break;
@@ -391,9 +408,10 @@ mod tests {
         nodes
     }
 
-    /// The grids give what the hash table and the full walk give, on covers with and without
-    /// holes, several covers side by side, overlapping and repeated nodes (which take the
-    /// full walk through split cells), and on covers whose split cells end walks early.
+    /// The grids give what the hash table and the full walk give — and the walk that looks
+    /// each same-level pair up from both sides —, on covers with and without holes, several
+    /// covers side by side, overlapping and repeated nodes (which take the full walk through
+    /// split cells), and on covers whose split cells end walks early.
     #[test]
     fn the_grids_walk_as_the_hash_table_does() {
         let mut seed = 0x2545_f491_4f6c_dd1du64;
@@ -428,6 +446,16 @@ mod tests {
                 want,
                 "case {case}: {nodes:?}"
             );
+            // Each same-level pair looked up from both sides gives the same.
+            let both_sides = walk_neighbours(
+                &nodes,
+                &resolution,
+                &folds,
+                |l, x, y| grids.get(l, x, y),
+                grids.overlap,
+                false,
+            );
+            assert_eq!(both_sides, want, "case {case}: {nodes:?}");
             if !grids.overlap {
                 stopped_early += grids
                     .levels
@@ -441,7 +469,7 @@ mod tests {
     }
 
     /// Against a brute force over every pair of nodes sharing an edge along a positive length:
-    /// an edge has a skirt exactly when it lies on the grid's first sample, or some node
+    /// a node's reach is the largest ε of itself and the nodes across its edges, and an edge has a skirt exactly when it lies on the grid's first sample, or some node
     /// across it is drawn at another resolution, or both fold at the grid's end and differ in
     /// level or resolution; so an edge facing nothing (culled), or only nodes at its own
     /// resolution, has none. Covers with holes, every resolution offset, folding nodes.
@@ -472,6 +500,7 @@ mod tests {
                 |&(l, x, y, _): &(u32, u32, u32, f32)| [x << l, (x + 1) << l, y << l, (y + 1) << l];
             for (i, n) in nodes.iter().enumerate() {
                 let [x0, x1, y0, y1] = fp(n);
+                let mut want_reach = n.3;
                 for edge in 0..4u32 {
                     // The nodes across this edge along a positive length.
                     let across: Vec<usize> = (0..nodes.len())
@@ -487,6 +516,10 @@ mod tests {
                             }
                         })
                         .collect();
+                    // Reach: the roughest of itself and every node across any edge.
+                    for &j in &across {
+                        want_reach = want_reach.max(nodes[j].3);
+                    }
                     let first_sample = (edge == 0 && y0 == 0) || (edge == 3 && x0 == 0);
                     let apart = across.iter().any(|&j| {
                         resolution[j] != resolution[i]
@@ -510,6 +543,10 @@ mod tests {
                         bare += 1;
                     }
                 }
+                assert_eq!(
+                    skirts.reach[i], want_reach,
+                    "case {case}: node {n:?}'s reach"
+                );
             }
         }
         assert!(
@@ -571,6 +608,49 @@ mod tests {
             &node_skirts(&nodes[..n], &resolution[..n], &folds[..n])
         );
         assert_eq!((memo.hits, memo.misses), (1, 5));
+    }
+
+    /// A node repeated on both sides of an edge (no selection repeats one; the walk must
+    /// still not lose a pair): in every order of the list, looking each same-level pair up
+    /// once gives what looking from both sides gives.
+    #[test]
+    fn repeated_neighbours_lose_no_pair() {
+        let base = [
+            (0, 4, 4, 1.0),
+            (0, 5, 4, 2.0),
+            (0, 4, 4, 3.0),
+            (0, 5, 4, 4.0),
+            (1, 3, 2, 0.5),
+        ];
+        let mut orders = 0;
+        for p in 0..(5 * 4 * 3 * 2) {
+            // The p-th permutation (factorial number system).
+            let mut pool: Vec<_> = base.to_vec();
+            let mut nodes = Vec::new();
+            let mut r = p;
+            for n in (1..=5).rev() {
+                nodes.push(pool.remove(r % n));
+                r /= n;
+            }
+            let resolution: Vec<u32> = nodes.iter().map(|n| n.0 + (n.3 as u32) % 2).collect();
+            let folds = vec![false; nodes.len()];
+            let grids = LevelGrids::of(&nodes).expect("a small box");
+            let both_sides = walk_neighbours(
+                &nodes,
+                &resolution,
+                &folds,
+                |l, x, y| grids.get(l, x, y),
+                grids.overlap,
+                false,
+            );
+            assert_eq!(
+                node_skirts(&nodes, &resolution, &folds),
+                both_sides,
+                "{nodes:?}"
+            );
+            orders += 1;
+        }
+        assert_eq!(orders, 120);
     }
 
     #[test]
