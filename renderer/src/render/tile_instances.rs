@@ -8,7 +8,6 @@
 //! edges that need a skirt (`select::node_skirts`): the group's grid is one command, and
 //! each set of edges one more (two for opposite edges) drawing only those edges' skirts.
 
-use bytemuck::Zeroable;
 use glam::DVec3;
 
 use aerie_terrain::geodesy::GeoGrid;
@@ -294,40 +293,48 @@ pub fn build_instances(
         order[*at] = k as u32;
         *at += 1;
     }
-    // Zeroed records filled in place, the fields a node does not use (the ellipsoid's on the
-    // plane) left zero without being written.
-    let mut instances = vec![TileInstance::zeroed(); draw_list.len()];
+    // Each record built whole and pushed once, in its final place (no zeroed vector written
+    // over: 200 KB a frame on the dense flights); the ellipsoid's fields are zero on the plane.
+    let mut instances = Vec::with_capacity(draw_list.len());
     let projected = geo.as_ref().is_some_and(GeoEye::projected);
     let mut polynomials = Vec::with_capacity(if projected { draw_list.len() } else { 0 });
-    for (t, &k) in instances.iter_mut().zip(&order) {
+    for &k in &order {
         let (item, slot) = draw_list[k as usize];
         let reach_m = reach[k as usize];
         let node = (q as i64) << item.node_level;
         let origin = [item.node_tx as i64 * node, item.node_ty as i64 * node];
         let (slot_x, slot_y, slot_stride) = slot_placement(&item, q);
-        t.origin_rel = [
-            (origin[0] as f64 * f.spacing[0] - eye.x) as f32,
-            (origin[1] as f64 * f.spacing[1] - eye.y) as f32,
-        ];
-        t.origin_sample = [origin[0] as i32, origin[1] as i32];
-        t.step = 1 << item.node_level;
-        t.level = item.level;
-        t.refinement = item.refinement;
         // A refined node names its slot's layer and its south-west vertex's texel in that
         // layer (the slot's cell + the node's place in the slot): `terrain.vert` finds the cell
         // again from it (`PoolAtlas::read_texel`).
-        let (slot_x, slot_y) = if item.refinement > 0 {
+        let (slot, slot_x, slot_y) = if item.refinement > 0 {
             let place = f.pools[item.refinement as usize - 1].atlas.place(slot);
-            t.slot = place.layer;
-            (slot_x + place.x, slot_y + place.y)
+            (place.layer, slot_x + place.x, slot_y + place.y)
         } else {
-            t.slot = slot;
-            (slot_x, slot_y)
+            (slot, slot_x, slot_y)
         };
-        // ε + max(ε, neighbours' ε) at the default factor 2 (see select::node_skirts).
-        t.skirt_m = 0.5 * f.skirt_factor * (item.eps_m + reach_m) + f.skirt_min_m;
-        (t.slot_x, t.slot_y, t.slot_stride) = (slot_x, slot_y, slot_stride);
-        t.morph = item.morph.to_gpu();
+        let mut t = TileInstance {
+            origin_rel: [
+                (origin[0] as f64 * f.spacing[0] - eye.x) as f32,
+                (origin[1] as f64 * f.spacing[1] - eye.y) as f32,
+            ],
+            origin_sample: [origin[0] as i32, origin[1] as i32],
+            step: 1 << item.node_level,
+            level: item.level,
+            refinement: item.refinement,
+            slot,
+            // ε + max(ε, neighbours' ε) at the default factor 2 (see select::node_skirts).
+            skirt_m: 0.5 * f.skirt_factor * (item.eps_m + reach_m) + f.skirt_min_m,
+            slot_x,
+            slot_y,
+            slot_stride,
+            morph: item.morph.to_gpu(),
+            geo_origin: [0.0; 4],
+            geo_axis_r: [0.0; 4],
+            geo_axis_t: [0.0; 4],
+            geo_axis_z: [0.0; 4],
+            geo_radius: [0.0; 4],
+        };
         if let Some(e) = &geo {
             let (g, poly, rel) = e.node_fields_in(geo_cache, origin, 1 << item.node_level, q);
             t.geo_origin = [rel[0], rel[1], rel[2], g.geo_origin[3]];
@@ -339,6 +346,7 @@ pub fn build_instances(
                 polynomials.push(*p);
             }
         }
+        instances.push(t);
     }
     (instances, polynomials, sizes)
 }
