@@ -81,6 +81,7 @@ pub fn run(a: BenchArgs) -> Result<(), Failure> {
             overwrite: a.overwrite,
             resume: a.resume,
             command_line: a.result_settings(),
+            replays: a.replays,
         };
         return suite::run(&paths, &mut |job| suite_flight(&a, job));
     }
@@ -150,7 +151,7 @@ fn suite_flight(
     args.frames = r.frames;
     args.warmup = r.warmup;
     args.settle = r.settle;
-    args.replays = r.replays;
+    args.replays = Some(r.replays);
     args.fps = r.fps;
     args.modes = r.modes.clone();
     args.tau = join(&r.tau);
@@ -440,7 +441,7 @@ fn run_flight(
         &mut validation,
     )?;
     let replayed = ReplayTally::of(
-        a.replays,
+        a.replays(),
         rows.iter().filter(|r| !r.warmup).map(|r| &r.replays),
     );
     for lane in &mut lanes {

@@ -23,7 +23,10 @@ pub struct BenchArgs {
     #[arg(long, required_unless_present = "suite")]
     pub dem: Option<PathBuf>,
     /// A bench suite (TOML: datasets × flights, the run's settings): every flight is benched
-    /// into its own folder under --out, with one combined report (suite.md, ratios.csv).
+    /// into its own folder under --out, with one combined report (suite.md, ratios.csv). The
+    /// options its `[run]` table sets (--size, --fov, --frames, --warmup, --settle, --fps,
+    /// --modes, --tau, the sweeps, --tile-sizes, --oracle-nodes) are refused beside it; --replays
+    /// replaces its `run.replays`.
     #[arg(long, conflicts_with_all = ["dem", "flight"])]
     pub suite: Option<PathBuf>,
     /// Go on with an interrupted suite in --out: a flight whose folder holds the record of a
@@ -51,67 +54,72 @@ pub struct BenchArgs {
     #[arg(long)]
     pub flight: Option<PathBuf>,
     /// Measured frames (every configuration renders each).
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = 60, conflicts_with = "suite")]
     pub frames: u32,
     /// Frames rendered first and left out of the summaries (caches, pools, pipelines warm up).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, conflicts_with = "suite")]
     pub warmup: u32,
     /// Start-up fill: before the first frame every configuration renders the flight's first
     /// pose again until a frame has no late tile and no clipmap cell pending, at most this
     /// many frames (0: none) — as an IG fills its caches while the host waits for the
     /// database to load. Those frames are not measured; summary.md says how many each took.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, conflicts_with = "suite")]
     pub settle: u32,
     /// Fly the measured frames this many times, each time by fresh renderers after the same
     /// start-up fill, and time each frame by its fastest flight that did the same work (the
     /// same selection, triangles, uploads): on a shared machine the least of several times
-    /// holds less of the machine's noise. 1: fly once. The image error is measured on the
-    /// first flight.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=20))]
-    pub replays: u32,
+    /// holds less of the machine's noise. 1 (the default): fly once. The image error is
+    /// measured on the first flight. With --suite it replaces the suite's `run.replays` (the
+    /// times change, never what is drawn or measured).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=20))]
+    pub replays: Option<u32>,
     /// Simulated frame rate: frame k is the pose at k / fps seconds.
-    #[arg(long, default_value_t = 30.0)]
+    #[arg(long, default_value_t = 30.0, conflicts_with = "suite")]
     pub fps: f64,
     #[command(flatten)]
     pub pass: PassArgs,
     #[command(flatten)]
     pub drape: crate::app::args::DrapeArgs,
     /// Output size, WxH pixels.
-    #[arg(long, default_value = "1920x1080")]
+    #[arg(long, default_value = "1920x1080", conflicts_with = "suite")]
     pub size: String,
     /// Horizontal field of view, degrees (0 < fov < 180).
-    #[arg(long, default_value_t = 90.0)]
+    #[arg(long, default_value_t = 90.0, conflicts_with = "suite")]
     pub fov: f64,
     /// LOD modes, comma-separated: bounded, clipmap, distance, cdlod, full.
-    #[arg(long, default_value = "bounded,clipmap,distance,cdlod,full")]
+    #[arg(
+        long,
+        default_value = "bounded,clipmap,distance,cdlod,full",
+        conflicts_with = "suite"
+    )]
     pub modes: String,
     /// τ values (px) for `bounded`, comma-separated; the other modes ignore τ and run once.
-    #[arg(long, default_value = "0.5,1,2,5,10")]
+    #[arg(long, default_value = "0.5,1,2,5,10", conflicts_with = "suite")]
     pub tau: String,
     /// Clipmap patch side n in vertices (129 or 257).
     #[arg(long, default_value_t = 129)]
     pub patch: u32,
     /// Sweep `clipmap` over these patch sides n (comma-separated, each P·16+1 with P even ≥ 8,
     /// e.g. 129,257,513); empty: once at --patch.
-    #[arg(long, default_value = "")]
+    #[arg(long, default_value = "", conflicts_with = "suite")]
     pub clipmap_n: String,
     /// Draw every tiled mode (all but `tess` and `full`) with each of these tile sizes m
     /// (vertices a side, 2^j + 1: e.g. 9,17), so the tile size is one more knob of every
     /// mode's curve; empty: the default (17) only. --patch and each --clipmap-n must then be
     /// P·(m−1)+1 with P even ≥ 8 for every m.
-    #[arg(long, default_value = "")]
+    #[arg(long, default_value = "", conflicts_with = "suite")]
     pub tile_sizes: String,
     /// Sweep `distance` over these scales of its split distance (e.g. 0.5,1,2,4); empty: once
     /// at scale 1.
-    #[arg(long, default_value = "")]
+    #[arg(long, default_value = "", conflicts_with = "suite")]
     pub distance_scale: String,
     /// Sweep `cdlod` over these LOD ranges, in node sides of each level (e.g. 2,4,8,16); empty:
     /// once at the default (6).
-    #[arg(long, default_value = "")]
+    #[arg(long, default_value = "", conflicts_with = "suite")]
     pub cdlod_range: String,
     /// Sweep `tess` over these scales of its global tessellation factor (e.g.
     /// 0.25,0.5,1,2,4); empty: once at scale 1.
-    #[arg(long, default_value = "")]
+    #[arg(long, default_value = "", conflicts_with = "suite")]
     pub tess_density: String,
     /// Draw a flat Earth (no curvature drop).
     #[arg(long)]
@@ -129,7 +137,7 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value_t = SkirtsArg::Needed)]
     pub skirts: SkirtsArg,
     /// Nodes per frame the CPU oracle checks by brute force (0: no oracle).
-    #[arg(long, default_value_t = 12)]
+    #[arg(long, default_value_t = 12, conflicts_with = "suite")]
     pub oracle_nodes: u32,
     /// Skip the image-space error (and the `full` reference render it needs).
     #[arg(long)]
@@ -164,6 +172,11 @@ pub struct BenchArgs {
 }
 
 impl BenchArgs {
+    /// `--replays`, 1 when not given.
+    pub fn replays(&self) -> u32 {
+        self.replays.unwrap_or(1)
+    }
+
     /// The options besides the suite file's that change what a flight draws or measures
     /// (the patch, curvature, culling, carried selection, skirts, look, normal maps, the
     /// image error and its holes), in words: a suite flight's record holds them, and
@@ -294,5 +307,45 @@ mod tests {
             assert_ne!(settings(option), default, "{option:?}");
         }
         assert_eq!(settings(&["--resume", "--overwrite"]), default);
+    }
+
+    /// Beside --suite, an option its `[run]` table sets is refused naming both (it would be
+    /// ignored); --replays is taken, and every option parses without --suite.
+    #[test]
+    fn the_suites_run_options_are_refused_beside_it() {
+        for (flag, value) in [
+            ("--size", "320x180"),
+            ("--fov", "60"),
+            ("--frames", "4"),
+            ("--warmup", "0"),
+            ("--settle", "5"),
+            ("--fps", "10"),
+            ("--modes", "bounded"),
+            ("--tau", "1"),
+            ("--clipmap-n", "129"),
+            ("--tile-sizes", "9"),
+            ("--distance-scale", "2"),
+            ("--cdlod-range", "4"),
+            ("--tess-density", "2"),
+            ("--oracle-nodes", "3"),
+        ] {
+            let with_suite = ["aerie", "--suite", "s.toml", "--out", "o", flag, value];
+            let err = Bench::try_parse_from(with_suite)
+                .err()
+                .expect(flag)
+                .to_string();
+            assert!(
+                err.contains(flag) && err.contains("--suite"),
+                "{flag}: {err}"
+            );
+            let alone = ["aerie", "--dem", "d.hgt", "--out", "o", flag, value];
+            Bench::try_parse_from(alone)
+                .map_err(|e| format!("{flag}: {e}"))
+                .unwrap();
+        }
+        let replayed = ["aerie", "--suite", "s.toml", "--out", "o", "--replays", "3"];
+        assert_eq!(Bench::try_parse_from(replayed).unwrap().a.replays, Some(3));
+        let plain = ["aerie", "--dem", "d.hgt", "--out", "o"];
+        assert_eq!(Bench::try_parse_from(plain).unwrap().a.replays(), 1);
     }
 }

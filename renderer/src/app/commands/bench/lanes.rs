@@ -232,7 +232,7 @@ pub(super) fn replay(
     let measured: Vec<usize> = (0..lanes.len()).filter(|&i| lanes[i].reported).collect();
     let m = measured.len();
     let started = Instant::now();
-    for replay in 1..a.replays {
+    for replay in 1..a.replays() {
         for &i in &measured {
             let lane = &mut lanes[i];
             let fresh = inputs.open(lane.config, source.clone(), |_| {})?;
@@ -275,7 +275,7 @@ pub(super) fn replay(
         eprintln!(
             "bench: replay {}/{} of {total_frames} frames × {m} configurations, {:.0} s elapsed",
             replay + 1,
-            a.replays,
+            a.replays(),
             started.elapsed().as_secs_f64()
         );
     }

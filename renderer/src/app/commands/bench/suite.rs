@@ -54,6 +54,8 @@ pub(crate) struct SuitePaths<'a> {
     /// (`BenchArgs::result_settings`): part of each flight's fingerprint, so `--resume` never
     /// takes a flight run with other ones.
     pub command_line: String,
+    /// `--replays`: replaces the suite's `run.replays` (in its flights' records too).
+    pub replays: Option<u32>,
 }
 
 /// Largest suite file read.
@@ -72,7 +74,8 @@ pub(super) fn run(paths: &SuitePaths, flight: &mut FlightRunner) -> Result<(), F
     }
     let text =
         std::fs::read_to_string(file).map_err(|e| bad_input(format!("--suite {name}: {e}")))?;
-    let suite = parse_suite(&text, &name).map_err(bad_input)?;
+    let mut suite = parse_suite(&text, &name).map_err(bad_input)?;
+    suite.run.replays = paths.replays.unwrap_or(suite.run.replays);
     let root = match paths.data {
         Some(d) => d.to_path_buf(),
         None => file.parent().map(Path::to_path_buf).unwrap_or_default(),

@@ -9,7 +9,8 @@
 //! frames = 24                 # measured frames per flight (+ warmup)
 //! warmup = 3
 //! settle = 30                 # start-up fill: at most 30 frames at the first pose (default 0)
-//! replays = 3                 # fly the measured frames 3 times, each frame's fastest kept (default 1)
+//! replays = 3                 # fly the measured frames 3 times, each frame's fastest kept (default 1;
+//!                              # `--replays` replaces it)
 //! fps = 10.0
 //! modes = ["bounded", "clipmap", "distance", "cdlod"]
 //! tau = [0.5, 1, 2, 5]
