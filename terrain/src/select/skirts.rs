@@ -384,6 +384,18 @@ impl LevelGrid {
 mod tests {
     use super::*;
 
+    /// The grids' walk looking each same-level pair up from both sides (the reference the
+    /// one-sided walk must equal).
+    fn walk_both_sides(
+        grids: &LevelGrids,
+        nodes: &[(u32, u32, u32, f32)],
+        resolution: &[u32],
+        folds: &[bool],
+    ) -> NodeSkirts {
+        let find = |l, x, y| grids.get(l, x, y);
+        walk_neighbours(nodes, resolution, folds, find, grids.overlap, false)
+    }
+
     fn xorshift(seed: &mut u64) -> u64 {
         *seed ^= *seed << 13;
         *seed ^= *seed >> 7;
@@ -447,14 +459,7 @@ mod tests {
                 "case {case}: {nodes:?}"
             );
             // Each same-level pair looked up from both sides gives the same.
-            let both_sides = walk_neighbours(
-                &nodes,
-                &resolution,
-                &folds,
-                |l, x, y| grids.get(l, x, y),
-                grids.overlap,
-                false,
-            );
+            let both_sides = walk_both_sides(&grids, &nodes, &resolution, &folds);
             assert_eq!(both_sides, want, "case {case}: {nodes:?}");
             if !grids.overlap {
                 stopped_early += grids
@@ -635,14 +640,7 @@ mod tests {
             let resolution: Vec<u32> = nodes.iter().map(|n| n.0 + (n.3 as u32) % 2).collect();
             let folds = vec![false; nodes.len()];
             let grids = LevelGrids::of(&nodes).expect("a small box");
-            let both_sides = walk_neighbours(
-                &nodes,
-                &resolution,
-                &folds,
-                |l, x, y| grids.get(l, x, y),
-                grids.overlap,
-                false,
-            );
+            let both_sides = walk_both_sides(&grids, &nodes, &resolution, &folds);
             assert_eq!(
                 node_skirts(&nodes, &resolution, &folds),
                 both_sides,
