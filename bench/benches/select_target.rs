@@ -47,16 +47,24 @@ fn selection_target(c: &mut Criterion) {
             // selection's.
             let mut times = vec![f64::INFINITY; cams.len()];
             let (mut carried, mut drawn) = (0u64, 0u64);
+            // Ring tiles walked per frame, and of them for their record's age (the last pass).
+            let (mut walked, mut aged) = (vec![0u32; cams.len()], vec![0u32; cams.len()]);
             for _ in 0..3 {
                 let mut sel = Selection::default();
-                for (cam, least) in cams.iter().zip(times.iter_mut()) {
+                for (k, (cam, least)) in cams.iter().zip(times.iter_mut()).enumerate() {
                     let t = thread_cpu_us();
                     black_box(run(&scene, cam, &params, &mut sel));
                     *least = least.min(thread_cpu_us() - t);
                     carried += sel.carry.stats.carried_nodes as u64;
                     drawn += sel.items.len() as u64;
+                    walked[k] = sel.carry.stats.walked_tiles;
+                    aged[k] = sel.carry.stats.aged_tiles;
                 }
             }
+            // The first frame walks every ring tile: left out.
+            let (walked, aged) = (&mut walked[1..], &mut aged[1..]);
+            walked.sort_unstable();
+            aged.sort_unstable();
             times.sort_by(f64::total_cmp);
             let at = |q: f64| times[((times.len() - 1) as f64 * q).round() as usize];
             eprintln!(
@@ -68,6 +76,17 @@ fn selection_target(c: &mut Criterion) {
                 sel.items.len(),
                 100.0 * carried as f64 / drawn.max(1) as f64
             );
+            if carry {
+                let med = |v: &[u32]| v[v.len() / 2];
+                eprintln!(
+                    "select_target {}: ring tiles walked per frame median {}, max {}; of them for their record's age median {}, max {}",
+                    scene.name,
+                    med(walked),
+                    walked[walked.len() - 1],
+                    med(aged),
+                    aged[aged.len() - 1]
+                );
+            }
         }
         // The seen parts (`SelectParams::seen_quadrants`) on and off, interleaved frame by
         // frame in one process (the order swapped each pass), each frame's least of three: on

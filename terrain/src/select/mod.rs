@@ -24,7 +24,7 @@ pub use bound::{
     box_vertical_gain, curvature_interpolation_error, frustum_vertical_gain, min_view_depth,
     projected_error_px, tile_aabb,
 };
-pub use carry::{Carry, CarryStats};
+pub use carry::{Carry, CarryStats, AGED_WALKS_PER_FRAME, AGE_GRACE};
 pub use cdlod::{box_distance, cdlod_decide, cdlod_range_m, CdlodDecision};
 pub use horizon::{footprint, Footprint, Horizon, HorizonSet, MAX_OCCLUDERS, SECTORS};
 pub use node_cache::NodeCache;
