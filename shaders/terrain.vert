@@ -1,6 +1,6 @@
 #version 450
 // Clipmap tiles: one instance per tile, vertices generated from gl_VertexIndex (grid, then the
-// skirt under the perimeter), heights from the level's toroidal texture (r = 0) or from the
+// skirts under the perimeter, a ring per drawn stride), heights from the level's toroidal texture (r = 0) or from the
 // refined-tile pool r, positions relative to the eye with the Earth-curvature drop
 // (DESIGN.md "The terrain technique", "Precision", "Earth curvature"); geographic grids on the
 // WGS84 ellipsoid from each node's relative-to-eye frame, projected (UTM) grids there from each
@@ -89,6 +89,14 @@ vec2 morph_vertex(TileInstance t, ivec2 ij, float k1, float k2, inout float h) {
     return f;
 }
 
+// Perimeter vertex k of a node of n quads a side: the same walk as
+// terrain::mesh::perimeter_vertex (south edge west→east, east, north, west).
+ivec2 perimeter_ij(int n, int k) {
+    int e = k / n;
+    int s = k % n;
+    return e == 0 ? ivec2(s, 0) : e == 1 ? ivec2(n, s) : e == 2 ? ivec2(n - s, n) : ivec2(0, n - s);
+}
+
 void main() {
     TileInstance t = tiles[gl_InstanceIndex];
     // Every instance is one m×m node; its vertex spacing is `step` samples.
@@ -97,14 +105,17 @@ void main() {
     int vi = gl_VertexIndex;
     bool skirt = vi >= side * side;
     ivec2 ij;
+    // A skirt vertex: perimeter vertex pk of the ring of the stride its mesh is drawn at
+    // (terrain::mesh::skirt_vertex: rings for strides 1, 2, 4).
+    int pk = 0;
+    int skirt_stride = 1;
     if (!skirt) {
         ij = ivec2(vi % side, vi / side);
     } else {
-        // Same perimeter walk as terrain::mesh::perimeter_vertex.
-        int k = vi - side * side;
-        int e = k / n;
-        int s = k % n;
-        ij = e == 0 ? ivec2(s, 0) : e == 1 ? ivec2(n, s) : e == 2 ? ivec2(n - s, n) : ivec2(0, n - s);
+        int r = vi - side * side;
+        skirt_stride = 1 << (r / (4 * n));
+        pk = r % (4 * n);
+        ij = perimeter_ij(n, pk);
     }
     int step = int(t.step);
     // Vertices past the last valid sample collapse onto the first vertex at or past it, so the
@@ -112,6 +123,17 @@ void main() {
     ivec2 lim = (frame.grid_size.xy - 1 - t.origin_sample + step - 1) / step;
     ij = min(ij, lim);
     float h = fetch(t, ij);
+    // A skirt vertex hangs skirt_m below the lowest of its perimeter vertex and that vertex's
+    // two neighbours at the drawn stride (terrain::mesh::skirt_bottom), so the skirt's bottom
+    // between every other vertex lies below the edge: the neighbours' lower height here, the
+    // vertex's own after any morph below.
+    float skirt_low = 1e30;
+    if (skirt) {
+        int p = 4 * n;
+        float before = fetch(t, min(perimeter_ij(n, (pk + p - skirt_stride) % p), lim));
+        float after = fetch(t, min(perimeter_ij(n, (pk + skirt_stride) % p), lim));
+        skirt_low = min(before, after);
+    }
     // Heights per sample along the grid's axes, from central differences at the drawn
     // resolution (neighbours outside the node come from the same texture; a pool slot clamps at
     // its edge): the shading normal.
@@ -140,7 +162,6 @@ void main() {
         }
         g.geo_n[9] = vec4(0.0);
     }
-    float skirt_m = skirt ? t.skirt_m : 0.0;
     // CDLOD: the factors from the unmorphed vertex's distance to the eye (the reference's
     // `eyeDist`), then the vertex morphed.
     vec2 f = vec2(ij);
@@ -158,13 +179,14 @@ void main() {
         float k2 = quadrant ? morph_k(t.morph.zw, dist) : 0.0;
         f = morph_vertex(t, ij, k1, k2, h);
     }
+    float h_drawn = skirt ? min(skirt_low, h) - t.skirt_m : h;
     v_grid = vec2(t.origin_sample) + f * float(step);
     v_height = h;
     // The level whose samples (and normal map) the node is drawn from.
     v_tile = (t.refinement == 0u ? t.level : uint(findMSB(t.step))) | (t.refinement << 8);
     if (geo) {
         // On the ellipsoid (geographic or projected): the node's frame plus the vertex's offset.
-        GeoVertex gv = geo_vertex(g, (f - vec2(n / 2)) * float(step), h - skirt_m, dh);
+        GeoVertex gv = geo_vertex(g, (f - vec2(n / 2)) * float(step), h_drawn, dh);
         v_rel = gv.rel;
         v_normal = gv.normal;
         v_up = gv.up;
@@ -173,7 +195,7 @@ void main() {
         return;
     }
     vec2 xy = t.origin_rel + f * float(step) * frame.grid_spacing.xy;
-    float z = h - frame.grid_spacing.z - frame.grid_spacing.w * dot(xy, xy) - skirt_m;
+    float z = h_drawn - frame.grid_spacing.z - frame.grid_spacing.w * dot(xy, xy);
     vec2 slope = dh / frame.grid_spacing.xy;
     v_rel = vec3(xy, z);
     v_normal = normalize(vec3(-slope.x, -slope.y, 1.0));

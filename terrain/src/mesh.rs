@@ -81,11 +81,32 @@ mod tests {
     }
 }
 
-/// Vertices of a tile with `side` vertices per side plus its skirt: `side²` grid vertices,
-/// then one skirt vertex under each of the `4(side − 1)` perimeter vertices (see
-/// [`perimeter_vertex`]).
+/// Vertices of a tile with `side` vertices per side plus its skirts: `side²` grid vertices,
+/// then three rings of skirt vertices, one per stride the tile is drawn at (1, 2 and 4:
+/// [`SKIRT_STRIDES`]), each one vertex under each of the `4(side − 1)` perimeter vertices (see
+/// [`perimeter_vertex`]; [`skirt_vertex`]).
 pub fn skirted_vertex_count(side: u32) -> u32 {
-    side * side + 4 * (side - 1)
+    side * side + SKIRT_STRIDES * 4 * (side - 1)
+}
+
+/// Rings of skirt vertices: strides 1, 2 and 4 (the whole, quadrant and sixteenth meshes).
+pub const SKIRT_STRIDES: u32 = 3;
+
+/// Index of the skirt vertex under perimeter vertex `k` of a tile of `side` vertices drawn
+/// over every `stride`-th vertex (1, 2 or 4). It hangs below the lowest of perimeter vertices
+/// k − stride, k and k + stride ([`skirt_bottom`]; the vertex shader reads the three), so that
+/// a skirt's bottom between two of them lies below the edge's vertices on both segments it
+/// spans.
+pub fn skirt_vertex(side: u32, stride: u32, k: u32) -> u32 {
+    let n = side - 1;
+    side * side + stride.trailing_zeros() * 4 * n + k % (4 * n)
+}
+
+/// The height of a skirt vertex: `reach` below the lowest of the perimeter vertex it hangs
+/// under and its two neighbours along the perimeter at the drawn stride (`shaders/terrain.vert`
+/// forms the same).
+pub fn skirt_bottom(before: f32, at: f32, after: f32, reach: f32) -> f32 {
+    before.min(at).min(after) - reach
 }
 
 /// Grid position (i, j) of perimeter vertex `k` ∈ [0, 4(side−1)): south edge west→east, east edge
@@ -102,9 +123,8 @@ pub fn perimeter_vertex(side: u32, k: u32) -> (u32, u32) {
 }
 
 /// Triangle-list indices of a tile of `side × side` vertices and its skirt: the grid triangles of
-/// [`tile_indices`] (as u32), then two triangles per perimeter segment joining the edge to the
-/// skirt vertices below it (index `side² + k` for perimeter vertex k). Skirts hide the cracks
-/// between neighbours drawn at different resolutions (DESIGN.md "Cracks").
+/// [`tile_indices`] (as u32), then each edge's skirt ([`skirt_edge_indices`]). Skirts hide the
+/// cracks between neighbours drawn at different resolutions (DESIGN.md "Cracks").
 pub fn skirted_tile_indices(side: u32) -> Vec<u32> {
     assert!(
         (2..=4097).contains(&side),
@@ -115,7 +135,7 @@ pub fn skirted_tile_indices(side: u32) -> Vec<u32> {
 
 /// The same vertices drawn at half the tile's resolution: the triangles of a tile of
 /// `(side + 1) / 2` vertices a side over the tile's even vertices (every other one, the same
-/// diagonal), and skirts under its even perimeter vertices (index `side² + k`, k even) — what a
+/// diagonal), and skirts under its even perimeter vertices (the stride-2 ring) — what a
 /// tile drawn as a quadrant at its parent's resolution shows (the vertex shader's full morph
 /// folds each odd vertex onto an even one, so the odd vertices are not needed). Indices of
 /// the tile's own vertex layout ([`skirted_vertex_count`]), so both draw from one vertex
@@ -164,30 +184,51 @@ fn strided_skirted_indices(side: u32, stride: u32) -> Vec<u32> {
     out
 }
 
-/// The skirt of one edge of a tile of `side` vertices drawn over every `stride`-th vertex:
-/// two triangles per segment joining the edge's vertices to the skirt vertices below them
-/// (index `side² + k` for perimeter vertex k), in the perimeter walk's order
-/// ([`perimeter_vertex`]: edge 0 south, 1 east, 2 north, 3 west). The four edges in order are
-/// the skirt of [`skirted_tile_indices`] and its strided variants, so one edge's skirt can be
-/// drawn alone (a node whose neighbour across the other edges is drawn at its resolution).
+/// The skirt of one edge of a tile of `side` vertices drawn over every `stride`-th vertex (1, 2
+/// or 4), in the perimeter walk's order ([`perimeter_vertex`]: edge 0 south, 1 east, 2 north,
+/// 3 west): per two segments a, b, c of the edge, three triangles — a to b over the skirt
+/// vertex under a, b over the bottom from a to c, b to c over the skirt vertex under c — where
+/// a strip would take four; a last odd segment two ([`skirt_edge_triangles`]). The bottom
+/// needs no vertex under b because each skirt vertex hangs below its neighbours too
+/// ([`skirt_bottom`]): the bottom from a to c lies `reach` below a, b and c, so every triangle
+/// lies below the edge and the skirt covers at least `reach` under it everywhere. The four
+/// edges in order are the skirt of [`skirted_tile_indices`] and its strided variants, so one
+/// edge's skirt can be drawn alone (a node whose neighbour across the other edges is drawn at
+/// its resolution).
 pub fn skirt_edge_indices(side: u32, stride: u32, edge: u32) -> Vec<u32> {
     let n = side - 1;
     assert!(
-        edge < 4 && stride > 0 && n.is_multiple_of(stride),
+        edge < 4 && matches!(stride, 1 | 2 | 4) && n.is_multiple_of(stride),
         "edge {edge} of stride {stride} on a tile side {side}"
     );
     let grid = |k: u32| {
         let (i, j) = perimeter_vertex(side, k % (4 * n));
         j * side + i
     };
-    let skirt = |k: u32| side * side + k % (4 * n);
-    let mut out = Vec::with_capacity((n / stride * 6) as usize);
-    for k in (edge * n..(edge + 1) * n).step_by(stride as usize) {
-        let (a, b) = (grid(k), grid(k + stride));
-        let (sa, sb) = (skirt(k), skirt(k + stride));
-        out.extend_from_slice(&[a, sa, sb, a, sb, b]);
+    let skirt = |k: u32| skirt_vertex(side, stride, k);
+    let segments = n / stride;
+    let mut out = Vec::with_capacity(skirt_edge_triangles(segments) as usize * 3);
+    let first = edge * n;
+    for pair in 0..segments / 2 {
+        let a = first + 2 * pair * stride;
+        let (b, c) = (a + stride, a + 2 * stride);
+        let (ga, gb, gc) = (grid(a), grid(b), grid(c));
+        let (sa, sc) = (skirt(a), skirt(c));
+        out.extend_from_slice(&[ga, sa, gb, gb, sa, sc, gb, sc, gc]);
+    }
+    if segments % 2 == 1 {
+        let a = first + (segments - 1) * stride;
+        let (ga, gb) = (grid(a), grid(a + stride));
+        let (sa, sb) = (skirt(a), skirt(a + stride));
+        out.extend_from_slice(&[ga, sa, sb, ga, sb, gb]);
     }
     out
+}
+
+/// Triangles of one edge's skirt over `segments` segments ([`skirt_edge_indices`]): three per
+/// two, two for a last odd one.
+pub fn skirt_edge_triangles(segments: u32) -> u32 {
+    3 * (segments / 2) + 2 * (segments % 2)
 }
 
 #[cfg(test)]
@@ -236,9 +277,10 @@ mod skirt_tests {
                         );
                         (j / stride) * small + i / stride
                     } else {
-                        let k = v - side * side;
+                        let (ring, k) = ((v - side * side) / (4 * n), (v - side * side) % (4 * n));
+                        assert_eq!(ring, stride.trailing_zeros(), "stride {stride}: ring");
                         assert!(
-                            k.is_multiple_of(stride) && k < 4 * n,
+                            k.is_multiple_of(stride),
                             "stride {stride}: skirt {k} of a vertex off the coarse grid"
                         );
                         small * small + k / stride
@@ -262,10 +304,11 @@ mod skirt_tests {
             let n = side - 1;
             for edge in 0..4 {
                 let idx = skirt_edge_indices(side, stride, edge);
-                assert_eq!(idx.len() as u32, n / stride * 6);
+                assert_eq!(idx.len() as u32, skirt_edge_triangles(n / stride) * 3);
                 for &v in &idx {
                     let k = if v >= side * side {
-                        v - side * side
+                        assert_eq!((v - side * side) / (4 * n), stride.trailing_zeros());
+                        (v - side * side) % (4 * n)
                     } else {
                         let (i, j) = (v % side, v / side);
                         (0..4 * n)
@@ -288,13 +331,128 @@ mod skirt_tests {
         let grid: Vec<u32> = tile_indices(side).into_iter().map(u32::from).collect();
         assert_eq!(&idx[..grid.len()], &grid[..]);
         let skirts = &idx[grid.len()..];
-        assert_eq!(skirts.len() as u32, 4 * (side - 1) * 6);
+        assert_eq!(skirts.len() as u32, 4 * skirt_edge_triangles(side - 1) * 3);
         assert!(idx.iter().all(|&k| k < skirted_vertex_count(side)));
-        // Every skirt vertex is used, and every perimeter grid vertex is joined to a skirt.
+        // Every perimeter grid vertex is joined to a skirt, and the skirt vertices used are
+        // those under every other vertex of an edge (its corners included).
         for k in 0..4 * (side - 1) {
-            assert!(skirts.contains(&(side * side + k)));
             let (i, j) = perimeter_vertex(side, k);
             assert!(skirts.contains(&(j * side + i)));
+            let under = skirts.contains(&skirt_vertex(side, 1, k));
+            assert_eq!(under, k % (side - 1) % 2 == 0, "skirt vertex {k}");
         }
+    }
+
+    /// Across one edge (a vertical slice at every x along it), the skirt's triangles with
+    /// their bottoms at [`skirt_bottom`] cover at least `reach` below the drawn edge and never
+    /// rise above it — whatever the heights (random profiles with sharp notches and spikes),
+    /// at every stride, with an even and an odd number of segments. A strip's bottom under
+    /// each vertex at its own height less `reach` passes the first check but the three-per-two
+    /// triangles need the bottoms below the neighbours: the check catches bottoms at the
+    /// vertex's own height (they rise above a notch between them).
+    #[test]
+    fn an_edge_skirt_covers_reach_below_the_edge_and_nothing_above() {
+        let mut seed = 0x5c1e7u64;
+        let mut rnd = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for (side, stride) in [
+            (9u32, 1u32),
+            (17, 1),
+            (9, 2),
+            (17, 2),
+            (9, 4),
+            (17, 4),
+            (13, 4),
+        ] {
+            let n = side - 1;
+            for case in 0..40 {
+                let heights: Vec<f32> = (0..4 * n)
+                    .map(|_| (rnd() * 100.0 * if rnd() < 0.3 { 5.0 } else { 1.0 }) as f32)
+                    .collect();
+                let reach = (0.5 + rnd() * 20.0) as f32;
+                let h = |k: u32| heights[(k % (4 * n)) as usize];
+                for edge in 0..4 {
+                    let first = edge * n;
+                    // Each vertex of the skirt as (x along the edge, z).
+                    let at = |v: u32| -> (f32, f32) {
+                        if v >= side * side {
+                            let k = (v - side * side) % (4 * n);
+                            let x = (k + 4 * n - first) % (4 * n);
+                            let z = skirt_bottom(h(k + 4 * n - stride), h(k), h(k + stride), reach);
+                            (x as f32, z)
+                        } else {
+                            let (i, j) = (v % side, v / side);
+                            let k = (0..4 * n)
+                                .filter(|&k| perimeter_vertex(side, k) == (i, j))
+                                .find(|&k| (k + 4 * n - first) % (4 * n) <= n)
+                                .expect("a vertex of this edge");
+                            (((k + 4 * n - first) % (4 * n)) as f32, h(k))
+                        }
+                    };
+                    let tris: Vec<[(f32, f32); 3]> = skirt_edge_indices(side, stride, edge)
+                        .chunks(3)
+                        .map(|t| [at(t[0]), at(t[1]), at(t[2])])
+                        .collect();
+                    // The drawn edge: linear between every stride-th vertex.
+                    let top = |x: f32| {
+                        let s = stride as f32;
+                        let seg = ((x / s).floor() as u32).min(n / stride - 1);
+                        let (x0, x1) = (seg as f32 * s, (seg + 1) as f32 * s);
+                        let (z0, z1) = (h(first + seg * stride), h(first + seg * stride + stride));
+                        z0 + (z1 - z0) * (x - x0) / (x1 - x0)
+                    };
+                    for step in 0..=n * 16 {
+                        let x = step as f32 / 16.0;
+                        // The vertical extent of each triangle at x, merged.
+                        let mut spans: Vec<(f32, f32)> =
+                            tris.iter().filter_map(|t| slice(t, x)).collect();
+                        spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+                        let what =
+                            format!("side {side} stride {stride} case {case} edge {edge} x {x}");
+                        let t = top(x);
+                        let hi = spans.iter().fold(f32::NEG_INFINITY, |m, s| m.max(s.1));
+                        assert!(
+                            hi <= t + 1e-3,
+                            "{what}: the skirt rises to {hi}, the edge is at {t}"
+                        );
+                        // Covered from t − reach up to t without a gap.
+                        let mut reached = t - reach;
+                        for &(lo, up) in &spans {
+                            if lo <= reached + 1e-3 {
+                                reached = reached.max(up);
+                            }
+                        }
+                        assert!(
+                            reached >= t - 1e-3,
+                            "{what}: covered up to {reached} of {t}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// The vertical extent of triangle `t` (x, z) at `x`, if it reaches there.
+    fn slice(t: &[(f32, f32); 3], x: f32) -> Option<(f32, f32)> {
+        let mut zs = Vec::new();
+        for e in 0..3 {
+            let (a, b) = (t[e], t[(e + 1) % 3]);
+            let (lo, hi) = (a.0.min(b.0), a.0.max(b.0));
+            if x < lo || x > hi {
+                continue;
+            }
+            if (b.0 - a.0).abs() < 1e-9 {
+                zs.extend([a.1, b.1]);
+            } else {
+                zs.push(a.1 + (b.1 - a.1) * (x - a.0) / (b.0 - a.0));
+            }
+        }
+        let lo = zs.iter().copied().fold(f32::INFINITY, f32::min);
+        let hi = zs.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        (lo <= hi).then_some((lo, hi))
     }
 }

@@ -114,11 +114,12 @@ impl TileMeshes {
         } else {
             (v.len() as u32, 0)
         };
-        // A strided mesh lists its grid's 6 indices a cell, then each edge's 6 a segment.
+        // A strided mesh lists its grid's 6 indices a cell, then each edge's skirt.
         let n = side - 1;
         let cells = |stride: u32| (n / stride).pow(2) * 6;
+        let skirt = |stride: u32| aerie_terrain::mesh::skirt_edge_triangles(n / stride) * 3;
         let grid = [cells(1), cells(2), if sixteenths { cells(4) } else { 0 }];
-        let edge = [n * 6, n / 2 * 6, if sixteenths { n / 4 * 6 } else { 0 }];
+        let edge = [skirt(1), skirt(2), if sixteenths { skirt(4) } else { 0 }];
         (
             v,
             TileMeshes {
@@ -363,10 +364,12 @@ pub fn fixed_reserve(selected_nodes: usize, projected: bool, overlay_bytes: Opti
         + overlay
 }
 
-/// Triangles of a skirted tile of `q` quads a side (grid 2q², skirt 2 per perimeter edge).
+/// Triangles of a skirted tile of `q` quads a side (grid 2q², each edge's skirt three per two
+/// segments: `mesh::skirt_edge_triangles`).
 pub fn skirted_tile_triangles(q: u32) -> u64 {
+    let skirt = aerie_terrain::mesh::skirt_edge_triangles(q) as u64;
     let q = q as u64;
-    2 * q * q + 8 * q
+    2 * q * q + 4 * skirt
 }
 
 /// What one quadrant drawn at its parent's resolution draws fewer than a whole tile of `q`
@@ -596,7 +599,8 @@ mod tests {
         let whole = skirted_tile_indices(17).len() as u32;
         let coarse = skirted_coarse_tile_indices(17).len() as u32;
         let sixteenth = skirted_sixteenth_tile_indices(17).len() as u32;
-        let edge = [16 * 6, 8 * 6, 4 * 6];
+        // Each edge's skirt: three triangles per two segments (`mesh::skirt_edge_indices`).
+        let edge = [8 * 9, 4 * 9, 2 * 9];
         let after = |k: usize| REPEATED_EDGES * edge[k];
         assert_eq!(
             meshes,
@@ -688,14 +692,16 @@ mod tests {
                             &buffer[at..at + d.index_count as usize]
                         })
                         .collect();
-                    let six = |v: &[u32]| -> Vec<[u32; 6]> {
-                        v.chunks(6).map(|c| c.try_into().unwrap()).collect()
+                    let triangles = |v: &[u32]| -> Vec<[u32; 3]> {
+                        v.chunks(3).map(|c| c.try_into().unwrap()).collect()
                     };
-                    let mut drawn = six(&skirts.concat());
-                    let mut want = six(&(0..4)
-                        .filter(|e| set & (1 << e) != 0)
-                        .flat_map(|e| skirt_edge_indices(side, stride, e))
-                        .collect::<Vec<_>>());
+                    let mut drawn = triangles(&skirts.concat());
+                    let mut want = triangles(
+                        &(0..4)
+                            .filter(|e| set & (1 << e) != 0)
+                            .flat_map(|e| skirt_edge_indices(side, stride, e))
+                            .collect::<Vec<_>>(),
+                    );
                     drawn.sort();
                     want.sort();
                     assert_eq!(drawn, want, "side {side}, stride {stride}, set {set:04b}");
@@ -769,14 +775,15 @@ mod tests {
             let (_, _, sizes) = build_instances(&g, &list, &mut InstanceCaches::default());
             indirect_draws(&sizes, meshes).1
         };
+        // A 16-quad edge's skirt is 24 triangles, an 8-quad one's 12 (three per two segments).
         let grids = 3 * 512 + 128;
         assert_eq!(tris(SkirtRule::None), grids);
-        assert_eq!(tris(SkirtRule::Everywhere), grids + 3 * 128 + 64);
-        // Bare: the first tile's east edge and the second's west and north (96 triangles),
-        // the finer tile's east and north (64) and the quadrant's four (64).
+        assert_eq!(tris(SkirtRule::Everywhere), grids + 3 * 96 + 48);
+        // Bare: the first tile's east edge and the second's west and north (72 triangles),
+        // the finer tile's east and north (48) and the quadrant's four (48).
         assert_eq!(
             tris(SkirtRule::WhereResolutionsDiffer),
-            grids + 3 * 128 + 64 - 224
+            grids + 3 * 96 + 48 - 168
         );
     }
 

@@ -114,9 +114,10 @@ pub(super) struct MeshCosts {
 }
 
 impl MeshCosts {
-    /// For tiles of `q` quads a side (a skirted tile of k quads: 2k² + 8k triangles).
+    /// For tiles of `q` quads a side (a skirted tile of k quads: 2k² triangles and four edges'
+    /// skirts, `mesh::skirt_edge_triangles`).
     pub(super) fn of(q: u32) -> Self {
-        let tris = |k: u32| 2 * k * k + 8 * k;
+        let tris = |k: u32| 2 * k * k + 4 * crate::mesh::skirt_edge_triangles(k);
         Self {
             whole: tris(q),
             quadrant: tris(q / 2),

@@ -356,9 +356,9 @@ fn choose_parts_draws_the_fewest_triangles_that_meet_tau() {
     assert_eq!(
         cost,
         MeshCosts {
-            whole: 640,
-            quadrant: 192,
-            sixteenth: 64,
+            whole: 608,
+            quadrant: 176,
+            sixteenth: 56,
             instance: 64,
         }
     );
@@ -373,7 +373,7 @@ fn choose_parts_draws_the_fewest_triangles_that_meet_tau() {
             rho_norm: 0.9
         }
     );
-    // Three sixteenths and an unseen child: still one quadrant (256 < 3 × 128).
+    // Three sixteenths and an unseen child: still one quadrant (240 < 3 × 120).
     assert_eq!(
         choose_parts(&[fine, unseen, fine, fine], true, cost),
         Parts::AsQuadrant {
@@ -381,16 +381,16 @@ fn choose_parts_draws_the_fewest_triangles_that_meet_tau() {
             rho_norm: 0.9
         }
     );
-    // Three sixteenths, one quadrant: 640 < 704, child by child.
+    // Three sixteenths, one quadrant: 600 < 672, child by child.
     let three = [fine, coarse_only, fine, fine];
     assert_eq!(choose_parts(&three, true, cost), Parts::Children);
     assert_eq!(choose_parts(&three, false, cost), Parts::Children);
-    // Two sixteenths, two quadrants: 768 ≥ 704, drawn whole (its own ρ when it meets τ
+    // Two sixteenths, two quadrants: 720 ≥ 672, drawn whole (its own ρ when it meets τ
     // itself, else the largest child's at its resolution).
     let two = [fine, coarse_only, fine, coarse_only];
     assert_eq!(choose_parts(&two, true, cost), Parts::Whole(None));
     assert_eq!(choose_parts(&two, false, cost), Parts::Whole(Some(0.8)));
-    // Without sixteenths: three quadrants (768) whole, two and no terrain (512) apart.
+    // Without sixteenths: three quadrants (720) whole, two and no terrain (480) apart.
     let q = seen(None, 0.8);
     assert_eq!(
         choose_parts(&[q, q, none, q], false, cost),
