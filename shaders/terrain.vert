@@ -1,11 +1,11 @@
 #version 450
 // Clipmap tiles: one instance per tile, vertices generated from gl_VertexIndex (grid, then the
-// skirts under the perimeter, a ring per drawn stride), heights from the level's toroidal texture (r = 0) or from the
-// refined-tile pool r, positions relative to the eye with the Earth-curvature drop
-// (DESIGN.md "The terrain technique", "Precision", "Earth curvature"); geographic grids on the
-// WGS84 ellipsoid from each node's relative-to-eye frame, projected (UTM) grids there from each
-// node's polynomials (geo_node.glsl; render/geo_instances.rs `emulate_vertex` repeats its
-// arithmetic: keep them in step).
+// skirts under the perimeter, a ring per drawn stride), heights from the level's toroidal
+// texture (r = 0) or from the refined-tile pool r, positions relative to the eye with the
+// Earth-curvature drop (DESIGN.md "The terrain technique", "Precision", "Earth curvature");
+// geographic grids on the WGS84 ellipsoid from each node's relative-to-eye frame, projected
+// (UTM) grids there from each node's polynomials (geo_node.glsl; render/geo_instances.rs
+// `emulate_vertex` repeats its arithmetic: keep them in step).
 #extension GL_GOOGLE_include_directive : require
 #include "gpu_types.glsl"
 #include "geo_node.glsl"

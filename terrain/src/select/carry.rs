@@ -74,7 +74,7 @@ pub(super) fn max_age(level: u32, tx: u32, ty: u32) -> u64 {
 /// Records walked afresh for their age in one frame, at most (but see [`AGE_GRACE`]). The
 /// staggered ages alone leave waves: records of one age made in one frame fall due together
 /// every time, and two waves meeting made the 16385² plane's slowest frames (10–16 walked for
-/// age where the median frame walks 5).
+/// age where the median frame walks 4).
 pub const AGED_WALKS_PER_FRAME: u32 = 6;
 
 /// Frames a record due by its age may wait for a frame with room: past `max_age + AGE_GRACE`
