@@ -20,6 +20,8 @@ pub mod select;
 pub mod source;
 pub mod store;
 pub mod stream;
+#[cfg(test)]
+mod test_rng;
 pub mod tiles;
 
 pub use heightfield::{GeoReference, Heightfield};

@@ -352,13 +352,7 @@ mod skirt_tests {
     /// vertex's own height (they rise above a notch between them).
     #[test]
     fn an_edge_skirt_covers_reach_below_the_edge_and_nothing_above() {
-        let mut seed = 0x5c1e7u64;
-        let mut rnd = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = crate::test_rng::unit(0x5c1e7u64);
         for (side, stride) in [
             (9u32, 1u32),
             (17, 1),

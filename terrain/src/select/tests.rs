@@ -87,13 +87,7 @@ fn distance_mode_has_hysteresis() {
 /// vertically by up to ε, the exact screen displacement never exceeds ε·f·g/(z_min − ε).
 #[test]
 fn vertical_gain_bounds_vertical_errors_on_screen() {
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
-    let mut rnd = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rnd = crate::test_rng::unit(0x2545_f491_4f6c_dd1du64);
     let (w, h) = (320u32, 180u32);
     let mut checked = 0;
     let mut tightest: f64 = 0.0;
@@ -257,13 +251,7 @@ fn curvature_lowers_the_box_by_the_far_drop() {
 /// attitude and boxes from a metre to the Earth's radius away.
 #[test]
 fn view_corners_are_transform_point3_bit_for_bit() {
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
-    let mut next = || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = crate::test_rng::unit(0x2545_f491_4f6c_dd1d);
     for _ in 0..2000 {
         let scale = 10f64.powf(6.8 * next());
         let eye = DVec3::new(next() - 0.5, next() - 0.5, next()) * scale;
