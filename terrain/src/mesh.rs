@@ -231,6 +231,37 @@ pub fn skirt_edge_triangles(segments: u32) -> u32 {
     3 * (segments / 2) + 2 * (segments % 2)
 }
 
+/// Triangle-list indices that fill the crack along edge `edge` (0 south, 1 east, 2 north, 3 west)
+/// of a tile of `side` vertices drawn over every `stride`-th vertex, against a neighbour drawn
+/// at twice that stride whose vertices are every other one of this edge's (`select::node_skirts`'
+/// fills): per two segments (a, b, c) the triangle a–b–c. Between the coarse segment a–c and the
+/// fine polyline a–b–c lies exactly that triangle, whichever side of a–c vertex b is. Grid
+/// vertices only (no skirt vertex); a last odd segment, which no coarse segment spans, gets none.
+pub fn fill_edge_indices(side: u32, stride: u32, edge: u32) -> Vec<u32> {
+    let n = side - 1;
+    assert!(
+        edge < 4 && matches!(stride, 1 | 2 | 4) && n.is_multiple_of(stride),
+        "edge {edge} of stride {stride} on a tile side {side}"
+    );
+    let grid = |k: u32| {
+        let (i, j) = perimeter_vertex(side, k % (4 * n));
+        j * side + i
+    };
+    let segments = n / stride;
+    let first = edge * n;
+    (0..segments / 2)
+        .flat_map(|pair| {
+            let a = first + 2 * pair * stride;
+            [grid(a), grid(a + stride), grid(a + 2 * stride)]
+        })
+        .collect()
+}
+
+/// Triangles of one edge's fill over `segments` segments ([`fill_edge_indices`]): one per two.
+pub fn fill_edge_triangles(segments: u32) -> u32 {
+    segments / 2
+}
+
 #[cfg(test)]
 mod skirt_tests {
     use super::*;
@@ -423,6 +454,67 @@ mod skirt_tests {
                         assert!(
                             reached >= t - 1e-3,
                             "{what}: covered up to {reached} of {t}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// Across one edge (a vertical slice at every x along it), the fill's triangles span
+    /// exactly the gap between the drawn edge and the neighbour's edge drawn at twice the
+    /// stride through every other of its vertices — from the lower of the two to the higher,
+    /// nothing above or below —, whatever the heights, at every stride; and they join only
+    /// this edge's grid vertices, one triangle per two segments.
+    #[test]
+    fn an_edge_fill_spans_exactly_the_gap_to_the_coarser_edge() {
+        let mut rnd = crate::test_rng::unit(0xf111u64);
+        for (side, stride) in [(9u32, 1u32), (17, 1), (9, 2), (17, 2), (9, 4), (17, 4)] {
+            let n = side - 1;
+            for case in 0..40 {
+                let heights: Vec<f32> = (0..4 * n)
+                    .map(|_| (rnd() * 100.0 * if rnd() < 0.3 { 5.0 } else { 1.0 }) as f32)
+                    .collect();
+                let h = |k: u32| heights[(k % (4 * n)) as usize];
+                for edge in 0..4 {
+                    let first = edge * n;
+                    let idx = fill_edge_indices(side, stride, edge);
+                    assert_eq!(idx.len() as u32, fill_edge_triangles(n / stride) * 3);
+                    let at = |v: u32| -> (f32, f32) {
+                        assert!(v < side * side, "a grid vertex");
+                        let (i, j) = (v % side, v / side);
+                        let k = (0..4 * n)
+                            .filter(|&k| perimeter_vertex(side, k) == (i, j))
+                            .find(|&k| (k + 4 * n - first) % (4 * n) <= n)
+                            .expect("a vertex of this edge");
+                        let x = (k + 4 * n - first) % (4 * n);
+                        assert!(x.is_multiple_of(stride), "a vertex of the drawn stride");
+                        (x as f32, h(k))
+                    };
+                    let tris: Vec<[(f32, f32); 3]> = idx
+                        .chunks(3)
+                        .map(|t| [at(t[0]), at(t[1]), at(t[2])])
+                        .collect();
+                    // An edge drawn linear between every `s`-th vertex.
+                    let line = |s: u32, x: f32| {
+                        let seg = ((x / s as f32).floor() as u32).min(n / s - 1);
+                        let (x0, x1) = ((seg * s) as f32, ((seg + 1) * s) as f32);
+                        let (z0, z1) = (h(first + seg * s), h(first + seg * s + s));
+                        z0 + (z1 - z0) * (x - x0) / (x1 - x0)
+                    };
+                    for step in 0..=n * 16 {
+                        let x = step as f32 / 16.0;
+                        let (fine, coarse) = (line(stride, x), line(2 * stride, x));
+                        let (want_lo, want_hi) = (fine.min(coarse), fine.max(coarse));
+                        let spans: Vec<(f32, f32)> =
+                            tris.iter().filter_map(|t| slice(t, x)).collect();
+                        let what =
+                            format!("side {side} stride {stride} case {case} edge {edge} x {x}");
+                        let lo = spans.iter().fold(f32::INFINITY, |m, s| m.min(s.0));
+                        let hi = spans.iter().fold(f32::NEG_INFINITY, |m, s| m.max(s.1));
+                        assert!(
+                            (lo - want_lo).abs() < 1e-3 && (hi - want_hi).abs() < 1e-3,
+                            "{what}: the fill spans {lo}..{hi}, the gap {want_lo}..{want_hi}"
                         );
                     }
                 }

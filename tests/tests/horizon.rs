@@ -373,7 +373,7 @@ fn the_selection_drops_only_hidden_nodes() {
             );
         }
         let triangles = |sel: &Selection| -> u64 {
-            let tris = |k: u64| aerie::render::tile_instances::skirted_tile_triangles(k as u32);
+            let tris = |k: u64| aerie::render::terrain_draws::skirted_tile_triangles(k as u32);
             let q = (M - 1) as u64;
             sel.items
                 .iter()

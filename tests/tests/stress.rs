@@ -749,7 +749,7 @@ fn tau_viewport_and_fov_extremes_keep_selection_valid() {
                 check_selection(s, &cam, (w, h), &params, &sel, &what);
                 // Triangles drawn (a node drawn at a coarser level's resolution draws fewer:
                 // a coarse τ may draw more, smaller parts than a fine one draws nodes).
-                let tris = |k: u64| aerie::render::tile_instances::skirted_tile_triangles(k as u32);
+                let tris = |k: u64| aerie::render::terrain_draws::skirted_tile_triangles(k as u32);
                 let q = s.bake.params.tile_size as u64 - 1;
                 let triangles: u64 = sel
                     .items

@@ -49,6 +49,7 @@ pub mod pool_atlas;
 pub mod resources;
 pub mod sky_pass;
 pub mod stats;
+pub mod terrain_draws;
 pub mod terrain_pass;
 pub mod tess_pass;
 pub mod tile_instances;

@@ -62,10 +62,9 @@ pub use crate::render::pool_atlas::PoolSlots;
 use crate::render::pool_atlas::{PoolAtlas, PoolLimits};
 pub use crate::render::stats::selection_digest;
 use crate::render::stats::{selection_stats, FrameStats};
+pub use crate::render::terrain_draws::{indirect_draws, TileMeshes};
 use crate::render::tile_instances::{build_instances, InstanceCaches, InstanceFrame};
-pub use crate::render::tile_instances::{
-    fixed_reserve, indirect_draws, slot_placement, SkirtRule, TileMeshes,
-};
+pub use crate::render::tile_instances::{fixed_reserve, slot_placement, SkirtRule};
 
 /// Largest number of m×m instances one frame may draw (144 bytes each per frame in flight, 448
 /// on a projected grid): the instance buffers grow on demand up to this — `full` on a large

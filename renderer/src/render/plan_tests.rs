@@ -16,7 +16,7 @@ use aerie_terrain::Heightfield;
 use super::*;
 use crate::render::jobs::{split_into_submissions, ImageUpload, StagingBudget};
 use crate::render::stats::RESOLUTIONS;
-use crate::render::tile_instances::{EDGE_SETS, INSTANCE_KEYS};
+use crate::render::terrain_draws::{edge_combo, EDGE_COMBOS, INSTANCE_KEYS};
 
 const N: usize = 257;
 const Q: u32 = 16;
@@ -29,6 +29,7 @@ const MESHES: TileMeshes = TileMeshes {
     sixteenth: (2352, 144),
     grid: [1536, 384, 96],
     edge: [48, 24, 12],
+    fill: [24, 12, 6],
 };
 const ALIGN: u64 = 64;
 
@@ -435,10 +436,7 @@ fn instances_are_grouped_by_refinement_and_commands_follow_each_other() {
         want.push((0, grid, first, n));
         want.push((grid, 4 * edge, first, n));
     }
-    assert_eq!(
-        crate::render::tile_instances::draw_ranges(&plan.draws),
-        want
-    );
+    assert_eq!(crate::render::terrain_draws::draw_ranges(&plan.draws), want);
     assert_eq!(INDICES.1, grid + 4 * edge);
     // Selection order inside a group: the two unrefined tiles, west first.
     assert_eq!(plan.instances[0].origin_sample, [0, 0]);
@@ -492,8 +490,8 @@ fn instances_are_grouped_by_refinement_and_commands_follow_each_other() {
     let mut sizes = [0u32; INSTANCE_KEYS];
     (
         sizes[0],
-        sizes[EDGE_SETS + 15],
-        sizes[RESOLUTIONS * EDGE_SETS],
+        sizes[EDGE_COMBOS + edge_combo(15, 0)],
+        sizes[RESOLUTIONS * EDGE_COMBOS],
     ) = (3, 1, 2);
     let (draws, tris) = indirect_draws(&sizes, TileMeshes::default());
     assert!(draws.is_empty() && tris == 0);

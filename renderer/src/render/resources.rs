@@ -17,7 +17,7 @@ use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, GeoPolynomial, Tile
 use crate::render::normal_pass::NormalTargets;
 use crate::render::plan::{PlanState, MAX_INSTANCES};
 use crate::render::pool_atlas::PoolLimits;
-use crate::render::tile_instances::MAX_TERRAIN_DRAWS;
+use crate::render::terrain_draws::MAX_TERRAIN_DRAWS;
 use crate::vk::frame_context::FrameContext;
 use crate::vk::image::{Image2d, ImageDesc};
 use crate::vk::{Buffer, Device, VkError, FRAMES_IN_FLIGHT};

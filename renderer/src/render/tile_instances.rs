@@ -1,12 +1,10 @@
-//! The frame plan's draw records (pure): where a node lies in its pool slot, one
-//! `TileInstance` per drawn node (relative to the eye, grouped by refinement, whole nodes
-//! first, then quadrants drawn at their parent's resolution, then sixteenths drawn at their
-//! grandparent's) and one indexed indirect command per group: whole nodes with the tile's
-//! mesh, quadrants with its coarse mesh (the parent's quarter mesh:
-//! `mesh::skirted_coarse_tile_indices`), sixteenths with every fourth vertex
-//! (`mesh::skirted_sixteenth_tile_indices`). Within a group the records are sorted by the
-//! edges that need a skirt (`select::node_skirts`): the group's grid is one command, and
-//! each set of edges one more (two for opposite edges) drawing only those edges' skirts.
+//! The frame plan's draw records (pure): where a node lies in its pool slot, each drawn node's
+//! skirts and fills (`SkirtRule`, `select::node_skirts`), and one `TileInstance` per drawn node
+//! (relative to the eye), grouped by refinement — whole nodes first, then quadrants drawn at
+//! their parent's resolution, then sixteenths drawn at their grandparent's — and within a
+//! group sorted by the edges that need a skirt, then by those the node fills: the order
+//! `terrain_draws::indirect_draws` issues its commands in, one per group's grids and one per
+//! set of skirted or filled edges.
 
 use glam::DVec3;
 
@@ -18,21 +16,7 @@ use crate::render::gpu::{DrawIndexedIndirect, GeoPolynomial, TileInstance};
 use crate::render::jobs::{FIXED_SLACK_BYTES, OVERLAY_SLACK_BYTES};
 use crate::render::pool_atlas::PoolSlots;
 use crate::render::stats::RESOLUTIONS;
-
-/// Instance groups, each one indirect command: per refinement the whole nodes, then per
-/// refinement the quadrants drawn at their parent's resolution, then per refinement the
-/// sixteenths drawn at their grandparent's.
-pub const DRAW_GROUPS: usize = 3 * RESOLUTIONS;
-
-/// The sets of a node's edges that may need a skirt (`select::ALL_EDGES`' bits).
-pub const EDGE_SETS: usize = 16;
-
-/// The instance records' sort keys: a draw group's, then the node's skirted edges.
-pub const INSTANCE_KEYS: usize = DRAW_GROUPS * EDGE_SETS;
-
-/// The most commands a frame's terrain draw issues: per group its grid, and a command for
-/// each of the 15 non-empty edge sets, two for each of the 2 sets of opposite edges.
-pub const MAX_TERRAIN_DRAWS: usize = DRAW_GROUPS * (1 + 15 + 2);
+use crate::render::terrain_draws::{edge_combo, terrain_draws_bound, EDGE_COMBOS, INSTANCE_KEYS};
 
 /// Which edges of the drawn nodes get a skirt.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -64,119 +48,22 @@ impl SkirtRule {
     }
 }
 
-/// Skirt segments of one edge each mesh's skirt list repeats after its four edges, so that
-/// every run of edges around the tile — south, east, north, west, south, east — is one range
-/// of indices.
-const REPEATED_EDGES: u32 = 2;
-
-/// Where a tile's three meshes lie in the shared index buffer, (first index, index count)
-/// each: the whole tile, its coarse mesh for quadrants drawn at their parent's resolution, and
-/// its sixteenth mesh for sixteenths drawn at their grandparent's (empty when the tile's
-/// quads a side are not a multiple of 4). One vertex layout serves all three
-/// (`mesh::skirted_vertex_count`). Each range is the mesh's grid, then its four edges'
-/// skirts (`mesh::skirt_edge_indices`, south, east, north, west), followed in the buffer by
-/// the south and east skirts again ([`REPEATED_EDGES`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct TileMeshes {
-    pub whole: (u32, u32),
-    pub coarse: (u32, u32),
-    pub sixteenth: (u32, u32),
-    /// Each mesh's grid indices (whole, coarse, sixteenth): its first indices, before its
-    /// skirt's.
-    pub grid: [u32; 3],
-    /// Each mesh's indices of one edge's skirt.
-    pub edge: [u32; 3],
-}
-
-impl TileMeshes {
-    /// The index buffer of a tile of `side` vertices a side — the whole mesh, the coarse one,
-    /// the sixteenth one — and where each lies in it.
-    pub fn indices(side: u32) -> (Vec<u32>, TileMeshes) {
-        use aerie_terrain::mesh::{
-            skirt_edge_indices, skirted_coarse_tile_indices, skirted_sixteenth_tile_indices,
-            skirted_tile_indices,
-        };
-        let sixteenths = side >= 5 && (side - 1).is_multiple_of(4);
-        let mut v = Vec::new();
-        let mut mesh = |stride: u32, skirted: Vec<u32>| {
-            let first = v.len() as u32;
-            let count = skirted.len() as u32;
-            v.extend(skirted);
-            for edge in 0..REPEATED_EDGES {
-                v.extend(skirt_edge_indices(side, stride, edge));
-            }
-            (first, count)
-        };
-        let whole = mesh(1, skirted_tile_indices(side));
-        let coarse = mesh(2, skirted_coarse_tile_indices(side));
-        let sixteenth = if sixteenths {
-            mesh(4, skirted_sixteenth_tile_indices(side))
-        } else {
-            (v.len() as u32, 0)
-        };
-        // A strided mesh lists its grid's 6 indices a cell, then each edge's skirt.
-        let n = side - 1;
-        let cells = |stride: u32| (n / stride).pow(2) * 6;
-        let skirt = |stride: u32| aerie_terrain::mesh::skirt_edge_triangles(n / stride) * 3;
-        let grid = [cells(1), cells(2), if sixteenths { cells(4) } else { 0 }];
-        let edge = [skirt(1), skirt(2), if sixteenths { skirt(4) } else { 0 }];
-        (
-            v,
-            TileMeshes {
-                whole,
-                coarse,
-                sixteenth,
-                grid,
-                edge,
-            },
-        )
-    }
-
-    /// Group `g`'s mesh ([`DRAW_GROUPS`]): its first index, its grid's indices and one
-    /// edge's skirt's.
-    fn of_group(&self, g: usize) -> (u32, u32, u32) {
-        let k = (g / RESOLUTIONS).min(2);
-        let first = [self.whole.0, self.coarse.0, self.sixteenth.0][k];
-        (first, self.grid[k], self.edge[k])
-    }
-}
-
-/// The runs of consecutive edges (around the tile, south → east → north → west → south) that
-/// make up an edge set, (first edge, edges) each: one run, or two for opposite edges.
-fn edge_runs(set: u8) -> ([(u32, u32); 2], usize) {
-    if set & ALL_EDGES == ALL_EDGES {
-        return ([(0, 4), (0, 0)], 1);
-    }
-    let has = |e: u32| set & (1 << (e % 4)) != 0;
-    let mut runs = [(0, 0); 2];
-    let mut n = 0;
-    for e in 0..4 {
-        if has(e) && !has(e + 3) {
-            let mut len = 1;
-            while has(e + len) {
-                len += 1;
-            }
-            runs[n] = (e, len);
-            n += 1;
-        }
-    }
-    (runs, n)
-}
-
 /// A draw item's group: its refinement, offset by [`RESOLUTIONS`] for each level it is drawn
 /// coarser than its own (a quadrant, a sixteenth).
 fn group_of(item: &DrawItem) -> usize {
     item.refinement as usize + item.morph.levels_up() as usize * RESOLUTIONS
 }
 
-/// Each drawn node's skirt: how far it reaches and the edges that get one under `f.skirts`
-/// (see [`SkirtRule`]), in the list's order; one walk over the nodes gives both.
+/// Each drawn node's skirt: how far it reaches, the edges that get one under `f.skirts`
+/// (see [`SkirtRule`]) and those it fills instead, in the list's order; one walk over the
+/// nodes gives all three.
 fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)], memo: &mut SkirtMemo) -> NodeSkirts {
     let n = draw_list.len();
     if f.skirts == SkirtRule::None {
         return NodeSkirts {
             reach: vec![0.0; n],
             edges: vec![0; n],
+            fills: vec![0; n],
         };
     }
     let q = f.tile_quads as u64;
@@ -190,6 +77,8 @@ fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)], memo: &mut SkirtM
     // Every edge of every node keeps a skirt under these rules (a projected grid's nodes'
     // polynomials meet only within their fit).
     let all_edges = f.skirts == SkirtRule::Everywhere || projected;
+    // Fills need an even number of segments on every edge at every drawn stride (1, 2, 4).
+    let fill = !all_edges && q.is_multiple_of(8);
     let mut nodes = Vec::with_capacity(n);
     let mut resolution = Vec::with_capacity(n);
     let mut folds = Vec::with_capacity(n);
@@ -203,9 +92,10 @@ fn skirts_of(f: &InstanceFrame, draw_list: &[(DrawItem, u32)], memo: &mut SkirtM
         // The grid's last sample: an edge on it or past it keeps the skirt its first one keeps.
         on_last.push(((east >= last_x) as u8) << 1 | ((north >= last_y) as u8) << 2);
     }
-    let mut skirts = memo.skirts(&nodes, &resolution, &folds).clone();
-    for (e, last) in skirts.edges.iter_mut().zip(on_last) {
+    let mut skirts = memo.skirts(&nodes, &resolution, &folds, fill).clone();
+    for ((e, filled), last) in skirts.edges.iter_mut().zip(&mut skirts.fills).zip(on_last) {
         *e |= if all_edges { ALL_EDGES } else { last };
+        *filled &= !*e;
     }
     skirts
 }
@@ -269,9 +159,14 @@ pub fn build_instances(
 ) -> (Vec<TileInstance>, Vec<GeoPolynomial>, [u32; INSTANCE_KEYS]) {
     let q = f.tile_quads;
     let eye = f.eye;
-    let NodeSkirts { reach, edges } = skirts_of(f, draw_list, &mut caches.skirts);
+    let NodeSkirts {
+        reach,
+        edges,
+        fills,
+    } = skirts_of(f, draw_list, &mut caches.skirts);
     let geo_cache = &mut caches.geo;
-    let key_of = |k: usize| group_of(&draw_list[k].0) * EDGE_SETS + edges[k] as usize;
+    let key_of =
+        |k: usize| group_of(&draw_list[k].0) * EDGE_COMBOS + edge_combo(edges[k], fills[k]);
     let geo = f.earth.map(|g| {
         geo_cache.begin(g);
         GeoEye::new(g, eye)
@@ -359,86 +254,15 @@ pub fn fixed_reserve(selected_nodes: usize, projected: bool, overlay_bytes: Opti
     let overlay = overlay_bytes.map_or(0, |b| b + OVERLAY_SLACK_BYTES);
     let polynomial = projected as usize * std::mem::size_of::<GeoPolynomial>();
     FIXED_SLACK_BYTES
-        + (std::mem::size_of::<DrawIndexedIndirect>() * MAX_TERRAIN_DRAWS) as u64
+        + (std::mem::size_of::<DrawIndexedIndirect>() * terrain_draws_bound(selected_nodes)) as u64
         + (selected_nodes * (std::mem::size_of::<TileInstance>() + polynomial)) as u64
         + overlay
-}
-
-/// Triangles of a skirted tile of `q` quads a side (grid 2q², each edge's skirt three per two
-/// segments: `mesh::skirt_edge_triangles`).
-pub fn skirted_tile_triangles(q: u32) -> u64 {
-    let skirt = aerie_terrain::mesh::skirt_edge_triangles(q) as u64;
-    let q = q as u64;
-    2 * q * q + 4 * skirt
-}
-
-/// What one quadrant drawn at its parent's resolution draws fewer than a whole tile of `q`
-/// quads: it is drawn with the tile's coarse mesh, the parent's quarter mesh of q/2 quads a
-/// side.
-pub fn quarter_mesh_saving(q: u32) -> u64 {
-    skirted_tile_triangles(q) - skirted_tile_triangles(q / 2)
-}
-
-/// The indexed indirect commands of the instances counted per key ([`INSTANCE_KEYS`],
-/// as [`build_instances`] lays them out), and the triangles they draw. Per group: one
-/// command for every instance's grid — whole nodes the tile's mesh, quadrants its coarse one,
-/// sixteenths the stride-4 one —, then per set of skirted edges one command drawing those
-/// edges' skirts (two for opposite edges) for the instances of that set. Only commands that
-/// draw something are listed; a mesh without indices draws nothing.
-pub fn indirect_draws(
-    key_sizes: &[u32; INSTANCE_KEYS],
-    meshes: TileMeshes,
-) -> (Vec<DrawIndexedIndirect>, u64) {
-    let mut draws = Vec::new();
-    let mut triangles = 0u64;
-    let mut push = |first_index: u32, index_count: u32, first_instance: u32, n: u32| {
-        if index_count > 0 && n > 0 {
-            draws.push(DrawIndexedIndirect {
-                index_count,
-                instance_count: n,
-                first_index,
-                vertex_offset: 0,
-                first_instance,
-            });
-            triangles += n as u64 * (index_count as u64 / 3);
-        }
-    };
-    let mut first_instance = 0u32;
-    for (g, sets) in key_sizes.chunks_exact(EDGE_SETS).enumerate() {
-        let (first, grid, edge) = meshes.of_group(g);
-        push(first, grid, first_instance, sets.iter().sum());
-        for (set, &n) in sets.iter().enumerate() {
-            let (runs, count) = edge_runs(set as u8);
-            for &(from, len) in &runs[..count] {
-                push(first + grid + from * edge, len * edge, first_instance, n);
-            }
-            first_instance += n;
-        }
-    }
-    debug_assert!(draws.len() <= MAX_TERRAIN_DRAWS);
-    (draws, triangles)
-}
-
-/// Each command's (first index, index count, first instance, instance count): what the
-/// tests compare.
-#[cfg(test)]
-pub(crate) fn draw_ranges(draws: &[DrawIndexedIndirect]) -> Vec<(u32, u32, u32, u32)> {
-    draws
-        .iter()
-        .map(|d| {
-            (
-                d.first_index,
-                d.index_count,
-                d.first_instance,
-                d.instance_count,
-            )
-        })
-        .collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::terrain_draws::{indirect_draws, TileMeshes, DRAW_GROUPS};
 
     /// A frame of tiles of 17 at 10 m, the eye at the origin, no minimum skirt.
     fn frame(skirts: SkirtRule, valid_samples: [u32; 2], pools: &[PoolSlots]) -> InstanceFrame<'_> {
@@ -490,11 +314,12 @@ mod tests {
         want[RESOLUTIONS] = 2;
         want[RESOLUTIONS + 2] = 1;
         want[2 * RESOLUTIONS] = 1;
-        let per_group: Vec<u32> = sizes.chunks(EDGE_SETS).map(|c| c.iter().sum()).collect();
+        let per_group: Vec<u32> = sizes.chunks(EDGE_COMBOS).map(|c| c.iter().sum()).collect();
         assert_eq!(per_group, want);
         // Skirts everywhere: every node in its group's set of all four edges.
         for (key, &n) in sizes.iter().enumerate() {
-            assert!(n == 0 || key % EDGE_SETS == ALL_EDGES as usize, "key {key}");
+            let all = edge_combo(ALL_EDGES, 0);
+            assert!(n == 0 || key % EDGE_COMBOS == all, "key {key}");
         }
         let slots: Vec<u32> = instances.iter().map(|i| i.slot).collect();
         assert_eq!(slots, [2, 6, 3, 0, 5, 1, 7, 4, 8]);
@@ -587,136 +412,11 @@ mod tests {
         }
     }
 
-    /// Whole nodes draw the tile's grid, quadrants the coarse one, sixteenths the stride-4
-    /// one, each group's instances after the previous group's; all four skirts follow each
-    /// grid as one range; the triangles are the ranges' per instance.
-    #[test]
-    fn quadrant_groups_draw_the_coarse_range() {
-        use aerie_terrain::mesh::{
-            skirted_coarse_tile_indices, skirted_sixteenth_tile_indices, skirted_tile_indices,
-        };
-        let (buffer, meshes) = TileMeshes::indices(17);
-        let whole = skirted_tile_indices(17).len() as u32;
-        let coarse = skirted_coarse_tile_indices(17).len() as u32;
-        let sixteenth = skirted_sixteenth_tile_indices(17).len() as u32;
-        // Each edge's skirt: three triangles per two segments (`mesh::skirt_edge_indices`).
-        let edge = [8 * 9, 4 * 9, 2 * 9];
-        let after = |k: usize| REPEATED_EDGES * edge[k];
-        assert_eq!(
-            meshes,
-            TileMeshes {
-                whole: (0, whole),
-                coarse: (whole + after(0), coarse),
-                sixteenth: (whole + after(0) + coarse + after(1), sixteenth),
-                grid: [16 * 16 * 6, 8 * 8 * 6, 4 * 4 * 6],
-                edge,
-            }
-        );
-        assert_eq!(
-            buffer.len() as u32,
-            whole + coarse + sixteenth + after(0) + after(1) + after(2)
-        );
-        // Each range is the skirted mesh the mesh module makes.
-        for (range, mesh) in [
-            (meshes.whole, skirted_tile_indices(17)),
-            (meshes.coarse, skirted_coarse_tile_indices(17)),
-            (meshes.sixteenth, skirted_sixteenth_tile_indices(17)),
-        ] {
-            assert_eq!(
-                &buffer[range.0 as usize..(range.0 + range.1) as usize],
-                &mesh[..]
-            );
-        }
-        let all = ALL_EDGES as usize;
-        let mut sizes = [0u32; INSTANCE_KEYS];
-        sizes[all] = 3;
-        sizes[EDGE_SETS + all] = 1;
-        sizes[RESOLUTIONS * EDGE_SETS + all] = 2;
-        sizes[2 * RESOLUTIONS * EDGE_SETS + all] = 5;
-        let (draws, tris) = indirect_draws(&sizes, meshes);
-        let got = draw_ranges(&draws);
-        let (g, c, s) = (meshes.grid, meshes.coarse.0, meshes.sixteenth.0);
-        assert_eq!(
-            got,
-            [
-                (0, g[0], 0, 3),
-                (g[0], 4 * edge[0], 0, 3),
-                (0, g[0], 3, 1),
-                (g[0], 4 * edge[0], 3, 1),
-                (c, g[1], 4, 2),
-                (c + g[1], 4 * edge[1], 4, 2),
-                (s, g[2], 6, 5),
-                (s + g[2], 4 * edge[2], 6, 5),
-            ]
-        );
-        assert_eq!(
-            tris,
-            4 * skirted_tile_triangles(16)
-                + 2 * skirted_tile_triangles(8)
-                + 5 * skirted_tile_triangles(4)
-        );
-        // Without skirts (CDLOD's set): each mesh's grid indices, 2q² triangles.
-        let mut bare = [0u32; INSTANCE_KEYS];
-        bare[0] = 3;
-        let (draws, tris) = indirect_draws(&bare, meshes);
-        assert_eq!(draws.len(), 1);
-        assert_eq!(tris, 3 * 2 * 16 * 16);
-        assert!(buffer[..g[0] as usize].iter().all(|&i| i < 17 * 17));
-        // A tile whose quads a side are not a multiple of 4 has no sixteenth mesh.
-        assert_eq!(TileMeshes::indices(7).1.sixteenth.1, 0);
-        assert_eq!(TileMeshes::indices(7).1.grid[2], 0);
-        assert_eq!(
-            skirted_tile_triangles(16) - quarter_mesh_saving(16),
-            coarse as u64 / 3
-        );
-    }
-
-    /// For every set of edges and every mesh, the skirt commands draw exactly those edges'
-    /// skirt segments (each once) and no grid triangle.
-    #[test]
-    fn each_edge_set_draws_exactly_its_edges_skirts() {
-        use aerie_terrain::mesh::skirt_edge_indices;
-        for side in [5u32, 9, 17] {
-            let (buffer, meshes) = TileMeshes::indices(side);
-            for (k, stride) in [(0usize, 1u32), (1, 2), (2, 4)] {
-                for set in 0..EDGE_SETS {
-                    let mut sizes = [0u32; INSTANCE_KEYS];
-                    sizes[k * RESOLUTIONS * EDGE_SETS + set] = 1;
-                    let (draws, _) = indirect_draws(&sizes, meshes);
-                    let first = [meshes.whole.0, meshes.coarse.0, meshes.sixteenth.0][k];
-                    let skirts: Vec<&[u32]> = draws
-                        .iter()
-                        .filter(|d| d.first_index != first)
-                        .map(|d| {
-                            let at = d.first_index as usize;
-                            &buffer[at..at + d.index_count as usize]
-                        })
-                        .collect();
-                    let triangles = |v: &[u32]| -> Vec<[u32; 3]> {
-                        v.chunks(3).map(|c| c.try_into().unwrap()).collect()
-                    };
-                    let mut drawn = triangles(&skirts.concat());
-                    let mut want = triangles(
-                        &(0..4)
-                            .filter(|e| set & (1 << e) != 0)
-                            .flat_map(|e| skirt_edge_indices(side, stride, e))
-                            .collect::<Vec<_>>(),
-                    );
-                    drawn.sort();
-                    want.sort();
-                    assert_eq!(drawn, want, "side {side}, stride {stride}, set {set:04b}");
-                    let opposite = set == 0b0101 || set == 0b1010;
-                    let runs = if set == 0 { 0 } else { 1 + opposite as usize };
-                    assert_eq!(draws.len(), 1 + runs, "set {set:04b}");
-                }
-            }
-        }
-    }
-
     /// The skirt rule on a small frame: two tiles side by side at one level share an edge
-    /// without skirts; a finer node north of one keeps its skirts against the coarser tile
-    /// and the grid's first samples, and goes without them against the holes east and north
-    /// of it (nothing drawn there: culled); a quadrant drawn at its parent's resolution goes
+    /// without skirts; a finer node north of one fills the crack against the coarser tile
+    /// (one resolution apart: neither keeps a skirt there; without fills both do), keeps its
+    /// skirt on the grid's first samples, and goes without them against the holes east and
+    /// north of it (nothing drawn there: culled); a quadrant drawn at its parent's resolution goes
     /// without one against the tile of that resolution south of it and the holes around it; a
     /// tile reaching past the grid's last sample keeps the skirts on the grid's first and
     /// last samples, one ending on the last the skirt there; CDLOD's rule draws none, and the
@@ -742,10 +442,18 @@ mod tests {
         // The second tile spans samples 64..=128: past the last one.
         let f = frame(SkirtRule::WhereResolutionsDiffer, [100, 1000], &[]);
         let (s, e, n, w) = (1u8, 2u8, 4u8, 8u8);
-        assert_eq!(
-            skirts_of(&f, &list, &mut SkirtMemo::default()).edges,
-            [s | n | w, s | e, s | w, 0]
-        );
+        let skirts = skirts_of(&f, &list, &mut SkirtMemo::default());
+        assert_eq!(skirts.edges, [s | w, s | e, w, 0]);
+        assert_eq!(skirts.fills, [0, 0, s, 0]);
+        // Tiles of 12 quads (odd segments at stride 4): no fills, both sides skirted.
+        let twelve = InstanceFrame {
+            tile_quads: 12,
+            valid_samples: [75, 1000],
+            ..f
+        };
+        let skirts = skirts_of(&twelve, &list, &mut SkirtMemo::default());
+        assert_eq!(skirts.edges, [s | n | w, s | e, s | w, 0]);
+        assert_eq!(skirts.fills, [0; 4]);
         let inside = InstanceFrame {
             valid_samples: [1000, 1000],
             ..f
@@ -767,7 +475,9 @@ mod tests {
             (SkirtRule::Everywhere, [ALL_EDGES; 4]),
         ] {
             let g = InstanceFrame { skirts: rule, ..f };
-            assert_eq!(skirts_of(&g, &list, &mut SkirtMemo::default()).edges, want);
+            let skirts = skirts_of(&g, &list, &mut SkirtMemo::default());
+            assert_eq!(skirts.edges, want);
+            assert_eq!(skirts.fills, [0; 4]);
         }
         let (_, meshes) = TileMeshes::indices(17);
         let tris = |rule| {
@@ -779,22 +489,12 @@ mod tests {
         let grids = 3 * 512 + 128;
         assert_eq!(tris(SkirtRule::None), grids);
         assert_eq!(tris(SkirtRule::Everywhere), grids + 3 * 96 + 48);
-        // Bare: the first tile's east edge and the second's west and north (72 triangles),
-        // the finer tile's east and north (48) and the quadrant's four (48).
+        // Bare: the first tile's east and north edges and the second's west and north (96
+        // triangles), the finer tile's east and north (48), the quadrant's four (48); the
+        // finer tile's south filled instead (8 triangles for its 24).
         assert_eq!(
             tris(SkirtRule::WhereResolutionsDiffer),
-            grids + 3 * 96 + 48 - 168
+            grids + 3 * 96 + 48 - 96 - 48 - 48 - 24 + 8
         );
-    }
-
-    #[test]
-    fn a_quadrant_counts_as_the_parents_quarter_mesh() {
-        use aerie_terrain::mesh::skirted_tile_indices;
-        for q in [8u32, 16, 32] {
-            let full = skirted_tile_indices(q + 1).len() as u64 / 3;
-            let quarter = skirted_tile_indices(q / 2 + 1).len() as u64 / 3;
-            assert_eq!(skirted_tile_triangles(q), full);
-            assert_eq!(quarter_mesh_saving(q), full - quarter);
-        }
     }
 }

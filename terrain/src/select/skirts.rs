@@ -1,5 +1,7 @@
-//! Each drawn node's skirt: how far it must reach (the roughest of its edge neighbours) and
-//! which of its edges need one at all (those shared with a node drawn at another resolution).
+//! Each drawn node's skirt: how far it must reach (the roughest of its edge neighbours), which
+//! of its edges need one at all (those shared with a node drawn at another resolution), and
+//! along which it fills the crack itself instead (the one node across drawn one resolution
+//! coarser).
 
 use crate::fast_hash::FastHash;
 
@@ -7,7 +9,7 @@ use crate::fast_hash::FastHash;
 #[cfg(test)]
 pub(crate) fn neighbour_eps(nodes: &[(u32, u32, u32, f32)]) -> Vec<f32> {
     let levels: Vec<u32> = nodes.iter().map(|n| n.0).collect();
-    node_skirts(nodes, &levels, &vec![false; nodes.len()]).reach
+    node_skirts(nodes, &levels, &vec![false; nodes.len()], false).reach
 }
 
 /// The edges of a node in the perimeter walk's order (`mesh::perimeter_vertex`): bit e set
@@ -22,6 +24,10 @@ pub struct NodeSkirts {
     pub reach: Vec<f32>,
     /// Per node, the edges that need a skirt ([`ALL_EDGES`]' bits).
     pub edges: Vec<u8>,
+    /// Per node, the edges along which it fills the crack to the one node across, drawn one
+    /// resolution coarser, with a triangle per two segments of its edge
+    /// (`mesh::fill_edge_indices`); neither side hangs a skirt there. Disjoint from `edges`.
+    pub fills: Vec<u8>,
 }
 
 /// For each drawn node (level, tx, ty, ε), the largest ε among itself and the nodes sharing
@@ -62,13 +68,30 @@ pub struct NodeSkirts {
 /// `GRID_CELLS_PER_NODE` cells a node) take a hash table; both give the same values (tests).
 /// `nodes` must not overlap (no selection draws a place twice); where they do, every edge
 /// keeps its skirt.
+///
+/// Fills (`fill`): where a node's whole edge faces one node drawn exactly one resolution
+/// coarser (the same size or larger, neither folding), the coarse edge's vertices are every
+/// other vertex of the fine edge — the same samples, the same heights —, so the crack between
+/// them is, per coarse segment, exactly the triangle of the fine edge's three vertices over it,
+/// whichever side of the coarse segment its middle vertex lies (DESIGN.md "The terrain
+/// technique": levels are subsamplings). The finer node draws those triangles (a third of a
+/// skirt's: one per two segments against three) and neither edge gets a skirt from the pair.
+/// Two or more resolutions apart the fine polyline between two coarse vertices has interior
+/// vertices on both sides of the coarse segment and no fixed triangulation of the gap is safe
+/// (a fan pokes above both surfaces): both sides keep their skirts. The caller asks for fills
+/// only where every drawn stride puts an even number of segments on an edge.
 pub fn node_skirts(
     nodes: &[(u32, u32, u32, f32)],
     resolution: &[u32],
     folds: &[bool],
+    fill: bool,
 ) -> NodeSkirts {
     assert_eq!(nodes.len(), resolution.len(), "a resolution per node");
     assert_eq!(nodes.len(), folds.len(), "a fold flag per node");
+    let rule = Rule {
+        pairs_once: true,
+        fill,
+    };
     match LevelGrids::of(nodes) {
         Some(grids) => walk_neighbours(
             nodes,
@@ -76,10 +99,19 @@ pub fn node_skirts(
             folds,
             |l, x, y| grids.get(l, x, y),
             grids.overlap,
-            true,
+            rule,
         ),
-        None => node_skirts_hashed(nodes, resolution, folds),
+        None => node_skirts_hashed(nodes, resolution, folds, rule),
     }
+}
+
+/// How [`walk_neighbours`] treats pairs: `pairs_once`: a pair of same-level neighbours is
+/// looked up from one side only (what every caller asks; the tests compare it with both);
+/// `fill`: a pair one resolution apart is filled from the finer side ([`node_skirts`]).
+#[derive(Clone, Copy, Debug)]
+struct Rule {
+    pairs_once: bool,
+    fill: bool,
 }
 
 /// The skirts of the last node list given again while the list is the same: with a selection
@@ -92,6 +124,7 @@ pub struct SkirtMemo {
     nodes: Vec<(u32, u32, u32, f32)>,
     resolution: Vec<u32>,
     folds: Vec<bool>,
+    fill: bool,
     skirts: NodeSkirts,
     /// Lists answered from the memo, and formed afresh.
     pub hits: u64,
@@ -100,12 +133,13 @@ pub struct SkirtMemo {
 
 impl SkirtMemo {
     /// [`node_skirts`] of the list, from the memo when it is the last one given (every node,
-    /// ε bit for bit, resolution and fold flag equal, in the same order).
+    /// ε bit for bit, resolution and fold flag equal, in the same order, and the same `fill`).
     pub fn skirts(
         &mut self,
         nodes: &[(u32, u32, u32, f32)],
         resolution: &[u32],
         folds: &[bool],
+        fill: bool,
     ) -> &NodeSkirts {
         let same_nodes = self.nodes.len() == nodes.len()
             && self
@@ -113,11 +147,12 @@ impl SkirtMemo {
                 .iter()
                 .zip(nodes)
                 .all(|(a, b)| (a.0, a.1, a.2, a.3.to_bits()) == (b.0, b.1, b.2, b.3.to_bits()));
-        if same_nodes && self.resolution == resolution && self.folds == folds {
+        if same_nodes && self.fill == fill && self.resolution == resolution && self.folds == folds {
             self.hits += 1;
         } else {
             self.misses += 1;
-            self.skirts = node_skirts(nodes, resolution, folds);
+            self.fill = fill;
+            self.skirts = node_skirts(nodes, resolution, folds, fill);
             self.nodes.clear();
             self.nodes.extend_from_slice(nodes);
             self.resolution.clear();
@@ -134,6 +169,7 @@ fn node_skirts_hashed(
     nodes: &[(u32, u32, u32, f32)],
     resolution: &[u32],
     folds: &[bool],
+    rule: Rule,
 ) -> NodeSkirts {
     let mut index: std::collections::HashMap<(u32, u32, u32), usize, FastHash> =
         std::collections::HashMap::with_capacity_and_hasher(nodes.len(), FastHash::default());
@@ -168,7 +204,7 @@ fn node_skirts_hashed(
             None => Cell::Empty,
         },
         overlap,
-        true,
+        rule,
     )
 }
 
@@ -185,20 +221,20 @@ enum Cell {
 }
 
 /// The walk itself, over any lookup (a `Split` cell ends the walk); `overlap`: drawn nodes
-/// overlap (every edge keeps its skirt); `pairs_once`: a pair of same-level neighbours is
-/// looked up from one side only (what every caller asks; the tests compare it with both).
+/// overlap (every edge keeps its skirt, none fills).
 fn walk_neighbours(
     nodes: &[(u32, u32, u32, f32)],
     resolution: &[u32],
     folds: &[bool],
     find: impl Fn(u32, u32, u32) -> Cell,
     overlap: bool,
-    pairs_once: bool,
+    rule: Rule,
 ) -> NodeSkirts {
     let top = nodes.iter().map(|n| n.0).max().unwrap_or(0);
     let mut reach: Vec<f32> = nodes.iter().map(|n| n.3).collect();
     // Edges start bare and are given a skirt by the pairs that need one.
     let mut edges = vec![0u8; nodes.len()];
+    let mut fills = vec![0u8; nodes.len()];
     // Per node, the edges whose same-level neighbour has been met from the other side
     // already: the pair's updates are symmetric (both reaches, both edges, `apart` the same
     // either way), so each such pair is looked up once instead of twice.
@@ -228,14 +264,20 @@ fn walk_neighbours(
                             reach[i] = reach[i].max(nodes[j].3);
                             reach[j] = reach[j].max(e);
                             // Node j covers the whole strip across this edge (it is the
-                            // neighbour or its ancestor).
-                            let apart = resolution[j] != resolution[i]
-                                || (folds[i] && folds[j] && nodes[j].0 != l);
-                            if apart {
+                            // neighbour or its ancestor); node i covers j's edge only when
+                            // they are of one level.
+                            let (ri, rj) = (resolution[i], resolution[j]);
+                            let fill = rule.fill && !folds[i] && !folds[j];
+                            let apart = rj != ri || (folds[i] && folds[j] && nodes[j].0 != l);
+                            if fill && rj == ri + 1 {
+                                fills[i] |= 1 << edge;
+                            } else if fill && k == 0 && ri == rj + 1 {
+                                fills[j] |= 1 << ((edge + 2) % 4);
+                            } else if apart {
                                 edges[i] |= 1 << edge;
                                 edges[j] |= 1 << ((edge + 2) % 4);
                             }
-                            if k == 0 && found_here && pairs_once {
+                            if k == 0 && found_here && rule.pairs_once {
                                 met[j] |= 1 << ((edge + 2) % 4);
                             }
                         }
@@ -247,8 +289,13 @@ fn walk_neighbours(
     }
     if overlap {
         edges.fill(ALL_EDGES);
+        fills.fill(0);
     }
-    NodeSkirts { reach, edges }
+    NodeSkirts {
+        reach,
+        edges,
+        fills,
+    }
 }
 
 /// Grid cells allowed per node before [`node_skirts`] takes the hash table instead (a
@@ -391,9 +438,14 @@ mod tests {
         nodes: &[(u32, u32, u32, f32)],
         resolution: &[u32],
         folds: &[bool],
+        fill: bool,
     ) -> NodeSkirts {
         let find = |l, x, y| grids.get(l, x, y);
-        walk_neighbours(nodes, resolution, folds, find, grids.overlap, false)
+        let rule = Rule {
+            pairs_once: false,
+            fill,
+        };
+        walk_neighbours(nodes, resolution, folds, find, grids.overlap, rule)
     }
 
     fn xorshift(seed: &mut u64) -> u64 {
@@ -452,15 +504,21 @@ mod tests {
             let grids = LevelGrids::of(&nodes).expect("a cover fills its boxes");
             let resolution: Vec<u32> = nodes.iter().map(|n| n.0 + (n.1 + n.2) % 2).collect();
             let folds: Vec<bool> = nodes.iter().map(|n| (n.1 + 2 * n.2) % 7 == 0).collect();
-            let want = node_skirts_hashed(&nodes, &resolution, &folds);
-            assert_eq!(
-                node_skirts(&nodes, &resolution, &folds),
-                want,
-                "case {case}: {nodes:?}"
-            );
-            // Each same-level pair looked up from both sides gives the same.
-            let both_sides = walk_both_sides(&grids, &nodes, &resolution, &folds);
-            assert_eq!(both_sides, want, "case {case}: {nodes:?}");
+            for fill in [false, true] {
+                let rule = Rule {
+                    pairs_once: true,
+                    fill,
+                };
+                let want = node_skirts_hashed(&nodes, &resolution, &folds, rule);
+                assert_eq!(
+                    node_skirts(&nodes, &resolution, &folds, fill),
+                    want,
+                    "case {case}, fill {fill}: {nodes:?}"
+                );
+                // Each same-level pair looked up from both sides gives the same.
+                let both_sides = walk_both_sides(&grids, &nodes, &resolution, &folds, fill);
+                assert_eq!(both_sides, want, "case {case}, fill {fill}: {nodes:?}");
+            }
             if !grids.overlap {
                 stopped_early += grids
                     .levels
@@ -474,15 +532,21 @@ mod tests {
     }
 
     /// Against a brute force over every pair of nodes sharing an edge along a positive length:
-    /// a node's reach is the largest ε of itself and the nodes across its edges, and an edge has a skirt exactly when it lies on the grid's first sample, or some node
+    /// a node's reach is the largest ε of itself and the nodes across its edges. Without
+    /// fills an edge has a skirt exactly when it lies on the grid's first sample, or some node
     /// across it is drawn at another resolution, or both fold at the grid's end and differ in
     /// level or resolution; so an edge facing nothing (culled), or only nodes at its own
-    /// resolution, has none. Covers with holes, every resolution offset, folding nodes.
+    /// resolution, has none. With fills an edge fills exactly when one node across covers it
+    /// whole, drawn one resolution coarser, and neither folds; and a pair so filled (from
+    /// either side) gives neither edge a skirt. Covers with holes, every resolution offset,
+    /// folding nodes.
     #[test]
     fn an_edge_has_a_skirt_only_against_another_resolution() {
         let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let (mut bare, mut kept) = (0, 0);
-        for case in 0..160u32 {
+        let (mut bare, mut kept, mut filled) = (0, 0, 0);
+        for case in 0..320u32 {
+            let fill = case % 2 == 1;
+            let case = case / 2;
             let top = 1 + case % 5;
             // Some covers on the grid's first sample (x = 0).
             let x = (3 + case) * (case % 4 != 0) as u32;
@@ -499,53 +563,75 @@ mod tests {
                 .iter()
                 .map(|_| xorshift(&mut seed).is_multiple_of(4))
                 .collect();
-            let skirts = node_skirts(&nodes, &resolution, &folds);
+            let skirts = node_skirts(&nodes, &resolution, &folds, fill);
             // Footprints in level-0 cells: [x0, x1) × [y0, y1).
             let fp =
                 |&(l, x, y, _): &(u32, u32, u32, f32)| [x << l, (x + 1) << l, y << l, (y + 1) << l];
+            // The nodes across edge `edge` of node `i` along a positive length.
+            let across_of = |i: usize, edge: u32| -> Vec<usize> {
+                let [x0, x1, y0, y1] = fp(&nodes[i]);
+                (0..nodes.len())
+                    .filter(|&j| {
+                        let [a0, a1, b0, b1] = fp(&nodes[j]);
+                        let along_x = a0 < x1 && x0 < a1;
+                        let along_y = b0 < y1 && y0 < b1;
+                        match edge {
+                            0 => b1 == y0 && along_x,
+                            1 => a0 == x1 && along_y,
+                            2 => b0 == y1 && along_x,
+                            _ => a1 == x0 && along_y,
+                        }
+                    })
+                    .collect()
+            };
+            // Node i fills its edge: one node across, covering it whole, one resolution
+            // coarser, neither folding.
+            let fills_edge = |i: usize, edge: u32| -> bool {
+                let across = across_of(i, edge);
+                fill && across.len() == 1 && {
+                    let j = across[0];
+                    nodes[j].0 >= nodes[i].0
+                        && resolution[j] == resolution[i] + 1
+                        && !folds[i]
+                        && !folds[j]
+                }
+            };
             for (i, n) in nodes.iter().enumerate() {
-                let [x0, x1, y0, y1] = fp(n);
+                let [x0, _, y0, _] = fp(n);
                 let mut want_reach = n.3;
                 for edge in 0..4u32 {
-                    // The nodes across this edge along a positive length.
-                    let across: Vec<usize> = (0..nodes.len())
-                        .filter(|&j| {
-                            let [a0, a1, b0, b1] = fp(&nodes[j]);
-                            let along_x = a0 < x1 && x0 < a1;
-                            let along_y = b0 < y1 && y0 < b1;
-                            match edge {
-                                0 => b1 == y0 && along_x,
-                                1 => a0 == x1 && along_y,
-                                2 => b0 == y1 && along_x,
-                                _ => a1 == x0 && along_y,
-                            }
-                        })
-                        .collect();
+                    let across = across_of(i, edge);
                     // Reach: the roughest of itself and every node across any edge.
                     for &j in &across {
                         want_reach = want_reach.max(nodes[j].3);
                     }
                     let first_sample = (edge == 0 && y0 == 0) || (edge == 3 && x0 == 0);
                     let apart = across.iter().any(|&j| {
-                        resolution[j] != resolution[i]
-                            || (folds[i] && folds[j] && nodes[j].0 != n.0)
+                        let filled = fills_edge(i, edge) || fills_edge(j, (edge + 2) % 4);
+                        !filled
+                            && (resolution[j] != resolution[i]
+                                || (folds[i] && folds[j] && nodes[j].0 != n.0))
                     });
                     let has_skirt = skirts.edges[i] & (1 << edge) != 0;
-                    assert_eq!(
-                        has_skirt,
-                        first_sample || apart,
-                        "case {case}: node {n:?} (resolution {}, folds {}) edge {edge}, across {:?}",
-                        resolution[i],
-                        folds[i],
-                        across
-                            .iter()
-                            .map(|&j| (nodes[j], resolution[j], folds[j]))
-                            .collect::<Vec<_>>()
-                    );
-                    if has_skirt {
-                        kept += 1;
-                    } else {
-                        bare += 1;
+                    let has_fill = skirts.fills[i] & (1 << edge) != 0;
+                    let context = || {
+                        format!(
+                            "case {case}, fill {fill}: node {n:?} (resolution {}, folds {}) edge {edge}, across {:?}",
+                            resolution[i],
+                            folds[i],
+                            across
+                                .iter()
+                                .map(|&j| (nodes[j], resolution[j], folds[j]))
+                                .collect::<Vec<_>>()
+                        )
+                    };
+                    assert_eq!(has_skirt, first_sample || apart, "{}", context());
+                    assert_eq!(has_fill, fills_edge(i, edge), "{}", context());
+                    assert!(!(has_fill && has_skirt), "{}", context());
+                    match (has_skirt, has_fill) {
+                        (true, _) => kept += 1,
+                        (_, true) => filled += 1,
+                        _ => bare += 1,
                     }
                 }
                 assert_eq!(
@@ -555,8 +641,8 @@ mod tests {
             }
         }
         assert!(
-            bare > 100 && kept > 100,
-            "{bare} bare edges, {kept} skirted"
+            bare > 100 && kept > 100 && filled > 100,
+            "{bare} bare edges, {kept} skirted, {filled} filled"
         );
     }
 
@@ -571,9 +657,9 @@ mod tests {
         let resolution: Vec<u32> = nodes.iter().map(|n| n.0).collect();
         let folds = vec![false; nodes.len()];
         let mut memo = SkirtMemo::default();
-        let fresh = node_skirts(&nodes, &resolution, &folds);
-        assert_eq!(memo.skirts(&nodes, &resolution, &folds), &fresh);
-        assert_eq!(memo.skirts(&nodes, &resolution, &folds), &fresh);
+        let fresh = node_skirts(&nodes, &resolution, &folds, false);
+        assert_eq!(memo.skirts(&nodes, &resolution, &folds, false), &fresh);
+        assert_eq!(memo.skirts(&nodes, &resolution, &folds, false), &fresh);
         assert_eq!((memo.hits, memo.misses), (1, 1));
         // A finer neighbour drawn at a coarser resolution: other edges.
         let k = (0..nodes.len())
@@ -586,33 +672,38 @@ mod tests {
                         r
                     },
                     &folds,
+                    false,
                 ) != fresh
             })
             .expect("some node whose resolution changes the skirts");
         let mut other = resolution.clone();
         other[k] += 1;
-        let changed = node_skirts(&nodes, &other, &folds);
-        assert_eq!(memo.skirts(&nodes, &other, &folds), &changed);
+        let changed = node_skirts(&nodes, &other, &folds, false);
+        assert_eq!(memo.skirts(&nodes, &other, &folds, false), &changed);
+        // The same list with fills: formed afresh, and some pair filled.
+        let filled = node_skirts(&nodes, &other, &folds, true);
+        assert_ne!(filled, changed);
+        assert_eq!(memo.skirts(&nodes, &other, &folds, true), &filled);
         // One ε: another reach.
         let mut rougher = nodes.clone();
         rougher[k].3 += 7.0;
         assert_eq!(
-            memo.skirts(&rougher, &resolution, &folds),
-            &node_skirts(&rougher, &resolution, &folds)
+            memo.skirts(&rougher, &resolution, &folds, false),
+            &node_skirts(&rougher, &resolution, &folds, false)
         );
         // One fold flag, one node fewer.
         let mut folded = folds.clone();
         folded[k] = true;
         assert_eq!(
-            memo.skirts(&rougher, &resolution, &folded),
-            &node_skirts(&rougher, &resolution, &folded)
+            memo.skirts(&rougher, &resolution, &folded, false),
+            &node_skirts(&rougher, &resolution, &folded, false)
         );
         let n = nodes.len() - 1;
         assert_eq!(
-            memo.skirts(&nodes[..n], &resolution[..n], &folds[..n]),
-            &node_skirts(&nodes[..n], &resolution[..n], &folds[..n])
+            memo.skirts(&nodes[..n], &resolution[..n], &folds[..n], false),
+            &node_skirts(&nodes[..n], &resolution[..n], &folds[..n], false)
         );
-        assert_eq!((memo.hits, memo.misses), (1, 5));
+        assert_eq!((memo.hits, memo.misses), (1, 6));
     }
 
     /// A node repeated on both sides of an edge (no selection repeats one; the walk must
@@ -640,12 +731,14 @@ mod tests {
             let resolution: Vec<u32> = nodes.iter().map(|n| n.0 + (n.3 as u32) % 2).collect();
             let folds = vec![false; nodes.len()];
             let grids = LevelGrids::of(&nodes).expect("a small box");
-            let both_sides = walk_both_sides(&grids, &nodes, &resolution, &folds);
-            assert_eq!(
-                node_skirts(&nodes, &resolution, &folds),
-                both_sides,
-                "{nodes:?}"
-            );
+            for fill in [false, true] {
+                let both_sides = walk_both_sides(&grids, &nodes, &resolution, &folds, fill);
+                assert_eq!(
+                    node_skirts(&nodes, &resolution, &folds, fill),
+                    both_sides,
+                    "{nodes:?}"
+                );
+            }
             orders += 1;
         }
         assert_eq!(orders, 120);
