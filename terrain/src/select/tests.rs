@@ -344,9 +344,9 @@ fn choose_parts_draws_the_fewest_triangles_that_meet_tau() {
     assert_eq!(
         cost,
         MeshCosts {
-            whole: 608,
-            quadrant: 176,
-            sixteenth: 56,
+            whole: 512 + 2 * 24,
+            quadrant: 128 + 2 * 12,
+            sixteenth: 32 + 2 * 6,
             instance: 64,
         }
     );
