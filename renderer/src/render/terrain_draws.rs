@@ -270,11 +270,19 @@ pub fn indirect_draws(
     let mut first_instance = 0u32;
     let (combos, starts) = &COMBOS;
     for (g, sizes) in key_sizes.chunks_exact(EDGE_COMBOS).enumerate() {
+        // Most groups and sets are empty: skip them before working out their runs.
+        let in_group: u32 = sizes.iter().sum();
+        if in_group == 0 {
+            continue;
+        }
         let m = meshes.of_group(g);
-        push(m.first, m.grid, first_instance, sizes.iter().sum());
+        push(m.first, m.grid, first_instance, in_group);
         for skirted in 0..EDGE_SETS {
             let of_set = starts[skirted]..starts[skirted + 1];
             let n: u32 = sizes[of_set.clone()].iter().sum();
+            if n == 0 {
+                continue;
+            }
             let (runs, count) = edge_runs(skirted as u8);
             for &(from, len) in &runs[..count] {
                 let at = m.first + m.grid + from * m.edge;
@@ -282,6 +290,9 @@ pub fn indirect_draws(
             }
             for c in of_set {
                 let n = sizes[c];
+                if n == 0 {
+                    continue;
+                }
                 let (runs, count) = edge_runs(combos[c].1);
                 for &(from, len) in &runs[..count] {
                     push(m.fills + from * m.fill, len * m.fill, first_instance, n);
