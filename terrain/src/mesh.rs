@@ -196,19 +196,10 @@ fn strided_skirted_indices(side: u32, stride: u32) -> Vec<u32> {
 /// edge's skirt can be drawn alone (a node whose neighbour across the other edges is drawn at
 /// its resolution).
 pub fn skirt_edge_indices(side: u32, stride: u32, edge: u32) -> Vec<u32> {
-    let n = side - 1;
-    assert!(
-        edge < 4 && matches!(stride, 1 | 2 | 4) && n.is_multiple_of(stride),
-        "edge {edge} of stride {stride} on a tile side {side}"
-    );
-    let grid = |k: u32| {
-        let (i, j) = perimeter_vertex(side, k % (4 * n));
-        j * side + i
-    };
+    let (first, segments) = edge_at_stride(side, stride, edge);
+    let grid = |k: u32| perimeter_grid_index(side, k);
     let skirt = |k: u32| skirt_vertex(side, stride, k);
-    let segments = n / stride;
     let mut out = Vec::with_capacity(skirt_edge_triangles(segments) as usize * 3);
-    let first = edge * n;
     for pair in 0..segments / 2 {
         let a = first + 2 * pair * stride;
         let (b, c) = (a + stride, a + 2 * stride);
@@ -225,6 +216,24 @@ pub fn skirt_edge_indices(side: u32, stride: u32, edge: u32) -> Vec<u32> {
     out
 }
 
+/// Edge `edge` of a tile of `side` vertices drawn over every `stride`-th vertex, as the edge
+/// lists walk it: its first perimeter vertex ([`perimeter_vertex`]) and its segments.
+fn edge_at_stride(side: u32, stride: u32, edge: u32) -> (u32, u32) {
+    let n = side - 1;
+    assert!(
+        edge < 4 && matches!(stride, 1 | 2 | 4) && n.is_multiple_of(stride),
+        "edge {edge} of stride {stride} on a tile side {side}"
+    );
+    (edge * n, n / stride)
+}
+
+/// The grid index of perimeter vertex `k`, taken around the perimeter (an edge's last vertex
+/// is the next edge's first).
+fn perimeter_grid_index(side: u32, k: u32) -> u32 {
+    let (i, j) = perimeter_vertex(side, k % (4 * (side - 1)));
+    j * side + i
+}
+
 /// Triangles of one edge's skirt over `segments` segments ([`skirt_edge_indices`]): three per
 /// two, two for a last odd one.
 pub fn skirt_edge_triangles(segments: u32) -> u32 {
@@ -238,17 +247,8 @@ pub fn skirt_edge_triangles(segments: u32) -> u32 {
 /// fine polyline a–b–c lies exactly that triangle, whichever side of a–c vertex b is. Grid
 /// vertices only (no skirt vertex); a last odd segment, which no coarse segment spans, gets none.
 pub fn fill_edge_indices(side: u32, stride: u32, edge: u32) -> Vec<u32> {
-    let n = side - 1;
-    assert!(
-        edge < 4 && matches!(stride, 1 | 2 | 4) && n.is_multiple_of(stride),
-        "edge {edge} of stride {stride} on a tile side {side}"
-    );
-    let grid = |k: u32| {
-        let (i, j) = perimeter_vertex(side, k % (4 * n));
-        j * side + i
-    };
-    let segments = n / stride;
-    let first = edge * n;
+    let (first, segments) = edge_at_stride(side, stride, edge);
+    let grid = |k: u32| perimeter_grid_index(side, k);
     (0..segments / 2)
         .flat_map(|pair| {
             let a = first + 2 * pair * stride;

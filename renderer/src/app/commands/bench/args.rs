@@ -132,7 +132,8 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value_t = Switch::On)]
     pub carry_selection: Switch,
     /// Skirts under the tiles' edges: needed (only where the tile across is drawn at another
-    /// resolution: the default), everywhere (every edge of every tile), none (shows the
+    /// resolution, and where it is drawn exactly one resolution coarser the finer tile fills
+    /// the crack instead: the default), everywhere (every edge of every tile), none (shows the
     /// cracks). CDLOD draws none whatever this says.
     #[arg(long, value_enum, default_value_t = SkirtsArg::Needed)]
     pub skirts: SkirtsArg,
