@@ -232,6 +232,13 @@ pub(super) fn obliquity_of(corners: &[DVec3; 8], f: &Frustum) -> f64 {
 /// ranges clamped to the frustum or the whole frustum's) is below it. Each squared component
 /// is least where its own variable comes nearest to making it vanish.
 pub(super) fn frustum_gain_floor(f: &Frustum, w: DVec3) -> f64 {
+    gain_floor_over(w, [f.tan_left, f.tan_right], [-f.tan_up, -f.tan_down])
+}
+
+/// The least vertical gain over the view ratios a ∈ `a`, b ∈ `b` (ranges within the frustum's):
+/// no box whose clamped ranges lie within them has a smaller gain ([`vertical_gain`] is the
+/// largest over a box's ranges, at least its value at any point of them).
+pub(super) fn gain_floor_over(w: DVec3, a: [f64; 2], b: [f64; 2]) -> f64 {
     let least = |wc: f64, lo: f64, hi: f64| {
         let t = if w.z != 0.0 {
             (wc / w.z).clamp(lo, hi)
@@ -240,7 +247,31 @@ pub(super) fn frustum_gain_floor(f: &Frustum, w: DVec3) -> f64 {
         };
         (wc - t * w.z).powi(2)
     };
-    (least(w.x, f.tan_left, f.tan_right) + least(w.y, -f.tan_up, -f.tan_down)).sqrt()
+    (least(w.x, a[0], a[1]) + least(w.y, b[0], b[1])).sqrt()
+}
+
+/// The (a, b) ranges of view-space corners clamped to the frustum, the ranges every box within
+/// theirs is clamped into; the frustum's own when a corner is at or behind the eye plane (the
+/// gains then take the whole frustum's, as [`CornerPass::vertical_gain`] does).
+pub(super) fn clamped_ranges(c: &ViewCorners, f: &Frustum) -> ([f64; 2], [f64; 2]) {
+    let whole = ([f.tan_left, f.tan_right], [-f.tan_up, -f.tan_down]);
+    if c.z.iter().any(|&z| z <= 1e-9) {
+        return whole;
+    }
+    let (mut a, mut b) = (
+        [f64::INFINITY, f64::NEG_INFINITY],
+        [f64::INFINITY, f64::NEG_INFINITY],
+    );
+    for i in 0..8 {
+        let r = 1.0 / c.z[i];
+        let (ai, bi) = (c.x[i] * r, c.y[i] * r);
+        (a[0], a[1]) = (a[0].min(ai), a[1].max(ai));
+        (b[0], b[1]) = (b[0].min(bi), b[1].max(bi));
+    }
+    (
+        a.map(|v| v.clamp(whole.0[0], whole.0[1])),
+        b.map(|v| v.clamp(whole.1[0], whole.1[1])),
+    )
 }
 
 fn vertical_gain(w: DVec3, a: [f64; 2], b: [f64; 2]) -> f64 {

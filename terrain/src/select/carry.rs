@@ -35,12 +35,16 @@
 //! record's least gain is the frustum's for u_R less σ·√(2 + A² + B²), and its |w_z| is
 //! |u_R,z| + σ; c moves by at most |Δa| + |Δb| and is ≥ 1, so the slack's part grows by at most
 //! the ratio `(2 + A + B)·μ_R/(z_R − μ_R)` of itself — added to the relative growth. A
-//! record whose least gain is not positive is not kept.
+//! record whose least gain is not positive is not kept. The least gain is taken over the ring
+//! tile's own view ratios (its box's corners' (a, b), clamped), not the whole frustum's: every
+//! node's box lies within the tile's, so every gain formed was at least that.
 //!
 //! So each node's bound times the two factors bounds its error now; a record is drawn again
 //! while every node's stays ≤ τ (with a margin far beyond rounding), every part the walk
-//! culled is still outside the same frustum plane by more than μ, nothing came within μ of
-//! the eye plane, and until it falls due ([`max_age`] frames) — a walk afresh then finds the
+//! culled is still wholly outside one frustum plane — its distance past that plane less the
+//! eye's move along the plane's normal, k·D and the curvature drop (`FrustumPlanes::
+//! still_outside`: a forward move carries the parts beside the frustum further out) —,
+//! nothing came within μ of the eye plane, and until it falls due ([`max_age`] frames) — a walk afresh then finds the
 //! coarser nodes a receding eye allows; at most [`AGED_WALKS_PER_FRAME`] records a frame are
 //! walked for their age, the others drawn again (still certified) for up to [`AGE_GRACE`]
 //! frames more. Drawn again, a node's ρ is that bound: larger than a fresh
@@ -55,7 +59,7 @@ use crate::tiles::Aabb;
 
 use crate::camera::Frustum;
 
-use super::bound::{frustum_gain_floor, ViewCorners, EARTH_RADIUS_M};
+use super::bound::{clamped_ranges, gain_floor_over, ViewCorners, EARTH_RADIUS_M};
 use super::cdlod_morph::Morph;
 
 /// A node as `refine_ring_tile` lists it: (level, tx, ty, ε, ρ px).
@@ -118,10 +122,11 @@ struct NodeCert {
 }
 
 /// A part the walk culled: how far every corner of its box (cells two levels up) lies outside
-/// one frustum plane, and the farthest distance from the eye to it.
+/// each frustum plane (near, then the four sides; negative where some corner is inside it), and
+/// the farthest distance from the eye to it.
 #[derive(Debug, Clone, Copy)]
 struct CulledCert {
-    margin: f64,
+    margins: [f64; 5],
     reach: f64,
 }
 
@@ -141,8 +146,9 @@ struct CarriedTile {
 
 /// What bounds a record's gains as the eye moves: its ring tile's box (smallest depth,
 /// unclamped, and reach: every gain came from a box within it) and, when the record was made,
-/// the least gain of any of its nodes (> 0), the largest |w_z| of their verticals in view
-/// space, and whether their gains hold a slack part (the ellipsoid's).
+/// the least gain of any of its nodes (> 0: the least over the ring tile's own (a, b) ranges,
+/// which every node's box lies within, not the whole frustum's), the largest |w_z| of their
+/// verticals in view space, and whether their gains hold a slack part (the ellipsoid's).
 #[derive(Debug, Clone, Copy)]
 struct Growth {
     ring_z: f64,
@@ -154,19 +160,25 @@ struct Growth {
 
 impl Growth {
     /// A record's, made at `now` with `optics`, its ring tile's box at (`ring_z`, `ring_reach`)
-    /// and its normal on the ellipsoid; `None` where its least gain is not positive.
+    /// with view-space corners `ring` and its normal on the ellipsoid; `None` where its least
+    /// gain is not positive.
     fn of(
         optics: &Optics,
         now: &ViewNow,
         normal: Option<RingNormal>,
-        ring_z: f64,
+        ring: &ViewCorners,
         ring_reach: f64,
     ) -> Option<Self> {
+        let ring_z = ring.z.iter().fold(f64::INFINITY, |a, &z| a.min(z));
+        // Every node's box lies within the ring tile's, so its (a, b) ranges, clamped, lie
+        // within the tile's clamped ranges, and its gain — the largest over them — is at least
+        // the least over the tile's.
+        let (a, b) = clamped_ranges(ring, &optics.frustum);
         let (floor, w_z) = match normal {
-            None => (optics.floor, optics.w_z),
+            None => (gain_floor_over(optics.up, a, b), optics.w_z),
             Some(n) => {
                 let u = now.rotation * n.up;
-                let floor = frustum_gain_floor(&optics.frustum, u) - n.spread * optics.turn;
+                let floor = gain_floor_over(u, a, b) - n.spread * optics.turn;
                 (floor, u.z.abs() + n.spread)
             }
         };
@@ -212,9 +224,8 @@ pub(super) struct Optics {
     pub b: f64,
     /// √(2 + A² + B²): bounds what a turn of the world vertical does to a gain.
     pub turn: f64,
-    /// The least vertical gain in the frustum (`frustum_gain_floor`), > 0.
-    pub floor: f64,
-    /// |w_z| of the world vertical in view space.
+    /// The world vertical in view space, and its |w_z|.
+    pub up: DVec3,
     pub w_z: f64,
     /// The frustum, for a ring tile's own least gain on the ellipsoid.
     pub frustum: Frustum,
@@ -301,6 +312,7 @@ impl<P: PartialEq> Carry<P> {
         key: (u32, u32, u32),
         now: &ViewNow,
         optics: &Optics,
+        planes: &FrustumPlanes,
         nodes: &mut Vec<Node>,
         morphs: &mut Vec<(usize, Morph)>,
     ) -> bool {
@@ -322,9 +334,12 @@ impl<P: PartialEq> Carry<P> {
         let Some(gain) = t.growth.gain(m, k, optics) else {
             return false;
         };
+        // A culled part stays outside a plane while the eye's move along that plane's normal,
+        // the turn and the curvature drop leave it outside (`FrustumPlanes::still_outside`).
+        let step = now.rotation * (now.eye - t.view.eye);
         if t.culled
             .iter()
-            .any(|c| mu(c.reach) >= c.margin * (1.0 - ROOM))
+            .any(|c| !planes.still_outside(&c.margins, step, mu(c.reach) - m))
         {
             return false;
         }
@@ -382,8 +397,8 @@ impl<P: PartialEq> Carry<P> {
             let z = c.z.iter().fold(f64::INFINITY, |a, &z| a.min(z));
             (z, reach(&b, now.eye), c)
         };
-        let (ring_z, ring_reach, _) = depth_reach(key.0, key.1, key.2);
-        let Some(growth) = Growth::of(optics, now, normal, ring_z, ring_reach) else {
+        let (_, ring_reach, ring) = depth_reach(key.0, key.1, key.2);
+        let Some(growth) = Growth::of(optics, now, normal, &ring, ring_reach) else {
             self.tiles.remove(&key);
             return;
         };
@@ -440,7 +455,7 @@ impl<P: PartialEq> Carry<P> {
         t.culled.extend(culled.iter().map(|&(l, x, y)| {
             let (_, reach, c) = depth_reach(l, x, y);
             CulledCert {
-                margin: planes.outside_margin(&c),
+                margins: planes.margins(&c),
                 reach,
             }
         }));
@@ -471,18 +486,40 @@ impl FrustumPlanes {
     }
 
     /// How far every corner lies outside one plane (the largest such distance over the five
-    /// planes); ≤ 0 when no plane has them all outside.
-    pub(super) fn outside_margin(&self, c: &ViewCorners) -> f64 {
-        let mut best = (0..8)
-            .map(|i| self.near - c.z[i])
-            .fold(f64::INFINITY, f64::min);
-        for n in &self.normals {
-            let least = (0..8)
-                .map(|i| n.dot(DVec3::new(c.x[i], c.y[i], c.z[i])))
-                .fold(f64::INFINITY, f64::min);
-            best = best.max(least);
+    /// planes); ≤ 0 when no plane has them all outside. (The tests' check of a box's cull.)
+    #[cfg(test)]
+    fn outside_margin(&self, c: &ViewCorners) -> f64 {
+        self.margins(c)
+            .into_iter()
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// How far every corner lies outside each plane: the near plane's, then the four sides'
+    /// (negative where some corner is inside it).
+    pub(super) fn margins(&self, c: &ViewCorners) -> [f64; 5] {
+        let mut m = [f64::INFINITY; 5];
+        for i in 0..8 {
+            let p = DVec3::new(c.x[i], c.y[i], c.z[i]);
+            m[0] = m[0].min(self.near - p.z);
+            for (k, n) in self.normals.iter().enumerate() {
+                m[k + 1] = m[k + 1].min(n.dot(p));
+            }
         }
-        best
+        m
+    }
+
+    /// Whether a box `margins` outside the planes (as [`Self::margins`] gave them) is still
+    /// wholly outside one of them after the eye moved by `step` (view axes of now) and its
+    /// points moved by at most `drift` more (the turn, k·D, and the curvature drop). A point p
+    /// at distance d = n·R(p − e) past a plane through the eye is, after the eye moves to e'
+    /// and turns to R', at n·R'(p − e') = d + n·(R' − R)(p − e) − n·R'(e' − e): at least
+    /// d − drift − n·step. (The near plane's offset is the same before and after.)
+    pub(super) fn still_outside(&self, margins: &[f64; 5], step: DVec3, drift: f64) -> bool {
+        let near = DVec3::new(0.0, 0.0, -1.0);
+        std::iter::once(near)
+            .chain(self.normals)
+            .zip(margins)
+            .any(|(n, &d)| d > 0.0 && d * (1.0 - ROOM) - n.dot(step) - drift > 0.0)
     }
 }
 
@@ -502,281 +539,5 @@ fn frobenius(m: DMat3) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn corners_of(b: &Aabb) -> ViewCorners {
-        let c = b.corners();
-        ViewCorners {
-            x: c.map(|p| p.x),
-            y: c.map(|p| p.y),
-            z: c.map(|p| p.z),
-        }
-    }
-
-    /// A box wholly right of the right plane is outside it by its nearest corner's distance;
-    /// one straddling the plane is not outside.
-    #[test]
-    fn outside_margin_is_the_nearest_corners_distance_past_a_plane() {
-        let f = crate::camera::Frustum {
-            tan_left: -1.0,
-            tan_right: 1.0,
-            tan_down: -0.5,
-            tan_up: 0.5,
-        };
-        let planes = FrustumPlanes::of(&f, 1.0);
-        // x − z > 0 at every corner; the nearest to the plane x = z is (20, ·, 10): 10/√2.
-        let b = Aabb {
-            min: DVec3::new(20.0, -1.0, 5.0),
-            max: DVec3::new(30.0, 1.0, 10.0),
-        };
-        let m = planes.outside_margin(&corners_of(&b));
-        assert!((m - 10.0 / 2f64.sqrt()).abs() < 1e-12, "{m}");
-        let straddling = Aabb {
-            min: DVec3::new(0.0, -1.0, 5.0),
-            max: DVec3::new(30.0, 1.0, 10.0),
-        };
-        assert!(planes.outside_margin(&corners_of(&straddling)) <= 0.0);
-        // Behind the near plane: its distance past it.
-        let behind = Aabb {
-            min: DVec3::new(-1.0, -1.0, -5.0),
-            max: DVec3::new(1.0, 1.0, 0.5),
-        };
-        assert!((planes.outside_margin(&corners_of(&behind)) - 0.5).abs() < 1e-12);
-    }
-
-    use super::super::equivalence_tests::Rng;
-
-    /// A random unit vector.
-    fn unit(rng: &mut Rng) -> DVec3 {
-        loop {
-            let v = DVec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            );
-            if (0.1..1.0).contains(&v.length()) {
-                return v.normalize();
-            }
-        }
-    }
-
-    /// The growth bound of the module's doc, by brute force: a node's gain over a box within
-    /// its ring tile's box, formed afresh after the eye moved by m and turned by k, is never
-    /// more than its gain when the record was made times `Growth::gain` — on the plane (the
-    /// world vertical, no slack) and on the ellipsoid (the node's normal within the tile's
-    /// spread of the tile's, a slack part).
-    #[test]
-    fn a_gain_grows_at_most_by_the_records_factor() {
-        use super::super::bound::{spread_gain_of, vertical_gain_of};
-        let mut rng = Rng(0x15_0f);
-        let (mut checked, mut tight) = (0u32, 0f64);
-        for case in 0..20_000 {
-            let ellipsoid = case % 2 == 1;
-            let f = crate::camera::Frustum::symmetric(rng.range(40f64, 110.0).to_radians(), 16, 9);
-            // World → view at the record: looking along a random direction, below the horizon
-            // mostly; the world vertical is +Z.
-            let r0 = DMat3::from_euler(
-                glam::EulerRot::ZXY,
-                rng.range(0.0, 6.3),
-                rng.range(-1.6, 1.6),
-                rng.range(-0.6, 0.6),
-            );
-            let eye0 = DVec3::new(
-                rng.range(-50.0, 50.0),
-                rng.range(-50.0, 50.0),
-                rng.range(0.0, 900.0),
-            );
-            // The ring tile's box: somewhere in front of the eye at the record.
-            let ahead =
-                r0.transpose() * DVec3::new(rng.range(-0.5, 0.5), rng.range(-0.3, 0.3), 1.0);
-            let centre = eye0 + ahead * rng.range(200.0, 20_000.0);
-            let half = DVec3::new(
-                rng.range(5.0, 3000.0),
-                rng.range(5.0, 3000.0),
-                rng.range(1.0, 500.0),
-            );
-            let ring = Aabb {
-                min: centre - half,
-                max: centre + half,
-            };
-            // A node's box within it.
-            let pick = |rng: &mut Rng, lo: f64, hi: f64| {
-                let (a, b) = (rng.range(lo, hi), rng.range(lo, hi));
-                (a.min(b), a.max(b))
-            };
-            let (x0, x1) = pick(&mut rng, ring.min.x, ring.max.x);
-            let (y0, y1) = pick(&mut rng, ring.min.y, ring.max.y);
-            let (z0, z1) = pick(&mut rng, ring.min.z, ring.max.z);
-            let node = Aabb {
-                min: DVec3::new(x0, y0, z0),
-                max: DVec3::new(x1, y1, z1),
-            };
-            // The tile's normal, its spread, the node's normal within it and the node's slack.
-            let (up_ring, spread, up_node, slack) = if ellipsoid {
-                let up = (DVec3::Z + unit(&mut rng) * 0.05).normalize();
-                let spread = rng.range(0.0, 0.02);
-                let tilt = unit(&mut rng) * spread * rng.next();
-                (up, spread, (up + tilt).normalize(), rng.range(0.0, 1.0))
-            } else {
-                (DVec3::Z, 0.0, DVec3::Z, 0.0)
-            };
-            let corners = |r: DMat3, eye: DVec3, b: &Aabb| {
-                let c = b.corners().map(|p| r * (p - eye));
-                (
-                    c,
-                    ViewCorners {
-                        x: c.map(|p| p.x),
-                        y: c.map(|p| p.y),
-                        z: c.map(|p| p.z),
-                    },
-                )
-            };
-            let (ring0, ring_c) = corners(r0, eye0, &ring);
-            let ring_z = ring0.iter().fold(f64::INFINITY, |a, p| a.min(p.z));
-            if ring_z <= 1.0 {
-                continue;
-            }
-            let _ = ring_c;
-            let a = f.tan_left.abs().max(f.tan_right.abs());
-            let b = f.tan_up.abs().max(f.tan_down.abs());
-            let turn = (2.0 + a * a + b * b).sqrt();
-            let u0 = r0 * DVec3::Z;
-            let optics = Optics {
-                tau: 1.0,
-                focal: 1000.0,
-                near: 0.5,
-                a,
-                b,
-                turn,
-                floor: frustum_gain_floor(&f, u0),
-                w_z: u0.z.abs(),
-                frustum: f,
-            };
-            let view = ViewNow {
-                eye: eye0,
-                rotation: r0,
-            };
-            let normal = ellipsoid.then_some(RingNormal {
-                up: up_ring,
-                spread,
-            });
-            let Some(growth) = Growth::of(&optics, &view, normal, ring_z, reach(&ring, eye0))
-            else {
-                continue;
-            };
-            if growth.floor <= 1e-3 {
-                continue;
-            }
-            // What the record takes of every normal within the tile's spread: its least gain
-            // and |w_z| (a normal turned by the whole spread, any way).
-            if ellipsoid {
-                let turned = r0 * (up_ring + unit(&mut rng) * spread).normalize();
-                assert!(
-                    frustum_gain_floor(&f, turned) >= growth.floor,
-                    "case {case}: floor"
-                );
-                assert!(turned.z.abs() <= growth.w_z, "case {case}: w_z");
-            }
-            let gain = |r: DMat3, eye: DVec3| {
-                let (c, _) = corners(r, eye, &node);
-                if ellipsoid {
-                    spread_gain_of(&c, &f, r * up_node, slack)
-                } else {
-                    vertical_gain_of(&c, &f, r * up_node)
-                }
-            };
-            let then = gain(r0, eye0);
-            // The eye moves and turns a little (a frame or a few of a fast flight).
-            let turned = DMat3::from_axis_angle(unit(&mut rng), rng.range(0.0, 0.02)) * r0;
-            let eye1 = eye0 + unit(&mut rng) * rng.range(0.0, 30.0);
-            let (m, k) = ((eye1 - eye0).length(), frobenius(turned - r0));
-            let Some(factor) = growth.gain(m, k, &optics) else {
-                continue;
-            };
-            let now = gain(turned, eye1);
-            assert!(
-                now <= then * factor * (1.0 + 1e-9),
-                "case {case}: gain {then} → {now}, more than ×{factor} (m {m}, k {k})"
-            );
-            if now > then {
-                tight = tight.max((now - then) / (then * (factor - 1.0)));
-            }
-            checked += 1;
-        }
-        eprintln!("{checked} gains checked; the largest growth used {tight:.3} of the bound's");
-        assert!(checked > 5_000, "{checked}");
-    }
-
-    #[test]
-    fn frobenius_bounds_a_turn() {
-        let r0 = DMat3::from_rotation_z(0.3);
-        let r1 = DMat3::from_rotation_z(0.3 + 1e-3);
-        let k = frobenius(r1 - r0);
-        let v = DVec3::new(100.0, -40.0, 7.0);
-        assert!((r1 * v - r0 * v).length() <= k * v.length());
-        assert!(k < 2e-3);
-    }
-
-    /// Records made together fall due in waves; the budget spreads their walks: over a long
-    /// run of records walked afresh as the rule says, no frame walks more than
-    /// [`AGED_WALKS_PER_FRAME`] for age unless one has waited [`AGE_GRACE`] frames past due,
-    /// none waits longer, and the busiest frame walks fewer than without the budget.
-    #[test]
-    fn records_due_by_age_are_walked_a_few_a_frame() {
-        // 110 ring tiles (the 16385² plane's at 720p), all recorded in frame 0.
-        let tiles: Vec<(u32, u32, u32)> = (0..110u32).map(|i| (i % 6, i * 7 % 23, i / 5)).collect();
-        let run = |budget: bool| {
-            let mut made = vec![0u64; tiles.len()];
-            let (mut busiest, mut oldest_over) = (0u32, 0u64);
-            for frame in 1..400u64 {
-                let mut aged = 0u32;
-                for (t, &(l, x, y)) in tiles.iter().enumerate() {
-                    let (age, due) = (frame - made[t], max_age(l, x, y));
-                    let walk = if budget {
-                        walk_for_age(age, due, aged)
-                    } else {
-                        age >= due
-                    };
-                    if walk {
-                        if budget && aged >= AGED_WALKS_PER_FRAME {
-                            assert!(age >= due + AGE_GRACE, "frame {frame}: walked over budget");
-                        }
-                        aged += 1;
-                        made[t] = frame;
-                    } else {
-                        oldest_over = oldest_over.max(age.saturating_sub(due - 1));
-                    }
-                }
-                busiest = busiest.max(aged);
-            }
-            (busiest, oldest_over)
-        };
-        let (with, waited) = run(true);
-        let (without, _) = run(false);
-        assert!(
-            waited <= AGE_GRACE,
-            "a record waited {waited} frames past due"
-        );
-        assert!(waited > 0, "no record waited: the budget never bit");
-        assert!(
-            with < without,
-            "busiest frame {with} with the budget, {without} without"
-        );
-        // Not due: never walked for age; due with room: walked; due without room: waits,
-        // until the grace is spent.
-        assert!(!walk_for_age(15, 16, 0));
-        assert!(walk_for_age(16, 16, AGED_WALKS_PER_FRAME - 1));
-        assert!(!walk_for_age(16, 16, AGED_WALKS_PER_FRAME));
-        assert!(!walk_for_age(16 + AGE_GRACE - 1, 16, AGED_WALKS_PER_FRAME));
-        assert!(walk_for_age(16 + AGE_GRACE, 16, AGED_WALKS_PER_FRAME));
-    }
-
-    #[test]
-    fn ages_are_staggered_between_16_and_23() {
-        let ages: std::collections::HashSet<u64> =
-            (0..64).map(|t| max_age(t % 5, t, t / 3)).collect();
-        assert!(ages.len() > 4);
-        assert!(ages.iter().all(|a| (16..24).contains(a)));
-    }
-}
+#[path = "carry_tests.rs"]
+mod tests;

@@ -152,7 +152,7 @@ pub fn select_tiles_multi_ready(
                 a,
                 b,
                 turn: (2.0 + a * a + b * b).sqrt(),
-                floor,
+                up: v.up,
                 w_z: v.up.z.abs(),
                 frustum: f,
             }
@@ -492,7 +492,7 @@ fn select_coarsest_first(
                 let key = (level, tx, ty);
                 nodes.clear();
                 morphs.clear();
-                if carry.take(key, &c.now, &c.optics, &mut nodes, &mut morphs) {
+                if carry.take(key, &c.now, &c.optics, &c.planes, &mut nodes, &mut morphs) {
                     let first = out.items.len();
                     out.push_refined(i, level, tx, ty, &nodes);
                     for &(k, morph) in &morphs {
