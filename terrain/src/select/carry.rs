@@ -19,13 +19,18 @@
 //! - a depth falls by at most μ, so a part's first factor grows by at most
 //!   `(z − ε)/(z − μ − ε)`, largest for the node's own depth z and ε its own or
 //!   z·ρ/(f·g₀/τ + ρ), whichever is larger;
-//! - a gain grows by at most `(|w_z| + k)·(2 + A + B)·μ_R/(z_R − μ_R) + k·√(2 + A² + B²)`
-//!   while R stays wholly in front of the eye (z_R its smallest depth, unclamped): the view
-//!   ratios a = x/z, b = y/z of a box in R, clamped to the frustum's tangents (at most A and
-//!   B), each move by at most μ_R·(1 + A)/(z_R − μ_R) (resp. B), the gain is |w_z|-Lipschitz
-//!   in them (|w_z| when the record was made: the turn adds at most k), and √(2 + A² + B²)·|Δw|
-//!   bounds what the turn of the world vertical w does; over g₀ — the least gain when the
-//!   record was made, which every gain then was at least — that is the relative growth.
+//! - a gain grows by at most `(|w_z| + k)·√(2 + A² + B²)·μ_R/(z_R − μ_R) + k·√(2 + A² + B²)`
+//!   while R stays wholly in front of the eye (z_R its smallest depth, unclamped): a point of
+//!   R moved along the straight segment between its two view-space places (length ≤ μ_R,
+//!   depth ≥ z_R − μ_R all along) has its view ratio a = x/z change at the rate
+//!   (ẋ − a·ż)/z, at most ‖ṗ‖·√(1 + a²)/z, and its value clamped to the frustum's tangents
+//!   (at most A) changes only while |a| ≤ A: by at most Δa = √(1 + A²)·μ_R/(z_R − μ_R) in all,
+//!   likewise b by Δb with B; so do the ends of a box's clamped ranges. The gain
+//!   √(max (w_x − a·w_z)² + max (w_y − b·w_z)²) then moves by at most |w_z|·√(Δa² + Δb²)
+//!   (each root of a maximum is |w_z|-Lipschitz in the range's ends; |w_z| when the record was
+//!   made: the turn adds at most k), and √(2 + A² + B²)·|Δw| bounds what the turn of the
+//!   world vertical w does; over g₀ — the least gain when the record was made, which every
+//!   gain then was at least — that is the relative growth.
 //!
 //! **On the ellipsoid** (geographic and UTM grids) a node's boxes are fixed in the world (no
 //! curvature drop moves with the eye; μ keeps that term, which only adds room), and its gain
@@ -33,8 +38,8 @@
 //! c = √(1 + a² + b²) over its (a, b). Every node of the ring tile has its normal within the
 //! tile's spread σ of the tile's normal u_R, and g is √(1 + A² + B²)-Lipschitz in u, so the
 //! record's least gain is the frustum's for u_R less σ·√(2 + A² + B²), and its |w_z| is
-//! |u_R,z| + σ; c moves by at most |Δa| + |Δb| and is ≥ 1, so the slack's part grows by at most
-//! the ratio `(2 + A + B)·μ_R/(z_R − μ_R)` of itself — added to the relative growth. A
+//! |u_R,z| + σ; c moves by at most √(Δa² + Δb²) and is ≥ 1, so the slack's part grows by at
+//! most the ratio `√(2 + A² + B²)·μ_R/(z_R − μ_R)` of itself — added to the relative growth. A
 //! record whose least gain is not positive is not kept. The least gain is taken over the ring
 //! tile's own view ratios (its box's corners' (a, b), clamped), not the whole frustum's: every
 //! node's box lies within the tile's, so every gain formed was at least that.
@@ -199,8 +204,9 @@ impl Growth {
         if self.ring_z - mu_ring <= 1e-6 {
             return None;
         }
-        // Σ: how far a and b together move, at most, for a box within the ring tile.
-        let sigma = (2.0 + optics.a + optics.b) * mu_ring / (self.ring_z - mu_ring);
+        // Σ: how far (a, b) together move, at most (√(Δa² + Δb²)), for a box within the ring
+        // tile.
+        let sigma = optics.turn * mu_ring / (self.ring_z - mu_ring);
         let slack = if self.slack { sigma } else { 0.0 };
         Some(1.0 + ((self.w_z + k) * sigma + k * optics.turn) / self.floor + slack)
     }
@@ -219,10 +225,8 @@ pub(super) struct Optics {
     /// Focal length (px).
     pub focal: f64,
     pub near: f64,
-    /// Largest |tangent| across (A) and up or down (B).
-    pub a: f64,
-    pub b: f64,
-    /// √(2 + A² + B²): bounds what a turn of the world vertical does to a gain.
+    /// √(2 + A² + B²), A and B the largest |tangent| across and up or down: bounds what a
+    /// turn of the world vertical does to a gain, and how far (a, b) move.
     pub turn: f64,
     /// The world vertical in view space, and its |w_z|.
     pub up: DVec3,

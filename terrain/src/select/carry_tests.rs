@@ -140,8 +140,6 @@ fn a_gain_grows_at_most_by_the_records_factor() {
             tau: 1.0,
             focal: 1000.0,
             near: 0.5,
-            a,
-            b,
             turn,
             up: u0,
             w_z: u0.z.abs(),

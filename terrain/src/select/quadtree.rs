@@ -149,8 +149,6 @@ pub fn select_tiles_multi_ready(
                 tau: v.tau,
                 focal: v.focal,
                 near: v.camera.near,
-                a,
-                b,
                 turn: (2.0 + a * a + b * b).sqrt(),
                 up: v.up,
                 w_z: v.up.z.abs(),
