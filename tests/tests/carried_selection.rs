@@ -97,7 +97,7 @@ fn records_drawn_past_their_age_stay_within_tau() {
     let frustum = Frustum::symmetric(90f64.to_radians(), viewport.0, viewport.1);
     let mut sel = Selection::default();
     let (mut deferred, mut checked) = (0u32, 0u32);
-    for k in 0..60 {
+    for k in 0..100 {
         let p = DVec3::new(x + 3.0 * k as f64, y + 2.0 * k as f64, z);
         let cam = Camera::new(p, Attitude::from_degrees(56.0, -15.0, 0.0), frustum);
         select_at(&s, &cam, viewport, true, &mut sel);

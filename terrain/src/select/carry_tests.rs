@@ -265,10 +265,10 @@ fn records_due_by_age_are_walked_a_few_a_frame() {
 }
 
 #[test]
-fn ages_are_staggered_between_16_and_23() {
+fn ages_are_staggered_between_32_and_47() {
     let ages: std::collections::HashSet<u64> = (0..64).map(|t| max_age(t % 5, t, t / 3)).collect();
-    assert!(ages.len() > 4);
-    assert!(ages.iter().all(|a| (16..24).contains(a)));
+    assert!(ages.len() > 8);
+    assert!(ages.iter().all(|a| (32..48).contains(a)));
 }
 
 /// A part outside the frustum that `still_outside` keeps culled after a move and a turn is
