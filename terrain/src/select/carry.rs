@@ -47,12 +47,12 @@
 //! So each node's bound times the two factors bounds its error now; a record is drawn again
 //! while every node's stays ≤ τ (with a margin far beyond rounding), every part the walk
 //! culled is still wholly outside one frustum plane — its distance past that plane less the
-//! eye's move along the plane's normal, k·D and the curvature drop (`FrustumPlanes::
-//! still_outside`: a forward move carries the parts beside the frustum further out) —,
-//! nothing came within μ of the eye plane, and until it falls due ([`max_age`] frames) — a walk afresh then finds the
-//! coarser nodes a receding eye allows; at most [`AGED_WALKS_PER_FRAME`] records a frame are
-//! walked for their age, the others drawn again (still certified) for up to [`AGE_GRACE`]
-//! frames more. Drawn again, a node's ρ is that bound: larger than a fresh
+//! eye's move along the plane's normal, k·D and the curvature drop
+//! (`FrustumPlanes::still_outside`: a forward move carries the parts beside the frustum
+//! further out) —, nothing came within μ of the eye plane, and until it falls due
+//! ([`max_age`] frames) — a walk afresh then finds the coarser nodes a receding eye allows;
+//! at most [`AGED_WALKS_PER_FRAME`] records a frame are walked for their age, the others drawn
+//! again (still certified) for up to [`AGE_GRACE`] frames more. Drawn again, a node's ρ is that bound: larger than a fresh
 //! walk's, never smaller than its error.
 
 use std::collections::HashMap;
