@@ -155,7 +155,9 @@ fn carried_nodes_cover_the_ground_once_and_stay_within_tau() {
             let what = format!("{} flight {f} frame {k}", s.name);
             select(s, cam, true, &mut sel);
             select(s, cam, false, &mut fresh);
-            if k % 3 == 2 {
+            // Every third frame, and every frame that repaired a record (one node walked
+            // afresh beside the others drawn again): the ground covered exactly once.
+            if k % 3 == 2 || sel.carry.stats.repaired_tiles > 0 {
                 flat_oracle::assert_covered_once(hf, cam, (W, H), M, &sel.items, &what);
             }
             tally.frame(&sel, &fresh, &mut rng, &what, |l, x, y, drawn| {
@@ -164,6 +166,11 @@ fn carried_nodes_cover_the_ground_once_and_stay_within_tau() {
         }
     }
     tally.finish("carried selection", 2);
+    assert!(
+        tally.repaired > 5,
+        "{} records repaired: too few to tell",
+        tally.repaired
+    );
 }
 
 /// A carried flight's counts: nodes carried and drawn, nodes fresh walks drew, nodes checked,
@@ -177,6 +184,8 @@ struct Tally {
     worst_ratio: f64,
     /// Records drawn past their age (`CarryStats::deferred_tiles`), over the frames.
     deferred: u64,
+    /// Records repaired (`CarryStats::repaired_tiles`), over the frames.
+    repaired: u64,
 }
 
 impl Tally {
@@ -193,6 +202,7 @@ impl Tally {
     ) {
         assert_eq!(sel.unbounded, 0, "{what}: unbounded nodes");
         self.deferred += sel.carry.stats.deferred_tiles as u64;
+        self.repaired += sel.carry.stats.repaired_tiles as u64;
         self.carried += sel.carry.stats.carried_nodes as u64;
         self.drawn += sel.items.len() as u64;
         self.fresh_drawn += fresh.items.len() as u64;
@@ -200,8 +210,9 @@ impl Tally {
             return;
         }
         // A frame that drew records past their age (waiting for a frame with room to walk
-        // them) has more of its nodes checked: they are certified like any other.
-        let random = if sel.carry.stats.deferred_tiles > 0 {
+        // them) or repaired one has more of its nodes checked: they are certified like any
+        // other.
+        let random = if sel.carry.stats.deferred_tiles + sel.carry.stats.repaired_tiles > 0 {
             12
         } else {
             3
@@ -232,9 +243,10 @@ impl Tally {
             checked,
             worst_ratio,
             deferred,
+            repaired,
         } = *self;
         eprintln!(
-            "{name}: {carried} of {drawn} nodes carried; {fresh_drawn} drawn by fresh walks; {checked} nodes checked, tightest measured/bound {worst_ratio:.3}; {deferred} records drawn past their age"
+            "{name}: {carried} of {drawn} nodes carried; {fresh_drawn} drawn by fresh walks; {checked} nodes checked, tightest measured/bound {worst_ratio:.3}; {deferred} records drawn past their age; {repaired} repaired"
         );
         assert!(
             carried * share > drawn,

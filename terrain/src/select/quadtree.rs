@@ -8,7 +8,7 @@ use crate::camera::Camera;
 use crate::clipmap::{ring_tiles, ClipmapDesc, LevelPlacement};
 
 use super::bound::{frustum_gain_floor, frustum_vertical_gain};
-use super::carry::{Carry, CarryKey, FrustumPlanes, Optics, RingNormal, ViewNow};
+use super::carry::{Carry, CarryKey, FrustumPlanes, Optics, RingNormal, Taken, ViewNow};
 use super::cdlod_morph::Morph;
 use super::parts::{choose_parts, MeshCosts, NodeEval, Parts, Quadrant, Upgrade};
 use super::selection::{
@@ -282,6 +282,63 @@ fn refine_ring_tile(
     missed
 }
 
+/// The one node of a ring tile's carried record that no longer holds (`failing`, drawn as
+/// `morph`: at its own resolution, its parent's or its grandparent's), walked afresh as
+/// [`refine_ring_tile`] walks a ring tile's nodes, with the options a fresh walk reaching it
+/// would weigh: a sixteenth that fails is tried as its parent's quadrant first, and any node
+/// below the ring tile is split with its children tried as sixteenths of its parent (the node
+/// missed τ at its parent's resolution, or it would not be failing at a finer one). The ground
+/// it covered is covered again, each part meeting τ or split to the cap, culled parts dropped.
+/// Its nodes are appended to `nodes` and their morphs to `morphs` (indices into `nodes`);
+/// returns how many miss τ.
+fn repair_node(
+    frame: &Frame,
+    ring_level: u32,
+    failing: (u32, u32, u32, f32, f32),
+    morph: Morph,
+    nodes: &mut Vec<(u32, u32, u32, f32, f32)>,
+    morphs: &mut Vec<(usize, Morph)>,
+) -> u32 {
+    let cap = frame
+        .params
+        .max_refinement
+        .min(ring_level)
+        .min(MAX_REFINEMENT);
+    let finest = ring_level - cap;
+    let (l, x, y) = (failing.0, failing.1, failing.2);
+    frame.quadrants.borrow_mut().clear();
+    // Its parent within the ring tile, where its children may be that parent's sixteenths.
+    let parent =
+        (l < ring_level && frame.params.parent_quadrants).then(|| frame.fixed(l + 1, x / 2, y / 2));
+    let own = match &parent {
+        Some(p) if morph == Morph::SIXTEENTH => match frame.evaluate_quadrant(p, None, l, x, y) {
+            None => None,
+            Some((q, _, _)) if q.rho_norm <= 1.0 => {
+                nodes.push((l, x, y, q.eps as f32, q.rho_px as f32));
+                morphs.push((nodes.len() - 1, Morph::QUADRANT));
+                return 0;
+            }
+            Some((_, own, _)) => Some(own),
+        },
+        _ => frame.evaluate(l, x, y, true),
+    };
+    let missed = match own {
+        None => {
+            frame.note_culled(l, x, y);
+            0
+        }
+        Some(eval) => {
+            let retry = parent
+                .as_ref()
+                .map(|parent| TryParts { parent, kids: None });
+            frame.subdivide_seen(l, x, y, eval, finest, retry, nodes)
+        }
+    };
+    // `subdivide_seen` indexes its morphs into the list it appends to.
+    morphs.extend_from_slice(&frame.quadrants.borrow());
+    missed
+}
+
 /// `Bounded` with [`SelectParams::coarsen`]: a quadtree over the clipmap levels. Every
 /// coarsest-level tile is a root; a node that meets τ is drawn from its own level's texture;
 /// one that misses it is split into its four children when the next finer level's patch holds
@@ -315,6 +372,7 @@ fn select_coarsest_first(
         .collect();
     let mut formed: Vec<[Quadrant; 4]> = Vec::new();
     let mut parts = Vec::new();
+    let mut kept_culled = Vec::new();
     while let Some((i, tx, ty, known, retry)) = stack.pop() {
         let kids = match retry {
             Retry::Formed(k) => frame.formed(Some(&formed[k as usize])).copied(),
@@ -490,7 +548,49 @@ fn select_coarsest_first(
                 let key = (level, tx, ty);
                 nodes.clear();
                 morphs.clear();
-                if carry.take(key, &c.now, &c.optics, &c.planes, &mut nodes, &mut morphs) {
+                kept_culled.clear();
+                let taken = carry.take(
+                    key,
+                    &c.now,
+                    &c.optics,
+                    &c.planes,
+                    &mut nodes,
+                    &mut morphs,
+                    &mut kept_culled,
+                );
+                if let Some(culled) = &frame.culled {
+                    culled.borrow_mut().clear();
+                }
+                if let Taken::AllBut(failing, morph) = taken {
+                    // The others drawn again, the one walked afresh, the record made again.
+                    let missed = repair_node(frame, level, failing, morph, &mut nodes, &mut morphs);
+                    let first = out.items.len();
+                    out.push_refined(i, level, tx, ty, &nodes);
+                    for &(k, morph) in &morphs {
+                        out.items[first + k].morph = morph;
+                    }
+                    if missed == 0 {
+                        if let Some(culled) = &frame.culled {
+                            kept_culled.extend_from_slice(&culled.borrow());
+                        }
+                        let normal = frame.fixed(level, tx, ty).geo.map(|g| RingNormal {
+                            up: g.up,
+                            spread: g.spread,
+                        });
+                        carry.record(
+                            key,
+                            &c.now,
+                            &c.optics,
+                            normal,
+                            &nodes,
+                            &morphs,
+                            &kept_culled,
+                            &c.planes,
+                            |l, x, y| frame.carried_box(l, x, y),
+                        );
+                    }
+                    missed
+                } else if taken == Taken::Whole {
                     let first = out.items.len();
                     out.push_refined(i, level, tx, ty, &nodes);
                     for &(k, morph) in &morphs {
@@ -498,9 +598,7 @@ fn select_coarsest_first(
                     }
                     0
                 } else {
-                    if let Some(culled) = &frame.culled {
-                        culled.borrow_mut().clear();
-                    }
+                    carry.stats.walked_tiles += 1;
                     let missed =
                         refine_ring_tile(frame, level, tx, ty, eval, retry, i, &mut nodes, out);
                     if missed == 0 {
