@@ -282,6 +282,50 @@ fn refine_ring_tile(
     missed
 }
 
+/// A carried ring tile's `nodes` drawn, with their `morphs` (indices into `nodes`).
+fn push_carried(
+    out: &mut Selection,
+    i: usize,
+    (level, tx, ty): (u32, u32, u32),
+    nodes: &[(u32, u32, u32, f32, f32)],
+    morphs: &[(usize, Morph)],
+) {
+    let first = out.items.len();
+    out.push_refined(i, level, tx, ty, nodes);
+    for &(k, morph) in morphs {
+        out.items[first + k].morph = morph;
+    }
+}
+
+/// Ring tile `key`'s record made at this frame's view from `nodes`, `morphs` and the parts
+/// found outside the frustum, `culled` ([`Carry::record`]; on the ellipsoid with the tile's
+/// normal).
+fn record_ring_tile(
+    frame: &Frame,
+    c: &Carrying,
+    carry: &mut Carry<SelectParams>,
+    key: (u32, u32, u32),
+    nodes: &[(u32, u32, u32, f32, f32)],
+    morphs: &[(usize, Morph)],
+    culled: &[(u32, u32, u32)],
+) {
+    let normal = frame.fixed(key.0, key.1, key.2).geo.map(|g| RingNormal {
+        up: g.up,
+        spread: g.spread,
+    });
+    carry.record(
+        key,
+        &c.now,
+        &c.optics,
+        normal,
+        nodes,
+        morphs,
+        culled,
+        &c.planes,
+        |l, x, y| frame.carried_box(l, x, y),
+    );
+}
+
 /// The one node of a ring tile's carried record that no longer holds (`failing`, drawn as
 /// `morph`: at its own resolution, its parent's or its grandparent's), walked afresh as
 /// [`refine_ring_tile`] walks a ring tile's nodes, with the options a fresh walk reaching it
@@ -561,65 +605,36 @@ fn select_coarsest_first(
                 if let Some(culled) = &frame.culled {
                     culled.borrow_mut().clear();
                 }
-                if let Taken::AllBut(failing, morph) = taken {
-                    // The others drawn again, the one walked afresh, the record made again.
-                    let missed = repair_node(frame, level, failing, morph, &mut nodes, &mut morphs);
-                    let first = out.items.len();
-                    out.push_refined(i, level, tx, ty, &nodes);
-                    for &(k, morph) in &morphs {
-                        out.items[first + k].morph = morph;
+                match taken {
+                    Taken::Whole => {
+                        push_carried(out, i, key, &nodes, &morphs);
+                        0
                     }
-                    if missed == 0 {
-                        if let Some(culled) = &frame.culled {
-                            kept_culled.extend_from_slice(&culled.borrow());
+                    Taken::AllBut(failing, morph) => {
+                        // The others drawn again, the one walked afresh, the record made again.
+                        let missed =
+                            repair_node(frame, level, failing, morph, &mut nodes, &mut morphs);
+                        push_carried(out, i, key, &nodes, &morphs);
+                        if missed == 0 {
+                            if let Some(culled) = &frame.culled {
+                                kept_culled.extend_from_slice(&culled.borrow());
+                            }
+                            record_ring_tile(frame, c, carry, key, &nodes, &morphs, &kept_culled);
                         }
-                        let normal = frame.fixed(level, tx, ty).geo.map(|g| RingNormal {
-                            up: g.up,
-                            spread: g.spread,
-                        });
-                        carry.record(
-                            key,
-                            &c.now,
-                            &c.optics,
-                            normal,
-                            &nodes,
-                            &morphs,
-                            &kept_culled,
-                            &c.planes,
-                            |l, x, y| frame.carried_box(l, x, y),
-                        );
+                        missed
                     }
-                    missed
-                } else if taken == Taken::Whole {
-                    let first = out.items.len();
-                    out.push_refined(i, level, tx, ty, &nodes);
-                    for &(k, morph) in &morphs {
-                        out.items[first + k].morph = morph;
+                    Taken::Walk => {
+                        carry.stats.walked_tiles += 1;
+                        let missed =
+                            refine_ring_tile(frame, level, tx, ty, eval, retry, i, &mut nodes, out);
+                        if missed == 0 {
+                            let culled = frame.culled.as_ref().map(|c| c.borrow());
+                            let culled = culled.as_deref().map_or(&[][..], |v| v.as_slice());
+                            let morphs = frame.quadrants.borrow();
+                            record_ring_tile(frame, c, carry, key, &nodes, &morphs, culled);
+                        }
+                        missed
                     }
-                    0
-                } else {
-                    carry.stats.walked_tiles += 1;
-                    let missed =
-                        refine_ring_tile(frame, level, tx, ty, eval, retry, i, &mut nodes, out);
-                    if missed == 0 {
-                        let culled = frame.culled.as_ref().map(|c| c.borrow());
-                        let normal = frame.fixed(level, tx, ty).geo.map(|g| RingNormal {
-                            up: g.up,
-                            spread: g.spread,
-                        });
-                        carry.record(
-                            key,
-                            &c.now,
-                            &c.optics,
-                            normal,
-                            &nodes,
-                            &frame.quadrants.borrow(),
-                            culled.as_deref().map_or(&[], |v| v.as_slice()),
-                            &c.planes,
-                            |l, x, y| frame.carried_box(l, x, y),
-                        );
-                    }
-                    missed
                 }
             }
             _ => refine_ring_tile(frame, level, tx, ty, eval, retry, i, &mut nodes, out),
