@@ -224,6 +224,69 @@ fn drawn_tiles_cover_the_visible_ground_exactly_once() {
     }
 }
 
+/// A root of the coarsest clipmap level drawn at its parent's or its grandparent's resolution
+/// (`SelectParams::coarser_roots`: levels the bake holds above the textures, drawn with the
+/// root's stride-2 and stride-4 meshes) at coarse τ: each such root's true error within τ and
+/// within its bound by brute force, and the ground still covered exactly once.
+#[test]
+fn roots_drawn_coarser_are_within_tau() {
+    let scenes = [
+        scene("alpine", alpine()),
+        scene("cliffs", generated(DemKind::Cliffs, 7)),
+    ];
+    let mut rng = Rng(15);
+    let (mut checked, mut sixteenths) = (0u64, 0u64);
+    let mut worst_ratio: f64 = 0.0;
+    for k in 0..48 {
+        let s = &scenes[k % scenes.len()];
+        let cam = random_camera(&mut rng, s);
+        let tau = [3.0, 8.0, 30.0][k % 3];
+        let sel = select(s, &cam, tau);
+        let top = s.clip.level_count() - 1;
+        assert!(
+            (top as usize) + 2 < s.bake.levels.len(),
+            "two bake levels above"
+        );
+        let coarser: Vec<&DrawItem> = sel
+            .items
+            .iter()
+            .filter(|i| i.node_level == top && i.morph.levels_up() > 0)
+            .collect();
+        for item in coarser.iter().take(8) {
+            assert_eq!((item.level, item.refinement), (top, 0), "{item:?}");
+            let drawn = top + item.morph.levels_up();
+            let err = tile_error_px(&s.ds.hf, &cam, top, item.node_tx, item.node_ty, drawn);
+            assert!(
+                err <= tau + 1e-6 && err <= item.rho_px as f64 + 1e-6,
+                "{}: camera {k}, τ {tau}: root ({}, {}) drawn at level {drawn} projects {err:.4} px (bound {:.4})",
+                s.name,
+                item.node_tx,
+                item.node_ty,
+                item.rho_px
+            );
+            if item.rho_px > 0.0 {
+                worst_ratio = worst_ratio.max(err / item.rho_px as f64);
+            }
+            checked += 1;
+            sixteenths += (item.morph.levels_up() == 2) as u64;
+        }
+        if k % 4 == 0 {
+            flat_oracle::assert_covered_once(
+                &s.ds.hf,
+                &cam,
+                (W, H),
+                M,
+                &sel.items,
+                &format!("{} camera {k}, τ {tau}", s.name),
+            );
+        }
+    }
+    eprintln!(
+        "coarser roots: {checked} checked ({sixteenths} at their grandparent's resolution); tightest measured/bound = {worst_ratio:.3}"
+    );
+    assert!(checked > 40 && sixteenths > 10, "{checked} / {sixteenths}");
+}
+
 fn random_geo_camera(rng: &mut Rng, g: &GeoScene) -> Camera {
     let hf = &g.s.ds.hf;
     let (ex, ey) = hf.extent_m();

@@ -10,6 +10,15 @@
 //! by the parent over that quadrant. The coarsest level's range is unbounded (the reference
 //! ends it at the visibility distance; here the dataset ends first).
 //!
+//! The quadtree's levels: the clipmap's, and with `SelectParams::coarser_roots` up to two of
+//! the bake's levels above its coarsest (`levels_above`), as the reference's quadtree has its
+//! own `LODLevelCount` whatever texture it streams from. A node there is drawn as the
+//! coarsest clipmap level's tiles under it (`draw_above`): one level up each tile fully
+//! morphed onto the node's grid and then morphed by the node's zone, two levels up (the
+//! root, which does not morph) each tile's stride-4 mesh. Inn valley cruise at tiles of 9,
+//! k = 2: 2,528 triangles against 4,544 starting at the clipmap's coarsest level, the same
+//! max error (7.31 px).
+//!
 //! Each drawn node carries its level's geomorph zone (`cdlod_morph.rs`): its vertices slide onto
 //! the parent's grid as they near the end of its range, as the reference's vertex shader does;
 //! the coarsest level, whose range is unbounded, does not morph.
@@ -356,16 +365,141 @@ pub(super) fn select_cdlod(
         ),
     };
     let top = placements.len() - 1;
-    let roots = &bake.levels[coarsest.level as usize];
+    let above = levels_above(bake, coarsest.level, params);
+    let roots = &bake.levels[(coarsest.level + above) as usize];
     let mut scratch = Scratch::default();
     for ty in 0..roots.tiles_y {
         for tx in 0..roots.tiles_x {
-            visit_clipmap(&ctx, top, tx, ty, true, &mut scratch, out);
+            if above == 0 {
+                visit_clipmap(&ctx, top, tx, ty, true, &mut scratch, out);
+            } else {
+                visit_above(
+                    &ctx,
+                    coarsest.level + above,
+                    tx,
+                    ty,
+                    true,
+                    &mut scratch,
+                    out,
+                );
+            }
         }
     }
     out.finest_level = out.levels.iter().position(|l| l.drawn > 0).unwrap_or(0) as u32;
     for s in out.levels.iter_mut() {
         s.skipped = s.drawn == 0;
+    }
+}
+
+/// How many of the bake's levels above the coarsest clipmap level (`coarsest`) CDLOD's
+/// quadtree starts from: up to two with [`SelectParams::coarser_roots`] — no texture holds
+/// them, and a node there is drawn as the coarsest level's tiles under it, each as its
+/// parent's quadrant (the stride-2 mesh) or its grandparent's sixteenth (stride 4; tiles of a
+/// multiple of 4 quads), the meshes the bounded mode's roots are drawn with (`coarser_roots.rs`).
+fn levels_above(bake: &ErrorBake, coarsest: u32, params: &SelectParams) -> u32 {
+    if !params.coarser_roots {
+        return 0;
+    }
+    let q = bake.params.tile_size - 1;
+    let meshes = if q >= 4 && q.is_multiple_of(4) { 2 } else { 1 };
+    let held = (bake.levels.len() as u32).saturating_sub(coarsest + 1);
+    held.min(meshes)
+}
+
+/// `LODSelect` of node (level, tx, ty) above the coarsest clipmap level (the last placement):
+/// its children visited down to that level's tiles (`visit_clipmap`), and what it draws
+/// itself — wholly, or over the quadrants its children leave to it — drawn as the coarsest
+/// level's tiles under it ([`draw_above`]). Returns false when the parent covers its area.
+fn visit_above(
+    ctx: &Ctx,
+    level: u32,
+    tx: u32,
+    ty: u32,
+    root: bool,
+    scratch: &mut Scratch,
+    out: &mut Selection,
+) -> bool {
+    let top = ctx.placements.len() - 1;
+    if level == ctx.placements[top].level {
+        return visit_clipmap(ctx, top, tx, ty, root, scratch, out);
+    }
+    if !ctx.has_terrain(level, tx, ty) {
+        return true;
+    }
+    let s = ctx.seen(level, tx, ty);
+    let finer = Some(ctx.range(level - 1));
+    match cdlod_decide(s.distance, ctx.range(level), finer, root, s.visible) {
+        CdlodDecision::LeftToParent => false,
+        CdlodDecision::Culled => true,
+        CdlodDecision::Draw => {
+            draw_above(ctx, level, root, (level, tx, ty), &s, out);
+            true
+        }
+        CdlodDecision::Split => {
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let child = (level - 1, 2 * tx + dx, 2 * ty + dy);
+                if !visit_above(ctx, child.0, child.1, child.2, false, scratch, out) {
+                    draw_above(ctx, level, root, child, &s, out);
+                }
+            }
+            true
+        }
+    }
+}
+
+/// Node `level` (above the coarsest clipmap level; `root`: the coarsest of all, which does
+/// not morph) drawn over `area` (itself or one of its quadrants) as the coarsest clipmap
+/// level's tiles there that hold terrain and that a view sees: one level above them each
+/// tile is the node's quadrant, fully morphed onto its grid and then morphed by the node's
+/// zone, as `visit` draws a quadrant its parent covers; two levels above, a sixteenth at the
+/// node's resolution (the coarsest level: no morph). ε and ρ are the node's and the tile's
+/// larger, as for a covered quadrant.
+fn draw_above(
+    ctx: &Ctx,
+    level: u32,
+    root: bool,
+    area: (u32, u32, u32),
+    s: &Seen,
+    out: &mut Selection,
+) {
+    let top = ctx.placements.len() - 1;
+    let tile_level = ctx.placements[top].level;
+    let morph = match level - tile_level {
+        1 => ctx.quadrant_morph(level, root),
+        _ => {
+            debug_assert!(
+                root && level - tile_level == 2,
+                "a sixteenth at the top only"
+            );
+            Morph {
+                sixteenth: true,
+                ..ctx.quadrant_morph(level, true)
+            }
+        }
+    };
+    let shift = area.0 - tile_level;
+    let n = 1u32 << shift;
+    for ty in area.2 * n..(area.2 + 1) * n {
+        for tx in area.1 * n..(area.1 + 1) * n {
+            if !ctx.has_terrain(tile_level, tx, ty) {
+                continue;
+            }
+            let c = ctx.seen(tile_level, tx, ty);
+            let stats = &mut out.levels[top];
+            stats.considered += 1;
+            if !c.visible {
+                stats.culled += 1;
+                continue;
+            }
+            stats.drawn += 1;
+            stats.refined[0] += 1;
+            stats.nodes += 1;
+            let (eps, rho) = (s.eps.max(c.eps), s.rho_px.max(c.rho_px));
+            out.items.push(DrawItem {
+                morph,
+                ..DrawItem::whole(tile_level, tx, ty, eps as f32, rho as f32)
+            });
+        }
     }
 }
 
@@ -438,214 +572,5 @@ fn visit_clipmap(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ranges_double_per_level() {
-        assert_eq!(cdlod_range_m(3.0, 160.0, 0), 480.0);
-        assert_eq!(cdlod_range_m(3.0, 160.0, 1), 960.0);
-        assert_eq!(cdlod_range_m(3.0, 160.0, 4), 7680.0);
-    }
-
-    #[test]
-    fn box_distance_is_zero_inside_and_euclidean_outside() {
-        let b = Aabb {
-            min: DVec3::new(0.0, 0.0, 0.0),
-            max: DVec3::new(10.0, 10.0, 5.0),
-        };
-        assert_eq!(box_distance(DVec3::new(5.0, 5.0, 1.0), &b), 0.0);
-        assert_eq!(box_distance(DVec3::new(13.0, 14.0, 5.0), &b), 5.0);
-        assert_eq!(box_distance(DVec3::new(5.0, 5.0, 17.0), &b), 12.0);
-    }
-
-    #[test]
-    fn decisions_follow_lod_select() {
-        use CdlodDecision::*;
-        // Outside its own range: the parent covers it, even when invisible.
-        assert_eq!(
-            cdlod_decide(101.0, 100.0, Some(50.0), false, true),
-            LeftToParent
-        );
-        assert_eq!(
-            cdlod_decide(101.0, 100.0, Some(50.0), false, false),
-            LeftToParent
-        );
-        // A root has no range limit.
-        assert_eq!(cdlod_decide(1e9, 100.0, Some(50.0), true, true), Draw);
-        // In range but unseen: done.
-        assert_eq!(cdlod_decide(80.0, 100.0, Some(50.0), false, false), Culled);
-        // In range, beyond the finer range: whole; within it: split; finest: whole.
-        assert_eq!(cdlod_decide(80.0, 100.0, Some(50.0), false, true), Draw);
-        assert_eq!(cdlod_decide(50.0, 100.0, Some(50.0), false, true), Split);
-        assert_eq!(cdlod_decide(10.0, 100.0, None, false, true), Draw);
-    }
-
-    /// A 257² bumpy dataset, its bake and clipmap (level-0 tiles of 16 quads × 10 m).
-    fn scene() -> (crate::bake::ErrorBake, crate::clipmap::ClipmapDesc) {
-        use crate::bake::{bake, BakeParams};
-        use crate::dataset::Dataset;
-        use crate::Heightfield;
-        let n = 257;
-        let hf = Heightfield {
-            width: n,
-            height: n,
-            spacing_x: 10.0,
-            spacing_y: 10.0,
-            heights: (0..n * n)
-                .map(|k| ((k % n) as f32 * 0.3).sin() * 20.0 + ((k / n) as f32 * 0.17).cos() * 9.0)
-                .collect(),
-            geo: None,
-            voids_filled: 0,
-            spacing_note: String::new(),
-        };
-        let ds = Dataset::from_heightfield(hf, "t".into());
-        let b = bake(
-            &ds,
-            BakeParams {
-                tile_size: 17,
-                levels: 0,
-            },
-            &|_, _| {},
-        );
-        let desc = crate::clipmap::ClipmapDesc {
-            tile_quads: 16,
-            patch_tiles: 8,
-            margin_tiles: 2,
-            width: n as u32,
-            height: n as u32,
-        };
-        (b, desc)
-    }
-
-    fn select(range: f64, eye: DVec3, pitch: f64) -> (Selection, crate::bake::ErrorBake) {
-        use crate::camera::{Attitude, Frustum};
-        use crate::clipmap::place_levels;
-        let (b, desc) = scene();
-        let params = SelectParams {
-            mode: crate::select::LodMode::Cdlod,
-            cdlod_range: range,
-            max_refinement: 6,
-            ..SelectParams::default()
-        };
-        let cam = Camera::new(
-            eye,
-            Attitude::from_degrees(30.0, pitch, 0.0),
-            Frustum::symmetric(170f64.to_radians(), 64, 64),
-        );
-        let placements = place_levels(&desc, [eye.x / 10.0, eye.y / 10.0]);
-        let mut sel = Selection::default();
-        crate::select::select_tiles(&b, &desc, &placements, &cam, (64, 64), &params, &mut sel);
-        (sel, b)
-    }
-
-    /// Looking straight down from high up every tile is seen: the nodes tile the ground
-    /// exactly once, each drawn node is beyond the next finer range (it was not split), and a
-    /// longer range draws more nodes.
-    #[test]
-    fn nodes_tile_the_ground_once_and_follow_the_ranges() {
-        let eye = DVec3::new(700.0, 1900.0, 250.0);
-        let mut counts = Vec::new();
-        for range in [2.0, 4.0, 8.0] {
-            let (sel, b) = select(range, eye, -89.9);
-            let mut cover = vec![0u32; 16 * 16];
-            for it in &sel.items {
-                let l = it.node_level;
-                assert!(it.node_level + it.refinement >= it.level, "{it:?}");
-                for y in (it.node_ty << l)..((it.node_ty + 1) << l) {
-                    for x in (it.node_tx << l)..((it.node_tx + 1) << l) {
-                        if x < 16 && y < 16 {
-                            cover[(y * 16 + x) as usize] += 1;
-                        }
-                    }
-                }
-                if l > 0 {
-                    let t = Ctx::seen_for_test(&b, l, it.node_tx, it.node_ty, eye);
-                    assert!(
-                        t > cdlod_range_m(range, 160.0, l - 1),
-                        "range {range}: {it:?} at {t} m should have split"
-                    );
-                }
-            }
-            assert!(cover.iter().all(|&c| c == 1), "range {range}: {cover:?}");
-            counts.push(sel.items.len());
-        }
-        assert!(counts[0] < counts[1] && counts[1] < counts[2], "{counts:?}");
-    }
-
-    /// Every drawn node morphs over its own level's zone — the coarsest level not at all — and
-    /// a quadrant drawn for its parent is fully morphed onto the parent's grid, then over the
-    /// parent's zone; the selection itself (which nodes) is the same as without morphing.
-    #[test]
-    fn nodes_carry_their_levels_morph_zone() {
-        let eye = DVec3::new(700.0, 1900.0, 250.0);
-        let mut quadrants = 0;
-        for range in [2.0, 4.0, 8.0] {
-            let (sel, _) = select(range, eye, -60.0);
-            // The roots: the coarsest clipmap level's tiles, whose range is unbounded.
-            let desc = scene().1;
-            let places = crate::clipmap::place_levels(&desc, [eye.x / 10.0, eye.y / 10.0]);
-            let top = places.last().unwrap().level;
-            let zones = morph_zones(|l| cdlod_range_m(range, 160.0, l), top);
-            let zone = |l: u32| {
-                let z = zones[l as usize];
-                [z[0] as f32, z[1] as f32]
-            };
-            assert!(!sel.items.is_empty());
-            for it in &sel.items {
-                let m = it.morph;
-                if m.quadrant {
-                    quadrants += 1;
-                    let parent = it.node_level + 1;
-                    let want = if parent == top {
-                        [0.0, 0.0]
-                    } else {
-                        zone(parent)
-                    };
-                    assert_eq!(m.parent_zone, want, "{it:?}");
-                    assert_eq!(m.to_gpu()[..2], [-1.0, 0.0]);
-                } else if it.node_level == top {
-                    assert_eq!(m, Morph::NONE, "{it:?}");
-                } else {
-                    assert_eq!(m.zone, zone(it.node_level), "{it:?}");
-                    assert!(m.zone[0] < m.zone[1]);
-                }
-            }
-        }
-        assert!(quadrants > 0, "no quadrant drawn for its parent");
-    }
-
-    /// On the ellipsoid a node's distance is to the box the renderer draws it in
-    /// (`GeoGrid::node_geometry`), not to its flat grid rectangle: far from the grid's origin
-    /// the two part (a 1/120° grid at 47° N, a level-3 node beside the origin's).
-    #[test]
-    fn on_the_ellipsoid_a_nodes_box_is_where_it_is_drawn() {
-        let (b, _) = scene();
-        let earth = crate::geodesy::GeoGrid::test_geographic(47.0, 11.0, 1.0 / 120.0, 47.0);
-        let (level, tx, ty) = (3, 1, 1);
-        let side = (16u64 << level) as f64 * 10.0;
-        let lo = DVec2::new(tx as f64 * side, ty as f64 * side);
-        let valid = DVec2::new(256.0 * 10.0, 256.0 * 10.0);
-        let (lo, hi) = (lo.min(valid), (lo + DVec2::splat(side)).min(valid));
-        let (min_h, max_h) = b.bounds(level, tx, ty);
-        let drawn = earth.node_geometry(lo, hi, min_h, max_h).aabb;
-        // An eye 500 m beside the drawn box's east face, level with it.
-        let eye = DVec3::new(
-            drawn.max.x + 500.0,
-            0.5 * (drawn.min.y + drawn.max.y),
-            drawn.max.z,
-        );
-        let on_earth = Ctx::seen_on(&b, Some(earth), level, tx, ty, eye);
-        assert!(
-            (on_earth - box_distance(eye, &drawn)).abs() < 1e-9,
-            "{on_earth}"
-        );
-        let flat = Ctx::seen_for_test(&b, level, tx, ty, eye);
-        // The flat rectangle's box is elsewhere (0.39 m here, 2.6 km from the origin; tens of
-        // metres across a mosaic).
-        assert!(
-            (flat - on_earth).abs() > 0.1,
-            "flat {flat} vs drawn {on_earth}"
-        );
-    }
-}
+#[path = "cdlod_tests.rs"]
+mod tests;

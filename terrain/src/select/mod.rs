@@ -9,6 +9,7 @@ mod box_bounds;
 mod carry;
 mod cdlod;
 pub mod cdlod_morph;
+mod coarser_roots;
 mod horizon;
 mod node_cache;
 mod parts;

@@ -460,7 +460,22 @@ fn select_coarsest_first(
         let grand = (known.is_some() && retry && children_ready && frame.sixteenths_below(level))
             .then(|| frame.fixed(level + 1, tx / 2, ty / 2));
         if rho_norm <= 1.0 && grand.is_none() {
-            if frame.seen_parts(&eval, level, tx, ty, &mut parts) {
+            let coarser = (i == top)
+                .then(|| frame.coarser_root(level, tx, ty))
+                .flatten();
+            let seen = frame.seen_parts(&eval, level, tx, ty, &mut parts);
+            // The root drawn coarser, unless its seen parts are fewer triangles and
+            // instances still.
+            let instance = frame.costs.instance;
+            let parts_cost =
+                seen.then(|| frame.parts_triangles(&parts) + instance * parts.len() as u32);
+            if let Some((item, triangles)) = coarser {
+                if parts_cost.is_none_or(|c| triangles + instance <= c) {
+                    push_drawn(out, i, item);
+                    continue;
+                }
+            }
+            if seen {
                 for &item in &parts {
                     push_drawn(out, i, item);
                 }

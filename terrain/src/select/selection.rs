@@ -80,6 +80,14 @@ pub struct SelectParams {
     /// texture, when that draws fewer triangles (`Frame::seen_parts`) — what CDLOD's quadtree
     /// does with a node it culls in part.
     pub seen_quadrants: bool,
+    /// Up to two of the bake's levels above the coarsest clipmap level, which no texture
+    /// holds, drawn from that level's tiles as their stride-2 and stride-4 meshes (a tile as
+    /// its parent's quadrant or its grandparent's sixteenth). `Bounded` (with
+    /// `parent_quadrants`, in the coarsest-first quadtree): a root that meets τ is drawn the
+    /// coarsest of those ways that meets τ (`coarser_roots.rs`). `Cdlod`: the quadtree starts
+    /// at the top one of those levels, as the reference's starts at its `LODLevelCount`
+    /// (`cdlod.rs`).
+    pub coarser_roots: bool,
     /// `Bounded` with one view (plane or ellipsoid): a ring tile refined in an earlier frame is
     /// drawn again while its certificate says every node still meets τ (`carry.rs`), instead
     /// of walked afresh.
@@ -102,6 +110,7 @@ impl Default for SelectParams {
             parent_quadrants: true,
             sixteenths: true,
             seen_quadrants: true,
+            coarser_roots: true,
             carry: true,
         }
     }
