@@ -401,6 +401,60 @@ fn geodetic_oracle(scenes: &[GeoScene], cameras: usize, seed: u64, what: &str) -
     (tiles_checked, refined_checked)
 }
 
+/// [`roots_drawn_coarser_are_within_tau`] on the ellipsoid: at coarse τ, each root of the
+/// coarsest clipmap level drawn at its parent's or grandparent's resolution is within τ and
+/// its bound, its true samples at their exact positions against the drawn surface.
+#[test]
+fn geodetic_roots_drawn_coarser_are_within_tau() {
+    let scenes = [
+        alpine_47n(M),
+        geo_scene(
+            "ridged 10° 60°N",
+            generated(DemKind::Ridged, 3),
+            55.0,
+            10.0,
+            0.01,
+            M,
+        ),
+    ];
+    let mut rng = Rng(16);
+    let (mut checked, mut sixteenths) = (0u64, 0u64);
+    let mut worst_ratio: f64 = 0.0;
+    for k in 0..48 {
+        let g = &scenes[k % scenes.len()];
+        let cam = random_geo_camera(&mut rng, g);
+        let tau = [3.0, 8.0, 30.0][k % 3];
+        let sel = select_geo(g, &cam, tau);
+        let top = g.s.clip.level_count() - 1;
+        for item in sel
+            .items
+            .iter()
+            .filter(|i| i.node_level == top && i.morph.levels_up() > 0)
+            .take(6)
+        {
+            let drawn = top + item.morph.levels_up();
+            let err = geo_tile_error_px(g, &cam, (W, H), M, top, item.node_tx, item.node_ty, drawn);
+            assert!(
+                err <= tau + 1e-6 && err <= item.rho_px as f64 + 1e-6,
+                "{}: camera {k}, τ {tau}: root ({}, {}) drawn at level {drawn} projects {err:.4} px (bound {:.4})",
+                g.s.name,
+                item.node_tx,
+                item.node_ty,
+                item.rho_px
+            );
+            if item.rho_px > 0.0 {
+                worst_ratio = worst_ratio.max(err / item.rho_px as f64);
+            }
+            checked += 1;
+            sixteenths += (item.morph.levels_up() == 2) as u64;
+        }
+    }
+    eprintln!(
+        "geodetic coarser roots: {checked} checked ({sixteenths} at their grandparent's resolution); tightest measured/bound = {worst_ratio:.3}"
+    );
+    assert!(checked > 30 && sixteenths > 10, "{checked} / {sixteenths}");
+}
+
 #[test]
 fn every_drawn_geodetic_tile_is_within_tau_for_a_thousand_random_cameras() {
     let scenes = [
