@@ -224,6 +224,49 @@ fn drawn_tiles_cover_the_visible_ground_exactly_once() {
     }
 }
 
+/// Roots of the coarsest clipmap level drawn coarser, checked one by one: each measured error
+/// within τ and within the root's bound; how many, how many as sixteenths, the tightest.
+#[derive(Default)]
+struct CoarserRoots {
+    checked: u64,
+    sixteenths: u64,
+    worst_ratio: f64,
+}
+
+impl CoarserRoots {
+    /// `item`, a root drawn `levels_up` coarser, measured `err` px; `what` names the frame.
+    fn check(&mut self, item: &DrawItem, err: f64, tau: f64, what: &str) {
+        assert!(
+            err <= tau + 1e-6 && err <= item.rho_px as f64 + 1e-6,
+            "{what}, τ {tau}: root ({}, {}) drawn {} level(s) up projects {err:.4} px (bound {:.4})",
+            item.node_tx,
+            item.node_ty,
+            item.morph.levels_up(),
+            item.rho_px
+        );
+        if item.rho_px > 0.0 {
+            self.worst_ratio = self.worst_ratio.max(err / item.rho_px as f64);
+        }
+        self.checked += 1;
+        self.sixteenths += (item.morph.levels_up() == 2) as u64;
+    }
+
+    fn report(&self, what: &str, at_least: u64) {
+        let Self {
+            checked,
+            sixteenths,
+            worst_ratio,
+        } = self;
+        eprintln!(
+            "{what}: {checked} checked ({sixteenths} at their grandparent's resolution); tightest measured/bound = {worst_ratio:.3}"
+        );
+        assert!(
+            *checked > at_least && *sixteenths > 10,
+            "{checked} / {sixteenths}"
+        );
+    }
+}
+
 /// A root of the coarsest clipmap level drawn at its parent's or its grandparent's resolution
 /// (`SelectParams::coarser_roots`: levels the bake holds above the textures, drawn with the
 /// root's stride-2 and stride-4 meshes) at coarse τ: each such root's true error within τ and
@@ -235,8 +278,7 @@ fn roots_drawn_coarser_are_within_tau() {
         scene("cliffs", generated(DemKind::Cliffs, 7)),
     ];
     let mut rng = Rng(15);
-    let (mut checked, mut sixteenths) = (0u64, 0u64);
-    let mut worst_ratio: f64 = 0.0;
+    let mut roots = CoarserRoots::default();
     for k in 0..48 {
         let s = &scenes[k % scenes.len()];
         let cam = random_camera(&mut rng, s);
@@ -247,28 +289,15 @@ fn roots_drawn_coarser_are_within_tau() {
             (top as usize) + 2 < s.bake.levels.len(),
             "two bake levels above"
         );
-        let coarser: Vec<&DrawItem> = sel
+        let coarser = sel
             .items
             .iter()
-            .filter(|i| i.node_level == top && i.morph.levels_up() > 0)
-            .collect();
-        for item in coarser.iter().take(8) {
+            .filter(|i| i.node_level == top && i.morph.levels_up() > 0);
+        for item in coarser.take(8) {
             assert_eq!((item.level, item.refinement), (top, 0), "{item:?}");
             let drawn = top + item.morph.levels_up();
             let err = tile_error_px(&s.ds.hf, &cam, top, item.node_tx, item.node_ty, drawn);
-            assert!(
-                err <= tau + 1e-6 && err <= item.rho_px as f64 + 1e-6,
-                "{}: camera {k}, τ {tau}: root ({}, {}) drawn at level {drawn} projects {err:.4} px (bound {:.4})",
-                s.name,
-                item.node_tx,
-                item.node_ty,
-                item.rho_px
-            );
-            if item.rho_px > 0.0 {
-                worst_ratio = worst_ratio.max(err / item.rho_px as f64);
-            }
-            checked += 1;
-            sixteenths += (item.morph.levels_up() == 2) as u64;
+            roots.check(item, err, tau, &format!("{}: camera {k}", s.name));
         }
         if k % 4 == 0 {
             flat_oracle::assert_covered_once(
@@ -281,10 +310,7 @@ fn roots_drawn_coarser_are_within_tau() {
             );
         }
     }
-    eprintln!(
-        "coarser roots: {checked} checked ({sixteenths} at their grandparent's resolution); tightest measured/bound = {worst_ratio:.3}"
-    );
-    assert!(checked > 40 && sixteenths > 10, "{checked} / {sixteenths}");
+    roots.report("coarser roots", 40);
 }
 
 fn random_geo_camera(rng: &mut Rng, g: &GeoScene) -> Camera {
@@ -418,8 +444,7 @@ fn geodetic_roots_drawn_coarser_are_within_tau() {
         ),
     ];
     let mut rng = Rng(16);
-    let (mut checked, mut sixteenths) = (0u64, 0u64);
-    let mut worst_ratio: f64 = 0.0;
+    let mut roots = CoarserRoots::default();
     for k in 0..48 {
         let g = &scenes[k % scenes.len()];
         let cam = random_geo_camera(&mut rng, g);
@@ -434,25 +459,10 @@ fn geodetic_roots_drawn_coarser_are_within_tau() {
         {
             let drawn = top + item.morph.levels_up();
             let err = geo_tile_error_px(g, &cam, (W, H), M, top, item.node_tx, item.node_ty, drawn);
-            assert!(
-                err <= tau + 1e-6 && err <= item.rho_px as f64 + 1e-6,
-                "{}: camera {k}, τ {tau}: root ({}, {}) drawn at level {drawn} projects {err:.4} px (bound {:.4})",
-                g.s.name,
-                item.node_tx,
-                item.node_ty,
-                item.rho_px
-            );
-            if item.rho_px > 0.0 {
-                worst_ratio = worst_ratio.max(err / item.rho_px as f64);
-            }
-            checked += 1;
-            sixteenths += (item.morph.levels_up() == 2) as u64;
+            roots.check(item, err, tau, &format!("{}: camera {k}", g.s.name));
         }
     }
-    eprintln!(
-        "geodetic coarser roots: {checked} checked ({sixteenths} at their grandparent's resolution); tightest measured/bound = {worst_ratio:.3}"
-    );
-    assert!(checked > 30 && sixteenths > 10, "{checked} / {sixteenths}");
+    roots.report("geodetic coarser roots", 30);
 }
 
 #[test]

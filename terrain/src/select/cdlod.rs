@@ -491,16 +491,31 @@ fn draw_above(
                 stats.culled += 1;
                 continue;
             }
-            stats.drawn += 1;
-            stats.refined[0] += 1;
-            stats.nodes += 1;
-            let (eps, rho) = (s.eps.max(c.eps), s.rho_px.max(c.rho_px));
-            out.items.push(DrawItem {
-                morph,
-                ..DrawItem::whole(tile_level, tx, ty, eps as f32, rho as f32)
-            });
+            push_covered(out, top, (tile_level, tx, ty), s, &c, morph);
         }
     }
+}
+
+/// Tile (level, tx, ty) of clipmap level index `i`, seen as `c` (visible), drawn unrefined
+/// for the coarser node `s` that covers it, as `morph` says: ε and ρ the larger of the two;
+/// counted drawn in level `i`'s stats (the caller counts it considered).
+fn push_covered(
+    out: &mut Selection,
+    i: usize,
+    (level, tx, ty): (u32, u32, u32),
+    s: &Seen,
+    c: &Seen,
+    morph: Morph,
+) {
+    let stats = &mut out.levels[i];
+    stats.drawn += 1;
+    stats.refined[0] += 1;
+    stats.nodes += 1;
+    let (eps, rho) = (s.eps.max(c.eps), s.rho_px.max(c.rho_px));
+    out.items.push(DrawItem {
+        morph,
+        ..DrawItem::whole(level, tx, ty, eps as f32, rho as f32)
+    });
 }
 
 /// A node of clipmap level index `i` whose area the finer patch may hold: while it splits and
@@ -537,16 +552,9 @@ fn visit_clipmap(
                 if !visit_clipmap(ctx, i - 1, cx, cy, false, scratch, out) {
                     let c = ctx.seen(level - 1, cx, cy);
                     if c.visible {
-                        let stats = &mut out.levels[i - 1];
-                        stats.considered += 1;
-                        stats.drawn += 1;
-                        stats.refined[0] += 1;
-                        stats.nodes += 1;
-                        let (eps, rho) = (s.eps.max(c.eps), s.rho_px.max(c.rho_px));
-                        out.items.push(DrawItem {
-                            morph: ctx.quadrant_morph(level, root),
-                            ..DrawItem::whole(level - 1, cx, cy, eps as f32, rho as f32)
-                        });
+                        out.levels[i - 1].considered += 1;
+                        let morph = ctx.quadrant_morph(level, root);
+                        push_covered(out, i - 1, (level - 1, cx, cy), &s, &c, morph);
                     }
                 }
             }

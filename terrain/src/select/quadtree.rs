@@ -463,7 +463,10 @@ fn select_coarsest_first(
             let coarser = (i == top)
                 .then(|| frame.coarser_root(level, tx, ty))
                 .flatten();
-            let seen = frame.seen_parts(&eval, level, tx, ty, &mut parts);
+            // A root drawn as a sixteenth is the fewest triangles any of its seen parts
+            // could be: those are not formed then.
+            let sixteenth = coarser.is_some_and(|(item, _)| item.morph.sixteenth);
+            let seen = !sixteenth && frame.seen_parts(&eval, level, tx, ty, &mut parts);
             // The root drawn coarser, unless its seen parts are fewer triangles and
             // instances still.
             let instance = frame.costs.instance;
