@@ -59,6 +59,31 @@
 //! frame's view from both — a certified bound now is a bound now, so the argument above holds
 //! from the new record on. Drawn again, a node's ρ is that bound: larger than a fresh
 //! walk's, never smaller than its error.
+//!
+//! **Tried and dropped** (the manoeuvre flights, which roll 9.4° and pitch 2.35° a frame and
+//! walk nearly every ring tile afresh: 40–60 a frame, 0–22 carried, 17–28 records a frame not
+//! kept, the gains' factor ~3; Inn manoeuvre at 1280×720, τ = 1, the 4 s flight flown ten
+//! times, 1,200 frames, each frame's least of three runs):
+//! - *Repairing every node that fails* (up to half a record's nodes and culled parts, each
+//!   walked afresh as [`Taken::AllBut`]'s one is; nodes turned out of view culled by a
+//!   bounding sphere): selection 162 → 118–130 µs mean, 305 → 263 µs p99, for +33 % to +49 %
+//!   triangles (331 M → 442–494 M over the flight; frames at 1.5–1.9×). The nodes that hold
+//!   are those far below τ, the very ones whose coarser options come to meet τ as the view
+//!   turns: a repaired record never draws them coarser, a fresh walk does. With at most a
+//!   fifth repaired: 287 µs p99 for +7 % triangles.
+//! - *Discounting a roll*: a roll about the view axis moves no depth and no gain at a point,
+//!   |(w_x, w_y) − (a, b)·w_z|, so for a record whose ring tile lay wholly inside the frustum
+//!   (no range clamped: the gain formed then bounds the largest at the corners after any
+//!   roll) only the turn beyond the roll need count, and a point's move over its own depth is
+//!   at most (m + m²/2R)/z + √(1 + A² + B²)·(k + m/R) however far the tile reaches. Half the
+//!   records qualified (1,456 of 2,829 takes) and k fell from 0.239 to 0.058 a frame, but the
+//!   factor stayed 1.31–1.41 (the 2.35° pitch: the vertical's turn over the least gain 0.11,
+//!   (a, b)'s move 0.06, on the ellipsoid the slack's 0.2) and records of 30–50 nodes near τ
+//!   lost several a frame: selection p99 305 → 300–304 µs, triangles +0.3 %.
+//!
+//! Carrying costs triangles where records outlive their view: on the suite's cruise and
+//! follow flights at 5 fps (Inn, Northern England, bounded) 1.004× the triangles drawn with
+//! carrying off (geometric mean of 64 configurations; at most 1.026×, Inn cruise τ = 1 px).
 
 use std::collections::HashMap;
 

@@ -16,6 +16,15 @@
 //! against 21 ms without it, in each of three flights), so each flight puts another
 //! configuration before each one, and the least time is not always taken after the same one.
 //!
+//! Tried and dropped: waiting, before each lane's timed frame, for every lane's view-ahead
+//! selection (`render::ahead_select`'s worker, every fourth frame) to finish, so that no
+//! lane's worker runs on the cores another's frame is timed on. On four flights (Inn follow
+//! and approach, N40W074 follow and approach; every mode, three replays, one build flown with
+//! and without) the worst ÷ median frame time was 1.76 / 1.43 / 1.38 / 1.66 with it against
+//! 1.28 / 1.17 / 1.61 / 1.49 without: no pattern. The slow frames are single frames slower in
+//! every replay's order for the same work (Inn approach τ = 10 px, frame 2: 14.1 ms in the
+//! fastest of three flights, 7.5–9.0 ms for the other frames' same 1,282 triangles).
+//!
 //! Pure: the order, which timings a frame keeps, the tally and summary.md's line;
 //! `lanes::replay` renders.
 
