@@ -61,7 +61,7 @@
 //! walk's, never smaller than its error.
 //!
 //! **Tried and dropped** (the manoeuvre flights, which roll 9.4° and pitch 2.35° a frame and
-//! walk nearly every ring tile afresh: 40–60 a frame, 0–22 carried, 17–28 records a frame not
+//! walk nearly every ring tile afresh: 40–60 a frame, 0–22 carried, 12–28 records a frame not
 //! kept, the gains' factor ~3; Inn manoeuvre at 1280×720, τ = 1, the 4 s flight flown ten
 //! times, 1,200 frames, each frame's least of three runs):
 //! - *Repairing every node that fails* (up to half a record's nodes and culled parts, each
