@@ -680,6 +680,22 @@ datasets = ["mixed"]
         assert!(w.clipmap_n.len() >= 7 && w.distance_scale.len() >= 7 && w.cdlod_range.len() >= 7);
         assert!(s.run.tau.len() >= 13);
         assert_eq!(w.tile_sizes, vec![17, 9]);
+        // lavapipe.toml at twice the size without tessellation: otherwise the same run.
+        let base = parse_suite(
+            include_str!("../../../../../bench/suites/lavapipe.toml"),
+            "lavapipe.toml",
+        )
+        .unwrap();
+        let text = include_str!("../../../../../bench/suites/lavapipe-768.toml");
+        let s = parse_suite(text, "lavapipe-768.toml").unwrap();
+        assert_eq!(s.pairs().len(), 20);
+        assert_eq!(
+            (s.run.size.as_str(), base.run.size.as_str()),
+            ("768x432", "384x216")
+        );
+        assert_eq!(s.run.modes, base.run.modes.replace(",tess", ""));
+        let same = |r: &RunSettings| (r.tau.clone(), r.sweeps.clone(), r.frames, r.warmup, r.fps);
+        assert_eq!(same(&s.run), same(&base.run));
         // The CPU-frame measurement's flights: the four real datasets' 16, 4 s at 30 fps.
         let text = include_str!("../../../../../bench/suites/cpu-frame.toml");
         let s = parse_suite(text, "cpu-frame.toml").unwrap();
