@@ -696,6 +696,7 @@ datasets = ["mixed"]
         assert_eq!(s.run.modes, base.run.modes.replace(",tess", ""));
         let same = |r: &RunSettings| (r.tau.clone(), r.sweeps.clone(), r.frames, r.warmup, r.fps);
         assert_eq!(same(&s.run), same(&base.run));
+        assert_eq!((&s.datasets, &s.flights), (&base.datasets, &base.flights));
         // The CPU-frame measurement's flights: the four real datasets' 16, 4 s at 30 fps.
         let text = include_str!("../../../../../bench/suites/cpu-frame.toml");
         let s = parse_suite(text, "cpu-frame.toml").unwrap();
