@@ -697,6 +697,13 @@ datasets = ["mixed"]
         let same = |r: &RunSettings| (r.tau.clone(), r.sweeps.clone(), r.frames, r.warmup, r.fps);
         assert_eq!(same(&s.run), same(&base.run));
         assert_eq!((&s.datasets, &s.flights), (&base.datasets, &base.flights));
+        // Its tessellation column apart: the same run, bounded and tessellation only.
+        let text = include_str!("../../../../../bench/suites/lavapipe-768-tess.toml");
+        let t = parse_suite(text, "lavapipe-768-tess.toml").unwrap();
+        assert_eq!(t.run.modes, "bounded,tess");
+        assert_eq!(t.run.size, s.run.size);
+        assert_eq!(same(&t.run), same(&s.run));
+        assert_eq!((&t.datasets, &t.flights), (&s.datasets, &s.flights));
         // The CPU-frame measurement's flights: the four real datasets' 16, 4 s at 30 fps.
         let text = include_str!("../../../../../bench/suites/cpu-frame.toml");
         let s = parse_suite(text, "cpu-frame.toml").unwrap();
