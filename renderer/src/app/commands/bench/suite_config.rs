@@ -672,20 +672,33 @@ datasets = ["mixed"]
         let s = parse_suite(text, "lavapipe-tiles5.toml").unwrap();
         assert_eq!(s.pairs().len(), 16);
         assert_eq!(s.run.sweeps.tile_sizes, vec![17, 9, 5]);
-        // The denser sweeps: four flights, every knob at 7 settings or more, both tile sizes.
-        let text = include_str!("../../../../../bench/suites/lavapipe-dense.toml");
-        let s = parse_suite(text, "lavapipe-dense.toml").unwrap();
-        assert_eq!(s.pairs().len(), 4);
-        let w = &s.run.sweeps;
-        assert!(w.clipmap_n.len() >= 7 && w.distance_scale.len() >= 7 && w.cdlod_range.len() >= 7);
-        assert!(s.run.tau.len() >= 13);
-        assert_eq!(w.tile_sizes, vec![17, 9]);
-        // lavapipe.toml at twice the size without tessellation: otherwise the same run.
         let base = parse_suite(
             include_str!("../../../../../bench/suites/lavapipe.toml"),
             "lavapipe.toml",
         )
         .unwrap();
+        // The denser sweeps: lavapipe.toml's flights and frames without tessellation, every
+        // knob at 7 settings or more and each of lavapipe.toml's among them (its curves'
+        // points are this run's too), bounded's τ on to 100 px.
+        let text = include_str!("../../../../../bench/suites/lavapipe-dense.toml");
+        let d = parse_suite(text, "lavapipe-dense.toml").unwrap();
+        assert_eq!(d.pairs().len(), 20);
+        assert_eq!((&d.datasets, &d.flights), (&base.datasets, &base.flights));
+        let frames = |r: &RunSettings| (r.size.clone(), r.frames, r.warmup, r.fps, r.settle);
+        assert_eq!(frames(&d.run), frames(&base.run));
+        assert_eq!(d.run.modes, base.run.modes.replace(",tess", ""));
+        let (w, b) = (&d.run.sweeps, &base.run.sweeps);
+        assert!(w.clipmap_n.len() >= 7 && w.distance_scale.len() >= 7 && w.cdlod_range.len() >= 7);
+        assert!(b.clipmap_n.iter().all(|n| w.clipmap_n.contains(n)));
+        assert!(b
+            .distance_scale
+            .iter()
+            .all(|x| w.distance_scale.contains(x)));
+        assert!(b.cdlod_range.iter().all(|k| w.cdlod_range.contains(k)));
+        assert!(base.run.tau.iter().all(|t| d.run.tau.contains(t)));
+        assert!(d.run.tau.len() >= 13 && d.run.tau.contains(&100.0));
+        assert_eq!(w.tile_sizes, b.tile_sizes);
+        // lavapipe.toml at twice the size without tessellation: otherwise the same run.
         let text = include_str!("../../../../../bench/suites/lavapipe-768.toml");
         let s = parse_suite(text, "lavapipe-768.toml").unwrap();
         assert_eq!(s.pairs().len(), 20);
