@@ -31,6 +31,7 @@ mod features;
 mod flights;
 mod lanes;
 mod plot;
+mod plot_labels;
 mod replays;
 mod report;
 mod rows;

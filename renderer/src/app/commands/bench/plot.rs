@@ -12,6 +12,7 @@ use plotters::prelude::*;
 use plotters::style::FontStyle;
 
 use super::config::mode_name;
+use super::plot_labels::{place_labels, LabelToPlace};
 use super::report::{pareto_front, Summary};
 use crate::tools::output::write_png;
 use aerie_terrain::select::LodMode;
@@ -22,6 +23,8 @@ const FAMILY: &str = "sans-serif";
 /// Errors below this are drawn at it (a log axis has no 0); their labels say "≤".
 const ERROR_FLOOR_PX: f64 = 0.01;
 const SIZE: (u32, u32) = (1200, 800);
+/// The points' labels' font size.
+const LABEL_PX: f64 = 15.0;
 
 fn ensure_font() -> Result<(), String> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
@@ -48,6 +51,21 @@ fn log_tick(v: f64) -> String {
         format!("{}k", r / 1e3)
     } else {
         format!("{r}")
+    }
+}
+
+/// A point's label: its τ (and node size) for bounded, else the configuration's name; "≤" the
+/// error floor where the error is drawn at it.
+fn point_label(s: &Summary) -> String {
+    let label = match (s.config.tau_px, s.config.tile_size) {
+        (Some(t), None) => format!("τ={t}"),
+        (Some(t), Some(m)) => format!("τ={t} m={m}"),
+        (None, _) => s.config.label(),
+    };
+    if s.error_px() < ERROR_FLOOR_PX {
+        format!("{label} (≤{ERROR_FLOOR_PX} px)")
+    } else {
+        label
     }
 }
 
@@ -151,6 +169,40 @@ where
                 .y_label_formatter(y_fmt)
                 .draw()
                 .map_err(|e| err(&e))?;
+            // The points' labels, placed where they cover no other label or point: the
+            // Pareto front's first, then bounded's, then the rest, each by error.
+            let front = pareto_front(&pts.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>());
+            let texts: Vec<String> = pts.iter().map(|p| point_label(&summaries[p.2])).collect();
+            let font: TextStyle = (FAMILY, LABEL_PX).into();
+            let labels: Vec<LabelToPlace> = pts
+                .iter()
+                .zip(&texts)
+                .map(|(p, t)| LabelToPlace {
+                    at: c.backend_coord(&(p.0, p.1)),
+                    // Padded: the estimate is the glyphs' box, the text drawn a little taller.
+                    size: root
+                        .estimate_text_size(t, &font)
+                        .map_or((8 * t.len() as u32, 15), |(w, h)| (w + 2, h + 3)),
+                })
+                .collect();
+            let mut order: Vec<usize> = (0..pts.len()).collect();
+            order.sort_by(|&a, &b| {
+                let rank = |i: usize| {
+                    (
+                        !front[i],
+                        summaries[pts[i].2].config.mode != LodMode::Bounded,
+                    )
+                };
+                rank(a).cmp(&rank(b)).then(pts[a].0.total_cmp(&pts[b].0))
+            });
+            let (xs, ys) = c.plotting_area().get_pixel_range();
+            let placed = place_labels(&labels, &order, (xs.start, ys.start, xs.end, ys.end));
+            // Placement by summary index (the series below walk the points mode by mode).
+            let mut label_of: Vec<Option<(String, (i32, i32))>> = vec![None; summaries.len()];
+            for ((p, t), o) in pts.iter().zip(&texts).zip(&placed) {
+                label_of[p.2] = o.map(|o| (t.clone(), o));
+            }
+            let left_out = placed.iter().filter(|o| o.is_none()).count();
             for mode in [
                 LodMode::Bounded,
                 LodMode::Clipmap,
@@ -188,26 +240,15 @@ where
                     }
                 }
                 c.draw_series(mine.iter().map(|p| {
-                    let s = &summaries[p.2];
-                    let label = match (s.config.tau_px, s.config.tile_size) {
-                        (Some(t), None) => format!("τ={t}"),
-                        (Some(t), Some(m)) => format!("τ={t} m={m}"),
-                        (None, _) => s.config.label(),
-                    };
-                    let label = if s.error_px() < ERROR_FLOOR_PX {
-                        format!("{label} (≤{ERROR_FLOOR_PX} px)")
-                    } else {
-                        label
-                    };
-                    EmptyElement::at((p.0, p.1))
-                        + Circle::new((0, 0), 6, col.filled())
-                        + Text::new(label, (9, -18), (FAMILY, 15))
+                    let marker =
+                        EmptyElement::at((p.0, p.1)) + Circle::new((0, 0), 6, col.filled());
+                    let (text, at) = label_of[p.2].clone().unwrap_or_default();
+                    marker + Text::new(text, at, (FAMILY, LABEL_PX))
                 }))
                 .map_err(|e| err(&e))?
                 .label(mode_name(mode))
                 .legend(move |(x, y)| Circle::new((x + 8, y), 6, col.filled()));
             }
-            let front = pareto_front(&pts.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>());
             let mut on: Vec<(f64, f64)> = pts
                 .iter()
                 .zip(&front)
@@ -229,6 +270,18 @@ where
             .map_err(|e| err(&e))?
             .label("Pareto front")
             .legend(|(x, y)| Circle::new((x + 8, y), 8, BLACK.stroke_width(2)));
+            if left_out > 0 {
+                let note = format!(
+                    "{left_out} of {} labels left out where they would cover another; every point is in summary.csv",
+                    pts.len()
+                );
+                root.draw(&Text::new(
+                    note,
+                    (xs.start + 6, ys.end - 22),
+                    (FAMILY, LABEL_PX),
+                ))
+                .map_err(|e| err(&e))?;
+            }
             c.configure_series_labels()
                 .position(SeriesLabelPosition::UpperRight)
                 .label_font((FAMILY, 16))
