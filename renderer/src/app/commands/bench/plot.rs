@@ -23,6 +23,15 @@ const FAMILY: &str = "sans-serif";
 /// Errors below this are drawn at it (a log axis has no 0); their labels say "≤".
 const ERROR_FLOOR_PX: f64 = 0.01;
 const SIZE: (u32, u32) = (1200, 800);
+/// The modes in the order their series are drawn (and listed in the legend).
+const MODES: [LodMode; 6] = [
+    LodMode::Bounded,
+    LodMode::Clipmap,
+    LodMode::Distance,
+    LodMode::Cdlod,
+    LodMode::Tessellation,
+    LodMode::Full,
+];
 /// The points' labels' font size.
 const LABEL_PX: f64 = 15.0;
 
@@ -170,8 +179,22 @@ where
                 .draw()
                 .map_err(|e| err(&e))?;
             // The points' labels, placed where they cover no other label or point: the
-            // Pareto front's first, then bounded's, then the rest, each by error.
+            // Pareto front's first, then each mode's own efficient settings (the curves the
+            // ratios are read off), bounded's before the baselines', then the rest, each by error.
             let front = pareto_front(&pts.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>());
+            let mode_of = |i: usize| summaries[pts[i].2].config.mode;
+            let mut efficient = vec![false; pts.len()];
+            for mode in MODES {
+                let idx: Vec<usize> = (0..pts.len()).filter(|&i| mode_of(i) == mode).collect();
+                let own = pareto_front(
+                    &idx.iter()
+                        .map(|&i| (pts[i].0, pts[i].1))
+                        .collect::<Vec<_>>(),
+                );
+                for (&i, f) in idx.iter().zip(own) {
+                    efficient[i] = f;
+                }
+            }
             let texts: Vec<String> = pts.iter().map(|p| point_label(&summaries[p.2])).collect();
             let font: TextStyle = (FAMILY, LABEL_PX).into();
             let labels: Vec<LabelToPlace> = pts
@@ -182,17 +205,12 @@ where
                     // Padded: the estimate is the glyphs' box, the text drawn a little taller.
                     size: root
                         .estimate_text_size(t, &font)
-                        .map_or((8 * t.len() as u32, 15), |(w, h)| (w + 2, h + 3)),
+                        .map_or((8 * t.len() as u32, 15), |(w, h)| (w + 2, h + 5)),
                 })
                 .collect();
             let mut order: Vec<usize> = (0..pts.len()).collect();
             order.sort_by(|&a, &b| {
-                let rank = |i: usize| {
-                    (
-                        !front[i],
-                        summaries[pts[i].2].config.mode != LodMode::Bounded,
-                    )
-                };
+                let rank = |i: usize| (!front[i], !efficient[i], mode_of(i) != LodMode::Bounded);
                 rank(a).cmp(&rank(b)).then(pts[a].0.total_cmp(&pts[b].0))
             });
             let (xs, ys) = c.plotting_area().get_pixel_range();
@@ -203,14 +221,7 @@ where
                 label_of[p.2] = o.map(|o| (t.clone(), o));
             }
             let left_out = placed.iter().filter(|o| o.is_none()).count();
-            for mode in [
-                LodMode::Bounded,
-                LodMode::Clipmap,
-                LodMode::Distance,
-                LodMode::Cdlod,
-                LodMode::Tessellation,
-                LodMode::Full,
-            ] {
+            for mode in MODES {
                 let col = colour(mode);
                 let mut mine: Vec<&(f64, f64, usize)> = pts
                     .iter()
