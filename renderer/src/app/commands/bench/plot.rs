@@ -12,7 +12,7 @@ use plotters::prelude::*;
 use plotters::style::FontStyle;
 
 use super::config::mode_name;
-use super::plot_labels::{place_labels, LabelToPlace};
+use super::plot_labels::{label_order, place_labels, LabelToPlace};
 use super::report::{pareto_front, Summary};
 use crate::tools::output::write_png;
 use aerie_terrain::select::LodMode;
@@ -178,9 +178,8 @@ where
                 .y_label_formatter(y_fmt)
                 .draw()
                 .map_err(|e| err(&e))?;
-            // The points' labels, placed where they cover no other label or point: the
-            // Pareto front's first, then each mode's own efficient settings (the curves the
-            // ratios are read off), bounded's before the baselines', then the rest, each by error.
+            // The points' labels, placed where they cover no other label or point, in
+            // `label_order`'s order.
             let front = pareto_front(&pts.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>());
             let mode_of = |i: usize| summaries[pts[i].2].config.mode;
             let mut efficient = vec![false; pts.len()];
@@ -208,11 +207,11 @@ where
                         .map_or((8 * t.len() as u32, 15), |(w, h)| (w + 2, h + 5)),
                 })
                 .collect();
-            let mut order: Vec<usize> = (0..pts.len()).collect();
-            order.sort_by(|&a, &b| {
-                let rank = |i: usize| (!front[i], !efficient[i], mode_of(i) != LodMode::Bounded);
-                rank(a).cmp(&rank(b)).then(pts[a].0.total_cmp(&pts[b].0))
-            });
+            let bounded: Vec<bool> = (0..pts.len())
+                .map(|i| mode_of(i) == LodMode::Bounded)
+                .collect();
+            let x: Vec<f64> = pts.iter().map(|p| p.0).collect();
+            let order = label_order(&front, &efficient, &bounded, &x);
             let (xs, ys) = c.plotting_area().get_pixel_range();
             let placed = place_labels(&labels, &order, (xs.start, ys.start, xs.end, ys.end));
             // Placement by summary index (the series below walk the points mode by mode).

@@ -35,6 +35,22 @@ fn label_box(l: &LabelToPlace, offset: (i32, i32)) -> PixelBox {
     (x, y, x + l.size.0 as i32, y + l.size.1 as i32)
 }
 
+/// The order labels are placed in (the first the most wanted): the Pareto front's points, then
+/// each mode's own efficient settings (the curves the ratios are read off), bounded's before the
+/// baselines', then the rest; within each, by error (`x`) ascending. Per point: on the front, on
+/// its mode's curve, bounded, and its error.
+pub(crate) fn label_order(
+    front: &[bool],
+    efficient: &[bool],
+    bounded: &[bool],
+    x: &[f64],
+) -> Vec<usize> {
+    let rank = |i: usize| (!front[i], !efficient[i], !bounded[i]);
+    let mut order: Vec<usize> = (0..x.len()).collect();
+    order.sort_by(|&a, &b| rank(a).cmp(&rank(b)).then(x[a].total_cmp(&x[b])));
+    order
+}
+
 /// Each label's offset from its point (to its text's top-left corner), or `None` where it is
 /// left out. Labels are placed in `order` (the first the most wanted: it gets the first of its
 /// offsets that is free), each inside `area` (left, top, right, bottom), covering no marker of
@@ -89,6 +105,21 @@ mod tests {
             at: (x, y),
             size: (60, 15),
         }
+    }
+
+    #[test]
+    fn the_front_then_each_curve_then_bounded_then_by_error() {
+        // Points: 0 dominated baseline, 1 front baseline, 2 curve baseline at a smaller
+        // error than 3 (curve baseline), 4 curve bounded, 5 front bounded at a larger error
+        // than 1, 6 dominated bounded.
+        let front = [false, true, false, false, false, true, false];
+        let efficient = [false, true, true, true, true, true, false];
+        let bounded = [false, false, false, false, true, true, true];
+        let x = [0.1, 0.5, 0.2, 0.3, 0.9, 0.7, 0.05];
+        assert_eq!(
+            label_order(&front, &efficient, &bounded, &x),
+            vec![5, 1, 4, 2, 3, 6, 0]
+        );
     }
 
     #[test]
