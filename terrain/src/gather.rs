@@ -5,26 +5,71 @@ use super::Heightfield;
 
 /// Fills `out` (row-major, `size[0]` per row) with samples at `origin + (i, j)·step` (in sample
 /// coordinates), clamped to the grid so regions reaching past its edge repeat the edge.
+///
+/// A region whose columns all lie inside the grid (nearly every one) copies each row as a
+/// slice, strided by `step` over the row's span, instead of through a column table: a refined
+/// tile's 129 × 129 samples at step 2 from a 6000-wide mosaic took ~60 µs through the table,
+/// each row's span is prefetched before the row before it is copied (rows lie `step` grid
+/// rows apart, a page or more: the hardware prefetcher does not cross to them).
 pub fn gather(hf: &Heightfield, origin: [i64; 2], step: u32, size: [u32; 2], out: &mut [f32]) {
     let (w, h) = (size[0] as usize, size[1] as usize);
     assert_eq!(out.len(), w * h, "gather buffer size");
+    if w == 0 || h == 0 {
+        return;
+    }
     let step = step as i64;
     let max_c = hf.width as i64 - 1;
     let max_r = hf.height as i64 - 1;
+    let row_of = |j: usize| (origin[1] + j as i64 * step).clamp(0, max_r) as usize;
+    let last_c = origin[0] + (w as i64 - 1) * step;
+    if origin[0] >= 0 && last_c <= max_c {
+        // Every column inside: the row's span [first, last], every `step`-th sample of it.
+        let (first, last) = (origin[0] as usize, last_c as usize);
+        let span = |r: usize| &hf.heights[r * hf.width + first..=r * hf.width + last];
+        prefetch(span(row_of(0)));
+        for (j, row_out) in out.chunks_exact_mut(w).enumerate() {
+            if j + 1 < h {
+                prefetch(span(row_of(j + 1)));
+            }
+            let src = span(row_of(j));
+            if step == 1 {
+                row_out.copy_from_slice(src);
+            } else {
+                for (o, s) in row_out.iter_mut().zip(src.iter().step_by(step as usize)) {
+                    *o = *s;
+                }
+            }
+        }
+        return;
+    }
     let cols: Vec<usize> = (0..w as i64)
         .map(|i| (origin[0] + i * step).clamp(0, max_c) as usize)
         .collect();
     for (j, row_out) in out.chunks_exact_mut(w).enumerate() {
-        let r = (origin[1] + j as i64 * step).clamp(0, max_r) as usize;
+        let r = row_of(j);
         let row = &hf.heights[r * hf.width..(r + 1) * hf.width];
-        if step == 1 && cols[0] + w <= hf.width && cols[w - 1] == cols[0] + w - 1 {
-            row_out.copy_from_slice(&row[cols[0]..cols[0] + w]);
-        } else {
-            for (o, &c) in row_out.iter_mut().zip(&cols) {
-                *o = row[c];
-            }
+        for (o, &c) in row_out.iter_mut().zip(&cols) {
+            *o = row[c];
         }
     }
+}
+
+/// Asks the cache for every line of `span` ahead of its use (a hint: it reads nothing and
+/// changes no value).
+#[inline]
+fn prefetch(span: &[f32]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        const LINE: usize = 64 / std::mem::size_of::<f32>();
+        for k in (0..span.len()).step_by(LINE) {
+            // SAFETY: a prefetch is a hint that never faults or writes; the address is inside
+            // `span`, a live slice.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(span.as_ptr().add(k).cast()) };
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = span;
 }
 
 #[cfg(test)]
@@ -62,5 +107,51 @@ mod tests {
         let mut out = vec![0.0; 4];
         gather(&hf, [3, 2], 1, [4, 1], &mut out);
         assert_eq!(out, vec![21.0, 22.0, 23.0, 24.0]);
+    }
+
+    /// Every region — inside the grid (the rows copied as strided slices) or reaching past any
+    /// edge (through the column table), at steps 1 to 16, empty ones too — holds exactly the
+    /// clamped samples `Heightfield::at` reads.
+    #[test]
+    fn every_region_holds_the_clamped_samples() {
+        let hf = field();
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = |m: i64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % m as u64) as i64
+        };
+        let (mut inside, mut clamped) = (0, 0);
+        for _ in 0..2000 {
+            let step = 1 + next(16) as u32;
+            let origin = [next(14) - 3, next(12) - 3];
+            let size = [next(6) as u32, next(6) as u32];
+            let mut out = vec![f32::NAN; (size[0] * size[1]) as usize];
+            gather(&hf, origin, step, size, &mut out);
+            for j in 0..size[1] as i64 {
+                for i in 0..size[0] as i64 {
+                    let c = (origin[0] + i * step as i64).clamp(0, hf.width as i64 - 1);
+                    let r = (origin[1] + j * step as i64).clamp(0, hf.height as i64 - 1);
+                    let got = out[(j * size[0] as i64 + i) as usize];
+                    assert_eq!(
+                        got,
+                        hf.at(c as usize, r as usize),
+                        "{origin:?} step {step} {size:?}"
+                    );
+                }
+            }
+            let last = origin[0] + (size[0] as i64 - 1) * step as i64;
+            if size[0] * size[1] > 0 && origin[0] >= 0 && last < hf.width as i64 {
+                inside += 1;
+            } else if size[0] * size[1] > 0 {
+                clamped += 1;
+            }
+        }
+        // Both paths were taken many times.
+        assert!(
+            inside > 100 && clamped > 100,
+            "{inside} inside, {clamped} clamped"
+        );
     }
 }
