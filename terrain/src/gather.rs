@@ -73,13 +73,8 @@ mod tests {
     #[test]
     fn every_region_holds_the_clamped_samples() {
         let hf = field();
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = |m: i64| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed % m as u64) as i64
-        };
+        let mut rnd = crate::test_rng::unit(0x9e37_79b9_7f4a_7c15);
+        let mut next = |m: i64| (rnd() * m as f64) as i64;
         let (mut inside, mut clamped) = (0, 0);
         for _ in 0..2000 {
             let step = 1 + next(16) as u32;
