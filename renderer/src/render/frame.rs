@@ -35,7 +35,7 @@ use crate::render::plan::{fixed_reserve, plan_frame, select_frame, FrameInputs, 
 use crate::render::resources::{reserve_instances, GpuTerrain};
 use crate::render::terrain_pass::{descriptor_pool_sizes, DESCRIPTOR_SETS};
 use crate::render::tess_pass::TessTerrain;
-use crate::render::uniforms::{frame_uniforms, FLAG_NORMAL_MAP};
+use crate::render::uniforms::{frame_uniforms, FrameLight, FLAG_NORMAL_MAP};
 use crate::render::upload::{
     fit_staging, initialise_images, stage_frame, stream_buffer, stream_image_uploads, GpuNormals,
 };
@@ -78,7 +78,7 @@ pub struct TerrainRenderer {
     /// Statistics panel copied into the top-left corner of every frame while set.
     overlay: Option<Panel>,
     /// Sun and haze of the next frames.
-    lighting: Lighting,
+    light: FrameLight,
     /// Other traffic (CIGI entities), drawn after the terrain when set.
     entities: Option<EntityPass>,
     /// Draped imagery and land cover (placeholders until a terrain with rasters is loaded).
@@ -146,7 +146,7 @@ impl TerrainRenderer {
             channels: Vec::new(),
             channels_generation: 0,
             overlay: None,
-            lighting: Lighting::default(),
+            light: FrameLight::default(),
             entities: None,
             drape: None,
             draped: None,
@@ -248,7 +248,7 @@ impl TerrainRenderer {
 
     /// Sun and haze for the next frames (a host's Celestial Sphere / Atmosphere Control).
     pub fn set_lighting(&mut self, lighting: Lighting) {
-        self.lighting = lighting;
+        self.light.set(lighting);
     }
 
     /// Draws entities with the models of `library` from now on (their instances come from
@@ -623,7 +623,7 @@ impl TerrainRenderer {
             curvature,
             debug_tiles,
             self.desc.look,
-            &self.lighting,
+            &self.light,
         );
         if self.desc.normal_maps && !tess_mode {
             uniforms.grid_size[3] |= FLAG_NORMAL_MAP;

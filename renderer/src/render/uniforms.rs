@@ -121,6 +121,50 @@ impl Lighting {
     }
 }
 
+/// A light with its atmosphere, made once per light: [`Atmosphere::new`] (Perez coefficients,
+/// zenith, the sky's radiance for the ambient) was a tenth of the frame thread's time after the
+/// plan (the Northern England manoeuvre on lavapipe), and a light is held for many frames (the
+/// default one, a host's sun and visibility until it sends others).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameLight {
+    lighting: Lighting,
+    atmosphere: Atmosphere,
+}
+
+impl FrameLight {
+    pub fn new(lighting: Lighting) -> Self {
+        Self {
+            lighting,
+            atmosphere: lighting.atmosphere(),
+        }
+    }
+
+    pub fn lighting(&self) -> &Lighting {
+        &self.lighting
+    }
+
+    pub fn atmosphere(&self) -> &Atmosphere {
+        &self.atmosphere
+    }
+
+    /// Takes `lighting`; its atmosphere is made again only where it differs from the light
+    /// held (bit for bit: a NaN, which `Lighting::from_host` never keeps, always differs).
+    /// True when it did.
+    pub fn set(&mut self, lighting: Lighting) -> bool {
+        if lighting == self.lighting {
+            return false;
+        }
+        *self = Self::new(lighting);
+        true
+    }
+}
+
+impl Default for FrameLight {
+    fn default() -> Self {
+        Self::new(Lighting::default())
+    }
+}
+
 /// The uniforms of a frame drawn from `camera`: `curvature` bends the terrain by the Earth's
 /// radius, `debug_tiles` colours tiles by level and refinement, `look` chooses the shading.
 pub fn frame_uniforms(
@@ -130,9 +174,9 @@ pub fn frame_uniforms(
     curvature: bool,
     debug_tiles: bool,
     look: Look,
-    lighting: &Lighting,
+    light: &FrameLight,
 ) -> FrameUniforms {
-    let a = lighting.atmosphere();
+    let (lighting, a) = (light.lighting(), light.atmosphere());
     let p = camera.position;
     let m = camera.relative_world_to_clip_f32();
     let s = lighting.sun_enu;
@@ -258,7 +302,8 @@ mod tests {
             Frustum::symmetric(1.0, 64, 36),
         );
         let light = Lighting::from_host(Some([0.0, 1.0, 1.0]), Some(8_000.0));
-        let u = |look, debug| frame_uniforms(&cam, &grid, &clipmap, true, debug, look, &light);
+        let lit = FrameLight::new(light);
+        let u = |look, debug| frame_uniforms(&cam, &grid, &clipmap, true, debug, look, &lit);
         assert_eq!(u(Look::Plain, false).grid_size[3], 0);
         assert_eq!(u(Look::Full, false).grid_size[3], 2);
         assert_eq!(u(Look::Classes, true).grid_size[3], 5);
@@ -284,6 +329,26 @@ mod tests {
         assert_eq!((f.perez_a[3], f.perez_b[3]), (a.turbidity, a.dusk));
         assert_eq!(&f.sun_colour[..3], &a.sun_colour);
         assert!((f.sun_colour[3] - SUN_DISC_DEG.to_radians().cos() as f32).abs() < 1e-7);
+    }
+
+    #[test]
+    fn a_frame_light_makes_its_atmosphere_again_only_for_another_light() {
+        let noon = Lighting::from_host(Some([0.0, 0.3, 1.0]), Some(30_000.0));
+        let dusk = Lighting::from_host(Some([1.0, 0.0, 0.05]), Some(30_000.0));
+        let hazy = Lighting::from_host(Some([0.0, 0.3, 1.0]), Some(2_000.0));
+        let mut light = FrameLight::new(noon);
+        assert_eq!(*light.atmosphere(), noon.atmosphere());
+        assert!(!light.set(noon), "the same light keeps its atmosphere");
+        assert_eq!(*light.atmosphere(), noon.atmosphere());
+        // Another sun, then another visibility: each time the atmosphere of the light held.
+        for next in [dusk, hazy, noon] {
+            assert!(light.set(next));
+            assert_eq!(*light.lighting(), next);
+            assert_eq!(*light.atmosphere(), next.atmosphere());
+        }
+        assert_ne!(dusk.atmosphere(), noon.atmosphere());
+        assert_ne!(hazy.atmosphere(), noon.atmosphere());
+        assert_eq!(FrameLight::default(), FrameLight::new(Lighting::default()));
     }
 
     #[test]
@@ -335,7 +400,7 @@ mod tests {
             true,
             false,
             Look::Full,
-            &light,
+            &FrameLight::new(light),
         );
         assert!((f.eye_world[2] - 2500.0).abs() < 0.01, "{:?}", f.eye_world);
         assert_eq!(f.grid_size[3], Look::Full.flags() | FLAG_GEOGRAPHIC);
