@@ -619,6 +619,7 @@ impl TerrainRenderer {
         let mut uniforms = frame_uniforms(
             camera,
             &t.grid,
+            t.plan.earth.as_ref(),
             &t.plan.clipmap,
             curvature,
             debug_tiles,

@@ -165,11 +165,15 @@ impl Default for FrameLight {
     }
 }
 
-/// The uniforms of a frame drawn from `camera`: `curvature` bends the terrain by the Earth's
-/// radius, `debug_tiles` colours tiles by level and refinement, `look` chooses the shading.
+/// The uniforms of a frame drawn from `camera`: `earth` is the grid's place on the ellipsoid
+/// (`GeoGrid::of` the grid's geo-reference, made once by the plan: `PlanState::earth`; none on
+/// the plane), `curvature` bends the terrain by the Earth's radius, `debug_tiles` colours
+/// tiles by level and refinement, `look` chooses the shading.
+#[allow(clippy::too_many_arguments)]
 pub fn frame_uniforms(
     camera: &Camera,
     grid: &SourceGrid,
+    earth: Option<&GeoGrid>,
     clipmap: &ClipmapDesc,
     curvature: bool,
     debug_tiles: bool,
@@ -182,9 +186,8 @@ pub fn frame_uniforms(
     let s = lighting.sun_enu;
     // On the ellipsoid the eye's altitude is its height above it, not world z (which drops
     // away from the dataset's corner), and the shader takes up from the ellipsoid normal.
-    let geo = GeoGrid::of(grid.geo.as_ref(), grid.spacing_x, grid.spacing_y);
-    let eye_height = geo.map_or(p.z, |g| g.geodetic_of_world(p).alt_m);
-    let geo_flag = if geo.is_some() { FLAG_GEOGRAPHIC } else { 0 };
+    let eye_height = earth.map_or(p.z, |g| g.geodetic_of_world(p).alt_m);
+    let geo_flag = if earth.is_some() { FLAG_GEOGRAPHIC } else { 0 };
     let curvature = if curvature {
         (1.0 / (2.0 * aerie_terrain::select::EARTH_RADIUS_M)) as f32
     } else {
@@ -303,7 +306,7 @@ mod tests {
         );
         let light = Lighting::from_host(Some([0.0, 1.0, 1.0]), Some(8_000.0));
         let lit = FrameLight::new(light);
-        let u = |look, debug| frame_uniforms(&cam, &grid, &clipmap, true, debug, look, &lit);
+        let u = |look, debug| frame_uniforms(&cam, &grid, None, &clipmap, true, debug, look, &lit);
         assert_eq!(u(Look::Plain, false).grid_size[3], 0);
         assert_eq!(u(Look::Full, false).grid_size[3], 2);
         assert_eq!(u(Look::Classes, true).grid_size[3], 5);
@@ -396,6 +399,7 @@ mod tests {
         let f = frame_uniforms(
             &cam,
             &ds.source_grid(),
+            Some(&grid),
             &clipmap,
             true,
             false,
