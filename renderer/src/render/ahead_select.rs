@@ -9,10 +9,17 @@
 //! the previous reselect sent, looking `prefetch_frames` ahead of that frame — whether it was
 //! made on the worker or, with [`AheadSelector::inline`], on the frame thread at the take.
 //! The tests run both and compare the plans.
+//!
+//! The worker looks for requests every [`POLL`] while they come (for [`POLL_FOR`] after its
+//! last job), so that sending one wakes no thread: waking it from the frame thread cost that
+//! frame 15–30 µs on a virtual machine. Every fourth frame's selection + plan against the mean
+//! of its two neighbours, `fly --no-draw` at 1280×720, τ = 1, 4 runs each: Inn manoeuvre +31 →
+//! +13 µs, Northern England manoeuvre +29 → +12 µs with the worker looking.
 
-use std::sync::mpsc::{channel, Receiver, Sender};
+use std::sync::mpsc::{channel, Receiver, Sender, TryRecvError};
 use std::sync::Arc;
 use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
 
 use aerie_terrain::bake::ErrorBake;
 use aerie_terrain::camera::Camera;
@@ -46,6 +53,18 @@ impl AheadJob {
 
 type Request = (AheadJob, Selection);
 
+/// How long the worker sleeps between two looks for a request, while it looks.
+const POLL: Duration = Duration::from_micros(500);
+
+/// How long after its last job the worker keeps looking for the next request before it waits
+/// to be woken. A request sent to a waiting worker wakes it from the frame thread: a futex
+/// wake of a thread on the other core, 15–30 µs of the frame thread's time on a virtual
+/// machine (every fourth frame's `reselect`; the Inn manoeuvre, 1280×720); one that finds it
+/// looking costs the frame thread nothing but the send. Requests come every
+/// `PREFETCH_RESELECT_FRAMES` frames (133 ms at 30 fps), so a flight keeps the worker looking;
+/// a renderer left idle lets it sleep.
+pub(crate) const POLL_FOR: Duration = Duration::from_millis(250);
+
 /// The worker thread: a request in, its selection out, until the request side is dropped.
 struct Worker {
     /// `None` once dropped: closing it ends the worker's loop.
@@ -61,11 +80,25 @@ impl Worker {
         let thread = std::thread::Builder::new()
             .name("aerie-ahead-select".into())
             .spawn(move || {
-                for (job, mut sel) in jobs {
+                let mut last_job = Instant::now();
+                loop {
+                    let (job, mut sel) = match jobs.try_recv() {
+                        Ok(request) => request,
+                        Err(TryRecvError::Disconnected) => break,
+                        Err(TryRecvError::Empty) if last_job.elapsed() < POLL_FOR => {
+                            std::thread::sleep(POLL);
+                            continue;
+                        }
+                        Err(TryRecvError::Empty) => match jobs.recv() {
+                            Ok(request) => request,
+                            Err(_) => break,
+                        },
+                    };
                     job.run(&mut sel);
                     if done.send(sel).is_err() {
                         break;
                     }
+                    last_job = Instant::now();
                 }
             })
             .ok()?;
@@ -129,6 +162,11 @@ impl AheadSelector {
             }
         };
         self.request(job, buffer);
+    }
+
+    /// Whether the selections are made on a worker thread (one started and still running).
+    pub fn on_worker(&self) -> bool {
+        self.worker.is_some()
     }
 
     /// Whether a request waits to be taken.

@@ -589,6 +589,39 @@ fn the_view_ahead_selected_off_the_frame_thread_plans_as_inline() {
     }
 }
 
+/// A worker left without a request for longer than it looks for one waits to be woken
+/// (`ahead_select::POLL_FOR`), and the request that wakes it is answered: across the pause the
+/// same views ahead as inline, frame by frame.
+#[test]
+fn a_worker_that_stopped_looking_is_woken_by_the_next_request() {
+    let cam = |f: u64| camera(600.0 - 40.0 * f as f64, 1280.0, 300.0, 90.0);
+    let run = |ahead: AheadSelector, pause: std::time::Duration| {
+        let mut st = state(&[64, 64, 64, 64, 64, 0]);
+        st.ahead = ahead;
+        let mut items = Vec::new();
+        for f in 0..10u64 {
+            if f == 3 {
+                // Frame 1's request was answered long ago; the worker stops looking.
+                std::thread::sleep(pause);
+            }
+            refining_frame(&mut st, f, &cam(f), 20.0, BIG);
+            items.push(st.prefetch_selection.items.clone());
+        }
+        (items, st.ahead.on_worker())
+    };
+    let pause = crate::render::ahead_select::POLL_FOR * 2;
+    let (threaded, worker) = run(AheadSelector::threaded(), pause);
+    let (inline, _) = run(AheadSelector::inline(), std::time::Duration::ZERO);
+    assert!(
+        worker,
+        "the worker answered, not the frame thread in its place"
+    );
+    assert_eq!(threaded, inline);
+    // Frame 9 takes what frame 5 sent to the sleeping worker: another view than frame 5's.
+    assert!(!threaded[9].is_empty());
+    assert_ne!(threaded[9], threaded[5]);
+}
+
 /// With bands of 1,000 samples every prefetched tile larger than that (the 33² slots and up)
 /// comes a band a frame: a frame's prefetch gathers at most one band of such a tile; each pool
 /// upload, banded or not, stages exactly the samples one gather of its rectangle gives; and a
