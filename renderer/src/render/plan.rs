@@ -19,7 +19,8 @@
 //! - **Instances.** Grouped by refinement (unrefined first), selection order inside a group;
 //!   indirect command r starts at the sum of the groups before it; triangles = instances ×
 //!   triangles per skirted tile.
-//! - **Prefetch** happens only along the eye's motion, never evicts a slot drawn in the last
+//! - **Prefetch** happens only along the eye's motion (and in the first frame after a load, for
+//!   the views around the eye: `warm_start.rs`), never evicts a slot drawn in the last
 //!   [`PREFETCH_PROTECT_FRAMES`] frames, and stops at the first tile the budget cannot take; a
 //!   tile larger than a band is gathered a band of rows a frame and uploaded whole
 //!   (`banded.rs`).
@@ -46,11 +47,12 @@ use aerie_terrain::source::TerrainSource;
 use crate::render::ahead_select::{AheadJob, AheadSelector};
 use crate::render::banded::{Banded, BandedTile};
 use crate::render::feed::{Feed, DRAWN_PRIORITY, PREFETCH_PRIORITY};
+pub use crate::render::frame_plan::{FrameInputs, FramePlan, LateReason, LateTile, PoolUpload};
 use crate::render::gathered::Gatherer;
 
 use aerie_terrain::geodesy::GeoGrid;
 
-use crate::render::gpu::{DrawIndexedIndirect, FrameUniforms, GeoPolynomial, TileInstance};
+use crate::render::gpu::{FrameUniforms, TileInstance};
 use crate::render::jobs::{
     eye_samples, split_level_uploads, within_data_cap, ImageUpload, PlanError, StagingBudget,
 };
@@ -61,10 +63,11 @@ use crate::render::normal_map::normal_bytes;
 pub use crate::render::pool_atlas::PoolSlots;
 use crate::render::pool_atlas::{PoolAtlas, PoolLimits};
 pub use crate::render::stats::selection_digest;
-use crate::render::stats::{selection_stats, FrameStats};
+use crate::render::stats::selection_stats;
 pub use crate::render::terrain_draws::{indirect_draws, TileMeshes};
 use crate::render::tile_instances::{build_instances, InstanceCaches, InstanceFrame};
 pub use crate::render::tile_instances::{fixed_reserve, slot_placement, SkirtRule};
+use crate::render::warm_start::WarmViews;
 
 /// Largest number of m×m instances one frame may draw (144 bytes each per frame in flight, 448
 /// on a projected grid): the instance buffers grow on demand up to this — `full` on a large
@@ -106,6 +109,12 @@ pub struct PlanState {
     pub shared_selections: u64,
     /// A geographic dataset drawn on the WGS84 ellipsoid (`GeoGrid::of`); None: the flat plane.
     pub earth: Option<GeoGrid>,
+    /// True until the first frame's selection, which then also selects the views around the
+    /// eye (`warm_start.rs`): their nodes' cached values are made then, and their refined tiles
+    /// prefetched by the first frame's plan. Set it false for a first frame like any other.
+    pub warm_start: bool,
+    /// The refined tiles of those views, prefetched by the first frame's plan.
+    pub warm_items: Vec<DrawItem>,
     /// The drawn nodes' eye-independent ellipsoid fields and their skirts, kept across frames.
     pub instance_caches: InstanceCaches,
     /// The grid's valid samples east and north.
@@ -156,6 +165,8 @@ impl PlanState {
             shared: SharedSelection::default(),
             shared_selections: 0,
             earth,
+            warm_start: true,
+            warm_items: Vec::new(),
             instance_caches: InstanceCaches::default(),
             valid_samples,
         }
@@ -219,88 +230,6 @@ impl PlanState {
     }
 }
 
-/// What a plan reads besides its state: the frame's view, parameters and staging region.
-#[derive(Clone, Copy)]
-pub struct FrameInputs<'a> {
-    pub frame: u64,
-    pub camera: &'a Camera,
-    pub viewport: (u32, u32),
-    /// Channels (camera, viewport, τ) sharing one selection; empty: select for `camera` only.
-    pub channels: &'a [(Camera, (u32, u32), f64)],
-    /// Changes whenever `channels` does (the renderer counts its `set_channels` calls): the
-    /// shared selection is reused while it stays the same.
-    pub channels_generation: u64,
-    pub select: &'a SelectParams,
-    /// Prefetch looks this many frames ahead along the eye's motion (≤ 0: off).
-    pub prefetch_frames: f64,
-    pub skirt_factor: f32,
-    pub skirt_min_m: f32,
-    /// Which edges get skirts (`RendererDesc::skirts`); CDLOD draws none either way.
-    pub skirts: SkirtRule,
-    /// Bytes of the overlay panel staged with the frame (None: no overlay set).
-    pub overlay_bytes: Option<u64>,
-    /// Where the tile's whole and coarse meshes lie in the shared index buffer.
-    pub tile_meshes: TileMeshes,
-    /// The frame's staging region, empty.
-    pub staging: StagingBudget,
-}
-
-/// A pool upload: refined tile `key` into slot `upload.layer` of pool r = `key.refinement`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct PoolUpload {
-    pub key: TileKey,
-    pub upload: ImageUpload,
-    /// What the slot held before (evicted by this upload).
-    pub evicted: Option<TileKey>,
-    pub prefetch: bool,
-}
-
-/// Why a refined tile was drawn coarser.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LateReason {
-    /// Its upload did not fit what was left of the frame's staging region, or of its data cap.
-    Budget,
-    /// Every slot of its pool was handed out this frame.
-    NoSlot,
-    /// Its samples were not resident in the source (asked for).
-    Stream,
-}
-
-/// A refined tile drawn coarser this frame: `key` was asked for, `drawn_refinement` was resident.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct LateTile {
-    pub key: TileKey,
-    pub drawn_refinement: u32,
-    pub reason: LateReason,
-}
-
-/// Everything a frame does, as data.
-#[derive(Debug, Clone, Default)]
-pub struct FramePlan {
-    /// Strip uploads streamed before the frame, one inner list per extra submission.
-    pub spilled_strips: Vec<Vec<ImageUpload>>,
-    /// Strip uploads staged in the frame's own region (layer = level).
-    pub strips: Vec<ImageUpload>,
-    /// Pool uploads in staging order (misses in selection order, then prefetches).
-    pub pool_uploads: Vec<PoolUpload>,
-    pub late: Vec<LateTile>,
-    /// What is drawn: selected nodes (late tiles coarsened) with their pool slot.
-    pub draw_list: Vec<(DrawItem, u32)>,
-    /// Instance records, grouped by refinement (r = 0 first), whole nodes before quadrants.
-    pub instances: Vec<TileInstance>,
-    /// On a projected grid each instance's polynomials, in the same order; else empty.
-    pub polynomials: Vec<GeoPolynomial>,
-    /// The indirect commands: per group its grids, the skirts of each set of edges.
-    pub draws: Vec<DrawIndexedIndirect>,
-    /// Commands the multi-draw issues: `draws`' length.
-    pub draw_count: u32,
-    /// Whether every strip (spilled or not) is staged with its normal texels after its heights.
-    pub normal_maps: bool,
-    /// Bytes staging the plan takes from the frame's region, padding included.
-    pub staged_bytes: u64,
-    pub stats: FrameStats,
-}
-
 /// Places the levels around the eye, turns what the levels lack into strip uploads of the
 /// samples the source holds (advancing the cache regions and their content) and selects the
 /// frame's tiles into `out` over what the level textures will hold: for `camera` alone, or
@@ -315,6 +244,18 @@ pub fn select_frame(
     let placements = place_levels(&state.clipmap, state.viewer(inputs.camera.position));
     let strips = state.feed.update_levels(&placements, eye);
     let params = state.select_params(inputs.select);
+    if std::mem::take(&mut state.warm_start) {
+        let views = WarmViews {
+            bake: &state.bake,
+            clipmap: &state.clipmap,
+            placements: &placements,
+            viewport: inputs.viewport,
+            tau_px: inputs.select.tau_px,
+            params: &params,
+            content: &state.feed.content,
+        };
+        state.warm_items = views.refined_items(inputs.camera, out);
+    }
     if inputs.channels.is_empty() {
         let view = View {
             camera: inputs.camera,
@@ -644,7 +585,8 @@ fn coarsen(
 /// `prefetch_frames` frames from now along its motion (DESIGN.md "Pools": we budget and
 /// prefetch them), of what the source holds; asks for the rest, and for the level cells the
 /// levels will expose there. Never evicts a slot drawn in the last [`PREFETCH_PROTECT_FRAMES`]
-/// frames.
+/// frames. The first frame after a load prefetches the refined tiles of the views around the
+/// eye first (`warm_start.rs`).
 fn prefetch(
     state: &mut PlanState,
     inputs: &FrameInputs,
@@ -652,6 +594,10 @@ fn prefetch(
     reserve: u64,
     plan: &mut FramePlan,
 ) -> Result<(), PlanError> {
+    let warm = std::mem::take(&mut state.warm_items);
+    if !warm.is_empty() {
+        prefetch_items(state, &warm, inputs, budget, reserve, plan)?;
+    }
     let Some(prev) = state.prev_eye else {
         return Ok(());
     };
@@ -688,6 +634,21 @@ fn prefetch(
         state.prefetch_selected_at = Some(inputs.frame);
         state.prefetch_selections += 1;
     }
+    let items = std::mem::take(&mut state.prefetch_selection.items);
+    let done = prefetch_items(state, &items, inputs, budget, reserve, plan);
+    state.prefetch_selection.items = items;
+    done
+}
+
+/// The prefetch of `items`' refined tiles, in order, while the budget lasts.
+fn prefetch_items(
+    state: &mut PlanState,
+    items: &[DrawItem],
+    inputs: &FrameInputs,
+    budget: &mut StagingBudget,
+    reserve: u64,
+    plan: &mut FramePlan,
+) -> Result<(), PlanError> {
     let q = state.clipmap.tile_quads;
     if let Some(k) = state.banded.key() {
         // Drawn (so uploaded whole) since: its rows in hand are not needed.
@@ -697,8 +658,7 @@ fn prefetch(
     }
     let mut last = None;
     let mut rank = 0u32;
-    let items = std::mem::take(&mut state.prefetch_selection.items);
-    for item in &items {
+    for item in items {
         if item.refinement == 0 || last == Some((item.level, item.tx, item.ty)) {
             continue;
         }
@@ -771,7 +731,6 @@ fn prefetch(
             break;
         }
     }
-    state.prefetch_selection.items = items;
     Ok(())
 }
 

@@ -4,6 +4,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
+use crate::render::gpu::DrawIndexedIndirect;
 use aerie_terrain::bake::{bake, BakeParams};
 use aerie_terrain::camera::{Attitude, Camera, Frustum};
 use aerie_terrain::clipmap::ClipmapDesc;
@@ -589,6 +590,55 @@ fn the_view_ahead_selected_off_the_frame_thread_plans_as_inline() {
     }
 }
 
+/// The first frame also selects the views around the eye (`warm_start.rs`): it draws what it
+/// draws without them, prefetches their refined tiles (none of them drawn this frame), does
+/// so once, and a view turned away in the next frames then finds its tiles in the pools.
+#[test]
+fn the_first_frame_prefetches_the_views_around_the_eye_and_draws_the_same() {
+    let ahead = |f: u64| camera(600.0, 1280.0, 300.0, 90.0 + 30.0 * f as f64);
+    let fly = |warm: bool| {
+        let mut st = state(&[256, 256, 256, 256, 256, 0]);
+        st.warm_start = warm;
+        (0..4u64)
+            .map(|f| refining_frame(&mut st, f, &ahead(f), 0.0, BIG))
+            .collect::<Vec<_>>()
+    };
+    let (warm, cold) = (fly(true), fly(false));
+    for (w, c) in warm.iter().zip(&cold) {
+        assert_eq!(w.draw_list.len(), c.draw_list.len());
+        assert!(
+            w.draw_list
+                .iter()
+                .zip(&c.draw_list)
+                .all(|(a, b)| a.0 == b.0),
+            "the same nodes drawn"
+        );
+        assert_eq!(w.stats.triangles, c.stats.triangles);
+    }
+    assert_eq!(cold[0].stats.prefetched, 0, "no views around, no motion");
+    assert!(
+        warm[0].stats.prefetched > 0,
+        "the views around are prefetched"
+    );
+    let drawn = drawn_keys(&warm[0]);
+    let around: Vec<TileKey> = (warm[0].pool_uploads.iter())
+        .filter(|u| u.prefetch)
+        .map(|u| u.key)
+        .collect();
+    assert!(around.iter().all(|k| !drawn.contains(k)));
+    assert_eq!(around.len() as u32, warm[0].stats.prefetched);
+    assert!(warm[1..].iter().all(|p| p.stats.prefetched == 0), "once");
+    // Turned 30°, 60° and 90° away: the tiles the turn needs are there already.
+    let misses = |plans: &[FramePlan]| plans[1..].iter().map(|p| p.stats.pool_misses).sum::<u32>();
+    assert!(misses(&cold) > 0, "the fixture must turn onto new tiles");
+    assert!(
+        misses(&warm) < misses(&cold),
+        "{} against {}",
+        misses(&warm),
+        misses(&cold)
+    );
+}
+
 /// A worker left without a request for longer than it looks for one waits to be woken
 /// (`ahead_select::POLL_FOR`), and the request that wakes it is answered: across the pause the
 /// same views ahead as inline, frame by frame.
@@ -671,6 +721,8 @@ fn large_prefetches_come_a_band_a_frame_and_stage_their_whole_tile() {
 #[test]
 fn prefetch_follows_the_motion_only_and_spares_recent_draws() {
     let mut st = state(&[64, 64, 64, 64, 64, 0]);
+    // The first frame like any other (the views around the eye: `the_first_frame_...`).
+    st.warm_start = false;
     let cam = |x: f64| camera(x, 1280.0, 300.0, 90.0);
     // Backing away westwards while looking east: the refined band ahead moves west.
     let first = refining_frame(&mut st, 0, &cam(600.0), 20.0, BIG);
@@ -704,12 +756,14 @@ fn prefetch_follows_the_motion_only_and_spares_recent_draws() {
     // Pools exactly as large as one frame needs: after that frame every slot was drawn in the
     // last two frames, so a prefetch finds no victim.
     let mut st = state(&[0, 0, 0, 0, 0, 0]);
+    st.warm_start = false;
     let probe = refining_frame(&mut st, 0, &cam(600.0), 0.0, BIG);
     let mut caps = [0u32; 6];
     for l in &probe.late {
         caps[l.key.refinement as usize - 1] += 1;
     }
     let mut st = state(&caps);
+    st.warm_start = false;
     let full = refining_frame(&mut st, 0, &cam(600.0), 0.0, BIG);
     assert_eq!(full.stats.tiles_late, 0);
     let recent = drawn_keys(&full);
