@@ -72,6 +72,10 @@ pub struct RendererDesc {
     pub skirts: SkirtRule,
     /// Prefetch looks this many frames ahead along the eye's motion.
     pub prefetch_frames: f64,
+    /// The first frame after each load also selects the views around the eye and prefetches
+    /// their refined tiles (`warm_start.rs`): for flights and the image generator, whose next
+    /// frames may look anywhere; a still image, drawn once, has no next frames to spare.
+    pub warm_start: bool,
     /// Imagery and a land-cover raster draped on the terrain (registered when it is loaded).
     pub drape: Option<crate::render::drape_textures::SharedDrapeInput>,
     /// Device bytes the draped textures may take (`--drape-mb`): also what a store's imagery
@@ -126,6 +130,7 @@ impl Default for RendererDesc {
             skirt_min_m: 1.0,
             skirts: SkirtRule::default(),
             prefetch_frames: 20.0,
+            warm_start: false,
             drape: None,
             drape_budget_bytes: (crate::render::drape_textures::DEFAULT_DRAPE_MIB * 1048576.0)
                 as u64,

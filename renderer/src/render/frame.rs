@@ -452,6 +452,7 @@ impl TerrainRenderer {
             self.desc.pool_layers,
             normals,
         )?;
+        t.plan.warm_start = self.desc.warm_start;
         let staged_normals = normals == Some(NormalSource::Cpu);
         // First fill of every level around the eye, streamed.
         let strips = t.plan.strips_around(eye);
@@ -678,7 +679,7 @@ impl TerrainRenderer {
 
         // Record.
         let t2 = Instant::now();
-        let parts = RecordParts {
+        let mut parts = RecordParts {
             terrain: t,
             pipeline: &self.pipeline,
             target: &self.target,
@@ -696,7 +697,6 @@ impl TerrainRenderer {
                 None => None,
             },
         };
-        let mut parts = parts;
         let cmd = parts.record(d, &mut frame, &plan, &staged)?;
         let previous_gpu = frame.previous_gpu_ms();
 

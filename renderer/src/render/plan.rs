@@ -109,9 +109,10 @@ pub struct PlanState {
     pub shared_selections: u64,
     /// A geographic dataset drawn on the WGS84 ellipsoid (`GeoGrid::of`); None: the flat plane.
     pub earth: Option<GeoGrid>,
-    /// True until the first frame's selection, which then also selects the views around the
-    /// eye (`warm_start.rs`): their nodes' cached values are made then, and their refined tiles
-    /// prefetched by the first frame's plan. Set it false for a first frame like any other.
+    /// Whether the next frame's selection also selects the views around the eye
+    /// (`warm_start.rs`: their nodes' cached values made then, their refined tiles prefetched
+    /// by that frame's plan); it turns false once done. False unless set: the renderer sets it
+    /// from `RendererDesc::warm_start` at each load.
     pub warm_start: bool,
     /// The refined tiles of those views, prefetched by the first frame's plan.
     pub warm_items: Vec<DrawItem>,
@@ -165,7 +166,7 @@ impl PlanState {
             shared: SharedSelection::default(),
             shared_selections: 0,
             earth,
-            warm_start: true,
+            warm_start: false,
             warm_items: Vec::new(),
             instance_caches: InstanceCaches::default(),
             valid_samples,

@@ -3,8 +3,9 @@
 //! made into the frame's own [`Selection`] — before the frame's, which replaces their items —
 //! so that every node they meet has its camera-independent values in the selection's node
 //! cache, and their refined tiles are what the first frame's plan prefetches
-//! (`plan.rs`, `PlanState::warm_start`). They are made without carrying (no record of a view
-//! nobody drew), so what the first frames draw is what they draw without them.
+//! (`plan.rs`, `PlanState::warm_start`, set from `RendererDesc::warm_start`: `fly`, `run` and
+//! `bench` ask for it, a still image does not). They are made without carrying (no record of a
+//! view nobody drew), so what the first frames draw is what they draw without them.
 //!
 //! Why: a flight that starts turning meets, in its first frames, nodes and refined tiles the
 //! start-up never made. The Inn manoeuvre (1280×720, τ = 1, `fly --no-draw`, 3 runs each,

@@ -107,7 +107,9 @@ pub struct FlyArgs {
 }
 
 pub fn run(a: FlyArgs) -> Result<(), Failure> {
-    let s = setup(&a.gpu)?;
+    let mut s = setup(&a.gpu)?;
+    // A flight's next frames may look anywhere (`RendererDesc::warm_start`).
+    s.desc.warm_start = true;
     if a.frames == 0 {
         return Err(bad_input("--frames: must be at least 1"));
     }

@@ -109,6 +109,7 @@ pub fn fly_no_draw(
         clipmap,
         &desc.pool_capacity,
     );
+    st.warm_start = desc.warm_start;
     let start_up = Instant::now();
     st.strips_around(flight.pose_at(0.0).0);
     let first_fill_s = start_up.elapsed().as_secs_f64();

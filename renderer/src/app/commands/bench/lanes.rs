@@ -55,6 +55,8 @@ pub(super) fn lane_desc(a: &BenchArgs, p: &Plan, config: BenchConfig) -> Rendere
     });
     desc.pool_capacity = pools_for_tile_size(desc.pool_capacity, desc.tile_size, m);
     desc.tile_size = m;
+    // Each configuration starts as the image generator does (`run`).
+    desc.warm_start = true;
     match (config.mode, config.knob) {
         (LodMode::Distance, Some(k)) => desc.select.distance_factor *= k,
         (LodMode::Cdlod, Some(k)) => desc.select.cdlod_range = k,

@@ -203,6 +203,8 @@ pub(crate) fn renderer_desc(
         height: size.1,
         staging_budget: cfg.staging_budget_bytes(),
         tile_size: cfg.tile_size,
+        // The host may turn the view anywhere after a load (`RendererDesc::warm_start`).
+        warm_start: true,
         select: SelectParams {
             tau_px: cfg.tau_px,
             ..defaults.select

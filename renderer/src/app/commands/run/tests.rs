@@ -488,3 +488,16 @@ fn host_heights_come_from_the_flag_the_config_or_the_default() {
         "{e:?}"
     );
 }
+
+/// The image generator starts every load with the views around the eye (`warm_start.rs`): the
+/// host may turn the view anywhere; the library's default, and a still image, do not.
+#[test]
+fn the_image_generator_selects_the_views_around_the_eye_after_a_load() {
+    use clap::Parser;
+    let argv = ["run", "--dem", "x.hgt"];
+    let args = Cli::try_parse_from(argv).expect("parses").args;
+    let p = plan(&args).expect("plans");
+    let desc = crate::app::commands::run::plan::renderer_desc(&args, &p, (64, 36), None);
+    assert!(desc.warm_start);
+    assert!(!crate::render::desc::RendererDesc::default().warm_start);
+}
