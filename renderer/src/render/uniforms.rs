@@ -122,7 +122,7 @@ impl Lighting {
 }
 
 /// A light with its atmosphere, made once per light: [`Atmosphere::new`] (Perez coefficients,
-/// zenith, the sky's radiance for the ambient) was a tenth of the frame thread's time after the
+/// zenith, the sky's radiance for the ambient) was ~4 % of the frame thread's samples after the
 /// plan (the Northern England manoeuvre on lavapipe), and a light is held for many frames (the
 /// default one, a host's sun and visibility until it sends others).
 #[derive(Clone, Copy, Debug, PartialEq)]
